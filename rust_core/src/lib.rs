@@ -1,0 +1,29 @@
+//! # tribosweep-core
+//!
+//! Numerics of tribosweep, free of Python types so that `cargo test` covers them alone.
+//!
+//! A tour, in the order a computation flows:
+//! - [`model`]: the 3-DOF pin-on-disk slider of the 1985 report (MODEL.md §2-3): parameters with
+//!   their valid ranges, the static point, the right-hand side for bilateral and unilateral contact,
+//!   constant or regularised Coulomb/Stribeck friction, its analytic Jacobian and contact events.
+//! - [`ode`]: adaptive integrators on stack states (Dormand-Prince 5(4), DOP853, Rodas4) with dense
+//!   output and event location, so that contact switches are integrated through, never stepped across.
+//! - [`steady`]: run a trajectory to its steady state (decay to sliding, periodic cycle, escape) and
+//!   summarise it: frequency, harmonics of `z`, `phi`, `x`, minimum normal force, time off the disk.
+//! - [`ensemble`]: many trajectories in parallel (rayon), deterministic for any thread count, one
+//!   panic caught per point.
+//! - [`linear`], [`tidf`], [`shooting`]: linear stability of steady sliding, the triple-input
+//!   describing function with all its roots, periodic orbits with Floquet multipliers.
+//! - [`status`]: the per-point status codes, defined in one place.
+
+pub mod ensemble;
+pub mod linear;
+pub mod model;
+pub mod ode;
+pub mod shooting;
+pub mod status;
+pub mod steady;
+pub mod tidf;
+
+pub use model::{ContactMode, ContactModel, FrictionLaw, ParamError, Params, Slider, State};
+pub use status::Status;

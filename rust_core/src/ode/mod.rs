@@ -1,0 +1,319 @@
+//! Integrators on fixed-size stack states, with dense output and event location.
+//!
+//! The contract:
+//! - A system implements [`OdeSystem`]: a right-hand side that depends on a discrete `Mode`
+//!   (e.g. pin in contact / off the disk), optional event functions `g_i(t, y, mode)`, and an
+//!   `on_event` that says what happens when one crosses zero.
+//! - [`integrate`] advances with one of the [`Method`]s, locates every sign change of an event
+//!   function inside an accepted step on the step's dense output (to `Options::event_tol` in time),
+//!   truncates the step at the first event whose action is `Switch` or `Stop`, and restarts there
+//!   in the new mode. Non-smooth scenes are integrated through their switches, never stepped across.
+//! - An [`Observer`] sees every accepted step (with its dense output) and every event, and may stop
+//!   the run. Sampling at output times, Poincare sections and running extrema live in observers.
+//! - The run ends with an [`Outcome`] and [`Stats`]; a failure is data, never a panic.
+
+pub mod controller;
+pub mod dop853;
+pub mod dopri5;
+pub mod driver;
+pub mod rodas;
+
+use nalgebra::{SMatrix, SVector};
+
+pub use driver::integrate;
+
+/// Most event functions a system may declare.
+pub const MAX_EVENTS: usize = 4;
+
+/// What a located event does to the integration.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EventAction<M> {
+    /// Record it; the dynamics do not change (the step is not truncated).
+    Continue,
+    /// Truncate the step at the event and restart in this mode.
+    Switch(M),
+    /// Truncate the step at the event and end the run (`Outcome::StoppedByEvent`).
+    Stop,
+}
+
+/// An ODE `y' = f(t, y, mode)` with events.
+pub trait OdeSystem<const N: usize> {
+    /// Discrete state that selects the smooth branch of the right-hand side.
+    type Mode: Copy + PartialEq + core::fmt::Debug;
+
+    /// Right-hand side on the branch `mode`.
+    fn rhs(&self, t: f64, y: &SVector<f64, N>, mode: Self::Mode) -> SVector<f64, N>;
+
+    /// Jacobian `df/dy` on the branch `mode` (used by implicit methods). Default: central
+    /// differences with steps scaled to each component.
+    fn jacobian(&self, t: f64, y: &SVector<f64, N>, mode: Self::Mode) -> SMatrix<f64, N, N> {
+        let mut j = SMatrix::<f64, N, N>::zeros();
+        for c in 0..N {
+            let h = f64::EPSILON.cbrt() * y[c].abs().max(1e-8);
+            let mut yp = *y;
+            let mut ym = *y;
+            yp[c] += h;
+            ym[c] -= h;
+            let col = (self.rhs(t, &yp, mode) - self.rhs(t, &ym, mode)) / (2.0 * h);
+            j.set_column(c, &col);
+        }
+        j
+    }
+
+    /// Mode at the start of a run.
+    fn initial_mode(&self, t: f64, y: &SVector<f64, N>) -> Self::Mode;
+
+    /// Number of event functions (at most [`MAX_EVENTS`]).
+    fn n_events(&self) -> usize {
+        0
+    }
+
+    /// Event function values `g[i]`, `i < n_events()`. An event is a sign change of `g[i]`
+    /// (in either direction) within a step.
+    fn events(&self, _t: f64, _y: &SVector<f64, N>, _mode: Self::Mode, _g: &mut [f64; MAX_EVENTS]) {}
+
+    /// Action at a located event `index` at `(t, y)` in `mode`.
+    fn on_event(&self, _t: f64, _y: &SVector<f64, N>, _mode: Self::Mode, _index: usize) -> EventAction<Self::Mode> {
+        EventAction::Continue
+    }
+}
+
+/// Integration method.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Method {
+    /// Dormand-Prince 5(4), FSAL, 4th-order dense output.
+    Dopri5,
+    /// Dormand-Prince 8(5,3) (Hairer's DOP853), 7th-order dense output.
+    Dop853,
+    /// Rodas4: stiffly accurate L-stable Rosenbrock method of order 4(3), 3rd-order dense output.
+    Rodas4,
+}
+
+impl Method {
+    /// Every method.
+    pub const ALL: [Method; 3] = [Method::Dopri5, Method::Dop853, Method::Rodas4];
+
+    /// Classical order of the propagated solution.
+    pub fn order(self) -> u32 {
+        match self {
+            Method::Dopri5 => 5,
+            Method::Dop853 => 8,
+            Method::Rodas4 => 4,
+        }
+    }
+
+    /// Name as used in the Python API.
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Dopri5 => "dopri5",
+            Method::Dop853 => "dop853",
+            Method::Rodas4 => "rodas4",
+        }
+    }
+
+    /// Inverse of [`Method::name`].
+    pub fn from_name(name: &str) -> Option<Method> {
+        Method::ALL.into_iter().find(|m| m.name() == name)
+    }
+
+    /// True for methods that solve linear systems with the Jacobian.
+    pub fn is_implicit(self) -> bool {
+        matches!(self, Method::Rodas4)
+    }
+}
+
+/// Integration options. Error test: `|err_i| <= atol_i + rtol |y_i|`, RMS norm over components.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Options<const N: usize> {
+    /// Relative tolerance (> 0).
+    pub rtol: f64,
+    /// Absolute tolerance per component (> 0).
+    pub atol: SVector<f64, N>,
+    /// Initial step; 0 chooses one automatically (Hairer's starting-step algorithm).
+    pub h0: f64,
+    /// Largest step; `f64::INFINITY` for none.
+    pub h_max: f64,
+    /// Smallest step relative to `|t|` before the run ends with `StepTooSmall`
+    /// (the absolute floor is `h_min_rel * max(|t|, 1)`).
+    pub h_min_rel: f64,
+    /// Step budget (accepted + rejected).
+    pub max_steps: u64,
+    /// Absolute tolerance on located event times [s].
+    pub event_tol: f64,
+    /// After a `Switch` the same event function is ignored until the integration has moved by
+    /// this much time [s] or the function has moved away from zero: the guard against grazing
+    /// re-triggers (documented in the README).
+    pub event_guard: f64,
+    /// Most events in one run before it ends with `EventChatter`.
+    pub max_events: u64,
+}
+
+impl<const N: usize> Options<N> {
+    /// Options with scalar tolerances and the defaults below.
+    pub fn new(rtol: f64, atol: f64) -> Self {
+        Options {
+            rtol,
+            atol: SVector::<f64, N>::repeat(atol),
+            h0: 0.0,
+            h_max: f64::INFINITY,
+            h_min_rel: 1e-14,
+            max_steps: 10_000_000,
+            event_tol: 1e-13,
+            event_guard: 1e-12,
+            max_events: 10_000_000,
+        }
+    }
+}
+
+/// Work counters of one run (they end up in the output).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Stats {
+    /// Right-hand-side evaluations (including those of event location, if any).
+    pub n_rhs: u64,
+    /// Jacobian evaluations.
+    pub n_jac: u64,
+    /// LU decompositions.
+    pub n_lu: u64,
+    /// Accepted steps.
+    pub n_accept: u64,
+    /// Rejected steps.
+    pub n_reject: u64,
+    /// Located events (all actions).
+    pub n_events: u64,
+}
+
+impl core::ops::AddAssign for Stats {
+    fn add_assign(&mut self, o: Stats) {
+        self.n_rhs += o.n_rhs;
+        self.n_jac += o.n_jac;
+        self.n_lu += o.n_lu;
+        self.n_accept += o.n_accept;
+        self.n_reject += o.n_reject;
+        self.n_events += o.n_events;
+    }
+}
+
+/// How a run ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Outcome {
+    /// Reached `t_end`.
+    Finished,
+    /// An event with action `Stop` ended it.
+    StoppedByEvent,
+    /// The observer asked to stop.
+    StoppedByObserver,
+    /// `max_steps` exhausted.
+    MaxSteps,
+    /// Step size fell below the floor.
+    StepTooSmall,
+    /// Non-finite state or derivative.
+    NonFinite,
+    /// More than `max_events` events.
+    EventChatter,
+}
+
+impl Outcome {
+    /// The per-point status this outcome maps to (a stop by event or observer is a success of the
+    /// integrator; the caller decides what it means).
+    pub fn status(self) -> crate::status::Status {
+        use crate::status::Status;
+        match self {
+            Outcome::Finished | Outcome::StoppedByEvent | Outcome::StoppedByObserver => Status::Success,
+            Outcome::MaxSteps => Status::MaxSteps,
+            Outcome::StepTooSmall => Status::StepTooSmall,
+            Outcome::NonFinite => Status::NonFinite,
+            Outcome::EventChatter => Status::EventChatter,
+        }
+    }
+}
+
+/// End state of a run.
+#[derive(Clone, Copy, Debug)]
+pub struct Solution<const N: usize, M> {
+    /// Time reached.
+    pub t: f64,
+    /// State reached.
+    pub y: SVector<f64, N>,
+    /// Mode at the end.
+    pub mode: M,
+    /// How it ended.
+    pub outcome: Outcome,
+    /// Work counters.
+    pub stats: Stats,
+}
+
+/// Dense output of one accepted step on `[t0, t1]`.
+pub trait Dense<const N: usize> {
+    /// Interpolated state at `t` in `[t0, t1]`.
+    fn eval(&self, t: f64) -> SVector<f64, N>;
+}
+
+/// One accepted (possibly event-truncated) step, as an observer sees it.
+pub struct StepView<'a, const N: usize, M> {
+    /// Start of the step.
+    pub t0: f64,
+    /// End of the step (an event time if truncated).
+    pub t1: f64,
+    /// State at `t0`.
+    pub y0: &'a SVector<f64, N>,
+    /// State at `t1`.
+    pub y1: &'a SVector<f64, N>,
+    /// Mode during the step.
+    pub mode: M,
+    /// Interpolant valid on `[t0, t1]`.
+    pub dense: &'a dyn Dense<N>,
+}
+
+/// Whether the run goes on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Control {
+    /// Go on.
+    Continue,
+    /// End the run now (`Outcome::StoppedByObserver`).
+    Stop,
+}
+
+/// Sees the run as it goes.
+pub trait Observer<const N: usize, M> {
+    /// After each accepted step (before events at its end are processed).
+    fn on_step(&mut self, _step: &StepView<'_, N, M>) -> Control {
+        Control::Continue
+    }
+    /// At each located event: its index, time, state, and the modes before and after.
+    fn on_event(&mut self, _index: usize, _t: f64, _y: &SVector<f64, N>, _before: M, _after: M) -> Control {
+        Control::Continue
+    }
+}
+
+/// An observer that watches nothing.
+pub struct NoObserver;
+impl<const N: usize, M> Observer<N, M> for NoObserver {}
+
+/// Samples the dense output at increasing times `t_eval` (an observer).
+pub struct Sampler<'a, const N: usize> {
+    /// Requested times (increasing).
+    pub t_eval: &'a [f64],
+    /// Samples taken so far, one per requested time in order.
+    pub out: Vec<SVector<f64, N>>,
+}
+
+impl<'a, const N: usize> Sampler<'a, N> {
+    /// A sampler for `t_eval` (increasing).
+    pub fn new(t_eval: &'a [f64]) -> Self {
+        Sampler { t_eval, out: Vec::with_capacity(t_eval.len()) }
+    }
+}
+
+impl<const N: usize, M> Observer<N, M> for Sampler<'_, N> {
+    fn on_step(&mut self, s: &StepView<'_, N, M>) -> Control {
+        while let Some(&t) = self.t_eval.get(self.out.len()) {
+            if t > s.t1 {
+                break;
+            }
+            // Times before the first step's start are clamped to it (t0 of the run).
+            let v = if t <= s.t0 { *s.y0 } else if t == s.t1 { *s.y1 } else { s.dense.eval(t) };
+            self.out.push(v);
+        }
+        Control::Continue
+    }
+}
