@@ -1,1 +1,666 @@
-//! (in progress)
+//! Trajectories of the slider: plain runs, sampled runs, and runs to a steady state with a summary.
+//!
+//! A run to steady state ends when the motion
+//! - **decays** to steady sliding: the largest `|z|` over a window of Poincare sections is below
+//!   `decay_amplitude` and below the window before it (the motion is small and shrinking);
+//! - **settles on a periodic state**: on the Poincare section `zd = 0`, `z` at a maximum (crossing
+//!   of `zd` from + to -), the section state repeats after `p` crossings (`p = 1..=MAX_MULTIPLICITY`,
+//!   the smallest `p` wins, so a cycle with several maxima of `z` per period is still found) to
+//!   `periodic_tol` relative to each component's range over the window, twice in a row;
+//! - **escapes** the model's validity: `|z|` reaches the escape limit (an event);
+//! - or reaches `t_max` without either (status `NotConverged`).
+//!
+//! For a periodic state the summary re-integrates one period from the section state and takes
+//! Fourier integrals of uniform dense-output samples: DC and harmonics 1-3 of `z` with phases
+//! relative to `z1`, the first harmonics of `phi` and `x`, the minimum total normal force, the
+//! fraction of the period with the pin off the disk (`zc > 0`, from located contact events) and the
+//! minimum sliding velocity. Phases are `alpha` in `|.| sin(k psi + alpha)`, `psi = w t` with the phase
+//! of `z1` set to 0 (MODEL.md §5), in radians in `[0, 2 pi)`.
+
+use crate::model::{event, idx, ContactMode, Slider, State};
+use crate::ode::{integrate, Control, Method, Observer, Options, Outcome, Sampler, Stats, StepView};
+use crate::status::Status;
+use nalgebra::SVector;
+
+/// Largest period multiplicity (section crossings per period) looked for.
+pub const MAX_MULTIPLICITY: usize = 8;
+
+/// Tolerances of a plain integration, with per-component absolute tolerances scaled to the slider.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Tolerances {
+    /// Relative tolerance (> 0).
+    pub rtol: f64,
+    /// Absolute tolerance per component; `None`: `rtol` times [`characteristic_sizes`].
+    pub atol: Option<[f64; 6]>,
+}
+
+/// Characteristic size of each state component [m, m/s, m, m/s, rad, rad/s]: `|z_st|` for `z` and
+/// `x`, the twist `|z_st|/L` that moves the contact by `|z_st|` for `phi` (`|z_st|` if `L = 0`), and
+/// those times the torsional frequency for the rates. Default absolute tolerances are `rtol` times
+/// these, so that a tolerance means the same relative accuracy on every component.
+pub fn characteristic_sizes(s: &Slider) -> [f64; 6] {
+    let z = s.z_st.abs();
+    let phi = if s.p.moment_arm > 0.0 { z / s.p.moment_arm } else { z };
+    let w = s.p.omega_torsion;
+    [z, z * w, z, z * w, phi, phi * w]
+}
+
+/// Integration options for `s` at the given tolerances.
+pub fn options_for(s: &Slider, tol: &Tolerances) -> Options<6> {
+    let sizes = characteristic_sizes(s);
+    let atol = tol.atol.unwrap_or(sizes.map(|v| v * tol.rtol));
+    let mut o = Options::<6>::new(tol.rtol, 1.0);
+    o.atol = SVector::<f64, 6>::from(atol);
+    o
+}
+
+/// Extremes seen along a run: the validity checks of MODEL.md §2-3.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Extremes {
+    /// Minimum total normal force N [N] (0 while the pin is off the disk in the unilateral model).
+    pub min_normal_force: f64,
+    /// Largest `zc = z_st + z` [m]; `> 0` means the contact opened (for the bilateral law: outside its validity).
+    pub max_gap: f64,
+    /// Minimum sliding velocity `v_r` [m/s]; `<= 0` means stick-slip (the constant-mu law is invalid there).
+    pub min_slip_velocity: f64,
+    /// Largest `|z|` [m].
+    pub max_abs_z: f64,
+}
+
+impl Default for Extremes {
+    fn default() -> Self {
+        Extremes {
+            min_normal_force: f64::INFINITY,
+            max_gap: f64::NEG_INFINITY,
+            min_slip_velocity: f64::INFINITY,
+            max_abs_z: 0.0,
+        }
+    }
+}
+
+impl Extremes {
+    #[inline]
+    fn update(&mut self, s: &Slider, y: &State, mode: ContactMode) {
+        let f = s.forces(y, mode);
+        self.min_normal_force = self.min_normal_force.min(f.normal);
+        self.max_gap = self.max_gap.max(s.gap(y));
+        self.min_slip_velocity = self.min_slip_velocity.min(f.slip_velocity);
+        self.max_abs_z = self.max_abs_z.max(y[idx::Z].abs());
+    }
+}
+
+/// Result of a plain run.
+#[derive(Clone, Copy, Debug)]
+pub struct RunResult {
+    /// Status of the run (`Diverged` when the escape event stopped it).
+    pub status: Status,
+    /// Time reached [s].
+    pub t: f64,
+    /// State reached.
+    pub y: State,
+    /// Extremes at step ends and events.
+    pub extremes: Extremes,
+    /// Work counters.
+    pub stats: Stats,
+}
+
+struct ExtremesObserver<'a, O> {
+    s: &'a Slider,
+    ext: Extremes,
+    inner: O,
+}
+
+impl<O: Observer<6, ContactMode>> Observer<6, ContactMode> for ExtremesObserver<'_, O> {
+    fn on_step(&mut self, st: &StepView<'_, 6, ContactMode>) -> Control {
+        self.ext.update(self.s, st.y1, st.mode);
+        self.inner.on_step(st)
+    }
+    fn on_event(&mut self, i: usize, t: f64, y: &State, before: ContactMode, after: ContactMode) -> Control {
+        self.ext.update(self.s, y, before);
+        self.ext.update(self.s, y, after);
+        self.inner.on_event(i, t, y, before, after)
+    }
+}
+
+fn status_of(outcome: Outcome, escaped: bool) -> Status {
+    if outcome == Outcome::StoppedByEvent && escaped {
+        Status::Diverged
+    } else {
+        outcome.status()
+    }
+}
+
+/// Integrate `s` from `y0` at `t = 0` to `t_end`, observed by `obs`.
+pub fn run_observed<O: Observer<6, ContactMode>>(
+    s: &Slider,
+    y0: &State,
+    t_end: f64,
+    method: Method,
+    tol: &Tolerances,
+    obs: O,
+) -> (RunResult, O) {
+    let opts = options_for(s, tol);
+    let mut o = ExtremesObserver { s, ext: Extremes::default(), inner: obs };
+    o.ext.update(s, y0, s.mode_at(y0));
+    let sol = integrate(s, method, 0.0, *y0, t_end, &opts, &mut o);
+    let escaped = sol.y[idx::Z].abs() >= s.p.escape_limit * (1.0 - 1e-9);
+    let status = status_of(sol.outcome, escaped);
+    (RunResult { status, t: sol.t, y: sol.y, extremes: o.ext, stats: sol.stats }, o.inner)
+}
+
+/// Integrate to `t_end` and return the end state.
+pub fn run(s: &Slider, y0: &State, t_end: f64, method: Method, tol: &Tolerances) -> RunResult {
+    run_observed(s, y0, t_end, method, tol, crate::ode::NoObserver).0
+}
+
+/// Integrate to `t_end` and sample the state at increasing `t_eval` (times past the end of a run
+/// that stopped early are filled with NaN).
+pub fn run_sampled(s: &Slider, y0: &State, t_end: f64, method: Method, tol: &Tolerances, t_eval: &[f64]) -> (RunResult, Vec<State>) {
+    let (r, sampler) = run_observed(s, y0, t_end, method, tol, Sampler::new(t_eval));
+    let mut out = sampler.out;
+    out.resize(t_eval.len(), State::repeat(f64::NAN));
+    (r, out)
+}
+
+/// Records every accepted step end and event point (the solver's natural output).
+pub struct StepRecorder {
+    /// Times [s].
+    pub t: Vec<f64>,
+    /// States.
+    pub y: Vec<State>,
+}
+
+impl Observer<6, ContactMode> for StepRecorder {
+    fn on_step(&mut self, st: &StepView<'_, 6, ContactMode>) -> Control {
+        if self.t.is_empty() {
+            self.t.push(st.t0);
+            self.y.push(*st.y0);
+        }
+        self.t.push(st.t1);
+        self.y.push(*st.y1);
+        Control::Continue
+    }
+}
+
+/// How a run to steady state ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
+pub enum SteadyOutcome {
+    /// The motion decayed to steady sliding.
+    Decayed = 0,
+    /// The motion settled on a periodic state.
+    Periodic = 1,
+    /// `|z|` reached the escape limit.
+    Diverged = 2,
+    /// `t_max` was reached with neither (see the status for failures).
+    Unsettled = 3,
+    /// The integration failed (see the status).
+    Failed = 4,
+}
+
+impl SteadyOutcome {
+    /// Machine name.
+    pub fn name(self) -> &'static str {
+        match self {
+            SteadyOutcome::Decayed => "decayed",
+            SteadyOutcome::Periodic => "periodic",
+            SteadyOutcome::Diverged => "diverged",
+            SteadyOutcome::Unsettled => "unsettled",
+            SteadyOutcome::Failed => "failed",
+        }
+    }
+}
+
+/// Settings of a run to steady state.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SteadyOptions {
+    /// Longest simulated time [s].
+    pub t_max: f64,
+    /// Integrator.
+    pub method: Method,
+    /// Tolerances.
+    pub tol: Tolerances,
+    /// Relative tolerance of the section-state repetition that declares a periodic state.
+    pub periodic_tol: f64,
+    /// Amplitude of `z` below which a shrinking motion counts as decayed [m]; `None`: `1e-3 |z_st|`.
+    pub decay_amplitude: Option<f64>,
+    /// Sections per window of the decay test.
+    pub decay_window: usize,
+    /// Uniform samples per period for the Fourier integrals.
+    pub n_fourier: usize,
+}
+
+impl Default for SteadyOptions {
+    fn default() -> Self {
+        SteadyOptions {
+            t_max: 10.0,
+            method: Method::Dopri5,
+            tol: Tolerances { rtol: 1e-8, atol: None },
+            periodic_tol: 1e-5,
+            decay_amplitude: None,
+            decay_window: 8,
+            n_fourier: 512,
+        }
+    }
+}
+
+/// Summary of a run to steady state. Amplitudes [m, rad], phases [rad] in `[0, 2 pi)` relative to `z1`.
+#[derive(Clone, Copy, Debug)]
+pub struct Summary {
+    /// Status of the computation (`Success` when it ended in a recognised state: decayed, periodic
+    /// or diverged; `NotConverged` when `t_max` was reached; a failure code otherwise).
+    pub status: Status,
+    /// What the motion did.
+    pub outcome: SteadyOutcome,
+    /// Simulated time at the end of detection [s].
+    pub t_end: f64,
+    /// Angular frequency of the fundamental [rad/s] (periodic: `2 pi / period`; otherwise from the
+    /// last section interval, NaN if none).
+    pub omega: f64,
+    /// Period [s] (periodic only, else NaN).
+    pub period: f64,
+    /// Section crossings per period (periodic only, else 0).
+    pub multiplicity: u32,
+    /// DC of z [m].
+    pub z0: f64,
+    /// Amplitudes of the first three harmonics of z [m].
+    pub z_amp: [f64; 3],
+    /// Phases of harmonics 1-3 of z relative to z1 (the first is 0 by definition) [rad].
+    pub z_phase: [f64; 3],
+    /// Amplitude [rad] and phase [rad] of the first harmonic of phi.
+    pub phi_amp: f64,
+    /// Phase of phi1 relative to z1 [rad].
+    pub phi_phase: f64,
+    /// Amplitude of the first harmonic of x [m].
+    pub x_amp: f64,
+    /// Phase of x1 relative to z1 [rad].
+    pub x_phase: f64,
+    /// Minimum total normal force over the final period (periodic) or the whole run (otherwise) [N].
+    pub min_normal_force: f64,
+    /// Fraction of the final period with the pin off the disk (`zc > 0`) (periodic only).
+    pub fraction_off_disk: f64,
+    /// Minimum sliding velocity over the final period or the run [m/s].
+    pub min_slip_velocity: f64,
+    /// Extremes over the whole run.
+    pub extremes: Extremes,
+    /// Work counters, transient and the Fourier period together.
+    pub stats: Stats,
+}
+
+impl Summary {
+    fn empty(status: Status, outcome: SteadyOutcome) -> Self {
+        Summary {
+            status,
+            outcome,
+            t_end: 0.0,
+            omega: f64::NAN,
+            period: f64::NAN,
+            multiplicity: 0,
+            z0: f64::NAN,
+            z_amp: [f64::NAN; 3],
+            z_phase: [f64::NAN; 3],
+            phi_amp: f64::NAN,
+            phi_phase: f64::NAN,
+            x_amp: f64::NAN,
+            x_phase: f64::NAN,
+            min_normal_force: f64::NAN,
+            fraction_off_disk: f64::NAN,
+            min_slip_velocity: f64::NAN,
+            extremes: Extremes::default(),
+            stats: Stats::default(),
+        }
+    }
+
+    /// A summary for a point that could not be computed.
+    pub fn failed(status: Status) -> Self {
+        Self::empty(status, SteadyOutcome::Failed)
+    }
+}
+
+#[derive(Clone, Copy)]
+struct Crossing {
+    t: f64,
+    y: State,
+    /// Largest |z| since the previous crossing.
+    peak: f64,
+}
+
+/// Watches the Poincare section and decides when the run has settled.
+struct SectionWatcher {
+    ring: Vec<Crossing>,
+    n_seen: usize,
+    peak_since: f64,
+    tol: f64,
+    decay_amp: f64,
+    window: usize,
+    found: Option<(usize, f64)>,
+    decayed: bool,
+    matches_in_row: [u32; MAX_MULTIPLICITY + 1],
+    sizes: [f64; 6],
+}
+
+const RING: usize = 64;
+
+impl SectionWatcher {
+    fn new(opts: &SteadyOptions, s: &Slider) -> Self {
+        SectionWatcher {
+            ring: Vec::with_capacity(RING),
+            n_seen: 0,
+            peak_since: 0.0,
+            tol: opts.periodic_tol,
+            decay_amp: opts.decay_amplitude.unwrap_or(1e-3 * s.z_st.abs()),
+            window: opts.decay_window.max(2),
+            found: None,
+            decayed: false,
+            matches_in_row: [0; MAX_MULTIPLICITY + 1],
+            sizes: characteristic_sizes(s),
+        }
+    }
+
+    fn get(&self, back: usize) -> &Crossing {
+        // back = 0: newest
+        let i = (self.n_seen - 1 - back) % RING;
+        &self.ring[i]
+    }
+
+    fn push(&mut self, c: Crossing) {
+        if self.ring.len() < RING {
+            self.ring.push(c);
+        } else {
+            self.ring[self.n_seen % RING] = c;
+        }
+        self.n_seen += 1;
+        self.check();
+    }
+
+    fn check(&mut self) {
+        let n = self.n_seen;
+        // Scale of the periodicity test: the motion's amplitude (largest |z| since the previous
+        // crossing) in units of z's characteristic size, carried over to every component's size.
+        let rel_amp = (self.get(0).peak / self.sizes[0]).max(1e-6);
+        for p in 1..=MAX_MULTIPLICITY {
+            if n <= p {
+                break;
+            }
+            let a = self.get(0);
+            let b = self.get(p);
+            let mut ok = (0..6).all(|c| (a.y[c] - b.y[c]).abs() <= self.tol * rel_amp * self.sizes[c]);
+            let dt_now = a.t - b.t;
+            if ok && n > 2 * p {
+                let dt_prev = self.get(p).t - self.get(2 * p).t;
+                ok = (dt_now - dt_prev).abs() <= self.tol.max(1e-12) * dt_now;
+            } else if n <= 2 * p {
+                ok = false;
+            }
+            if ok {
+                self.matches_in_row[p] += 1;
+                if self.matches_in_row[p] >= 2 {
+                    self.found = Some((p, dt_now));
+                    return;
+                }
+            } else {
+                self.matches_in_row[p] = 0;
+            }
+        }
+        // Decay: the largest peak of the newest window is small and below the window before it.
+        let w = self.window;
+        if n >= 2 * w {
+            let recent = (0..w).map(|b| self.get(b).peak).fold(0.0, f64::max);
+            let before = (w..2 * w).map(|b| self.get(b).peak).fold(0.0, f64::max);
+            if recent < self.decay_amp && recent < before {
+                self.decayed = true;
+            }
+        }
+    }
+}
+
+struct SteadyObserver<'a> {
+    s: &'a Slider,
+    w: SectionWatcher,
+    decay_floor: f64,
+}
+
+impl Observer<6, ContactMode> for SteadyObserver<'_> {
+    fn on_step(&mut self, st: &StepView<'_, 6, ContactMode>) -> Control {
+        let (zd0, zd1) = (st.y0[idx::ZD], st.y1[idx::ZD]);
+        self.w.peak_since = self.w.peak_since.max(st.y1[idx::Z].abs());
+        if zd0 > 0.0 && zd1 <= 0.0 {
+            // Section: zd = 0 falling. Locate on the dense output by Illinois iteration; the
+            // dense output is accurate to the integration tolerance, which sets the section's.
+            let (t, y) = locate(st, |y| y[idx::ZD], 1e-14 * st.t1.abs().max(1.0));
+            let peak = self.w.peak_since.max(y[idx::Z].abs());
+            self.w.peak_since = st.y1[idx::Z].abs();
+            self.w.push(Crossing { t, y, peak });
+            if self.w.found.is_some() || self.w.decayed {
+                return Control::Stop;
+            }
+        } else if st.y1.norm() == 0.0 || self.w.peak_since < self.decay_floor {
+            // Exactly at rest (or below any meaningful size): nothing will ever cross the section.
+            self.w.decayed = true;
+            return Control::Stop;
+        }
+        let _ = self.s;
+        Control::Continue
+    }
+}
+
+/// Locate a zero of `g` (falling from > 0 to <= 0) inside a step by Illinois iteration on the dense output.
+fn locate(st: &StepView<'_, 6, ContactMode>, g: impl Fn(&State) -> f64, tol: f64) -> (f64, State) {
+    let (mut a, mut b) = (st.t0, st.t1);
+    let (mut ga, mut gb) = (g(st.y0), g(st.y1));
+    let mut yb = *st.y1;
+    let mut side = 0i32;
+    for _ in 0..100 {
+        if (b - a).abs() <= tol || gb == 0.0 {
+            break;
+        }
+        let t = (a * gb - b * ga) / (gb - ga);
+        let t = if t.is_finite() && t > a.min(b) && t < a.max(b) { t } else { 0.5 * (a + b) };
+        let y = st.dense.eval(t);
+        let gt = g(&y);
+        if gt * gb > 0.0 {
+            b = t;
+            gb = gt;
+            yb = y;
+            if side == -1 {
+                ga *= 0.5;
+            }
+            side = -1;
+        } else {
+            a = t;
+            ga = gt;
+            if side == 1 {
+                gb *= 0.5;
+            }
+            side = 1;
+        }
+    }
+    let _ = ga;
+    (b, yb)
+}
+
+/// Fourier coefficient pair (a_k, b_k) -> amplitude and phase alpha of |.| sin(k w t + alpha).
+fn amp_phase(a: f64, b: f64) -> (f64, f64) {
+    ((a * a + b * b).sqrt(), a.atan2(b))
+}
+
+fn wrap(x: f64) -> f64 {
+    let t = std::f64::consts::TAU;
+    let r = x.rem_euclid(t);
+    if r >= t {
+        0.0
+    } else {
+        r
+    }
+}
+
+/// Observer of the Fourier period: samples, off-disk time (from contact events), minimum forces.
+struct PeriodObserver<'a> {
+    s: &'a Slider,
+    sampler: Sampler<'a, 6>,
+    min_normal: f64,
+    min_slip: f64,
+    t_off: f64,
+    off_since: Option<f64>,
+}
+
+impl Observer<6, ContactMode> for PeriodObserver<'_> {
+    fn on_step(&mut self, st: &StepView<'_, 6, ContactMode>) -> Control {
+        self.sampler.on_step(st);
+        let f = self.s.forces(st.y1, st.mode);
+        self.min_normal = self.min_normal.min(f.normal);
+        self.min_slip = self.min_slip.min(f.slip_velocity);
+        Control::Continue
+    }
+    fn on_event(&mut self, i: usize, t: f64, y: &State, before: ContactMode, after: ContactMode) -> Control {
+        for m in [before, after] {
+            let f = self.s.forces(y, m);
+            self.min_normal = self.min_normal.min(f.normal);
+            self.min_slip = self.min_slip.min(f.slip_velocity);
+        }
+        if i == event::GAP {
+            // Off the disk after the crossing iff the pin moves away from it.
+            if y[idx::ZD] > 0.0 {
+                self.off_since = Some(t);
+            } else if let Some(t0) = self.off_since.take() {
+                self.t_off += t - t0;
+            }
+        }
+        Control::Continue
+    }
+}
+
+/// Run `s` from `y0` until it decays, settles on a periodic state, escapes, or reaches `t_max`,
+/// and summarise the motion.
+pub fn run_to_steady(s: &Slider, y0: &State, opts: &SteadyOptions) -> Summary {
+    let obs = SteadyObserver { s, w: SectionWatcher::new(opts, s), decay_floor: 1e-6 * opts.decay_amplitude.unwrap_or(1e-3 * s.z_st.abs()) };
+    let (r, obs) = run_observed(s, y0, opts.t_max, opts.method, &opts.tol, obs);
+    let w = obs.w;
+    let mut sum = Summary::empty(r.status, SteadyOutcome::Failed);
+    sum.t_end = r.t;
+    sum.extremes = r.extremes;
+    sum.stats = r.stats;
+    sum.min_normal_force = r.extremes.min_normal_force;
+    sum.min_slip_velocity = r.extremes.min_slip_velocity;
+    if w.n_seen >= 2 {
+        sum.omega = std::f64::consts::TAU / (w.get(0).t - w.get(1).t);
+    }
+    match r.status {
+        Status::Diverged => {
+            sum.outcome = SteadyOutcome::Diverged;
+            sum.status = Status::Success;
+            return sum;
+        }
+        Status::Success => {}
+        _ => return sum,
+    }
+    if let Some((p, period)) = w.found {
+        sum.outcome = SteadyOutcome::Periodic;
+        sum.period = period;
+        sum.multiplicity = p as u32;
+        sum.omega = std::f64::consts::TAU / period;
+        let c = *w.get(0);
+        fourier_period(s, &c.y, c.t, period, opts, &mut sum);
+    } else if w.decayed {
+        sum.outcome = SteadyOutcome::Decayed;
+    } else {
+        sum.outcome = SteadyOutcome::Unsettled;
+        sum.status = Status::NotConverged;
+    }
+    sum
+}
+
+/// Re-integrate one period from the section state and fill the harmonic part of `sum`.
+fn fourier_period(s: &Slider, y0: &State, t0: f64, period: f64, opts: &SteadyOptions, sum: &mut Summary) {
+    let n = opts.n_fourier.max(16);
+    let t_eval: Vec<f64> = (0..n).map(|j| j as f64 * period / n as f64).collect();
+    let mode0 = s.mode_at(y0);
+    let mut obs = PeriodObserver {
+        s,
+        sampler: Sampler::new(&t_eval),
+        min_normal: s.forces(y0, mode0).normal,
+        min_slip: s.slip_velocity(y0),
+        t_off: 0.0,
+        off_since: if s.gap(y0) > 0.0 { Some(0.0) } else { None },
+    };
+    let o = options_for(s, &opts.tol);
+    let sol = integrate(s, opts.method, 0.0, *y0, period, &o, &mut obs);
+    sum.stats += sol.stats;
+    let _ = t0;
+    if sol.outcome != Outcome::Finished || obs.sampler.out.len() != n {
+        sum.status = sol.outcome.status();
+        if sum.status.is_ok() {
+            sum.status = Status::NotConverged;
+        }
+        return;
+    }
+    if let Some(t_start) = obs.off_since {
+        obs.t_off += period - t_start;
+    }
+    let ys = &obs.sampler.out;
+    let w = std::f64::consts::TAU / period;
+    let coef = |comp: usize, k: usize| -> (f64, f64) {
+        let (mut a, mut b) = (0.0, 0.0);
+        for (j, y) in ys.iter().enumerate() {
+            let arg = k as f64 * w * t_eval[j];
+            a += y[comp] * arg.cos();
+            b += y[comp] * arg.sin();
+        }
+        (2.0 * a / n as f64, 2.0 * b / n as f64)
+    };
+    sum.z0 = ys.iter().map(|y| y[idx::Z]).sum::<f64>() / n as f64;
+    let mut alpha = [0.0; 3];
+    for k in 1..=3 {
+        let (a, b) = coef(idx::Z, k);
+        let (amp, ph) = amp_phase(a, b);
+        sum.z_amp[k - 1] = amp;
+        alpha[k - 1] = ph;
+    }
+    for k in 1..=3 {
+        sum.z_phase[k - 1] = wrap(alpha[k - 1] - k as f64 * alpha[0]);
+    }
+    let (a, b) = coef(idx::PHI, 1);
+    let (amp, ph) = amp_phase(a, b);
+    sum.phi_amp = amp;
+    sum.phi_phase = wrap(ph - alpha[0]);
+    let (a, b) = coef(idx::X, 1);
+    let (amp, ph) = amp_phase(a, b);
+    sum.x_amp = amp;
+    sum.x_phase = wrap(ph - alpha[0]);
+    // Samples miss the extremes between them; combine with step ends and events.
+    let mut min_n = obs.min_normal;
+    let mut min_v = obs.min_slip;
+    for y in ys {
+        let f = s.forces(y, s.mode_at(y));
+        min_n = min_n.min(f.normal);
+        min_v = min_v.min(f.slip_velocity);
+    }
+    sum.min_normal_force = min_n;
+    sum.min_slip_velocity = min_v;
+    // For the bilateral law too: "off the disk" means zc > 0, where the law acts outside its validity.
+    sum.fraction_off_disk = obs.t_off / period;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::Params;
+
+    #[test]
+    fn amp_phase_convention() {
+        // 2 sin(x + 0.3) = 2 sin 0.3 cos x + 2 cos 0.3 sin x
+        let (a, b) = (2.0 * 0.3f64.sin(), 2.0 * 0.3f64.cos());
+        let (amp, ph) = amp_phase(a, b);
+        assert!((amp - 2.0).abs() < 1e-15 && (ph - 0.3).abs() < 1e-15);
+        assert!((wrap(-0.1) - (std::f64::consts::TAU - 0.1)).abs() < 1e-15);
+    }
+
+    #[test]
+    fn characteristic_sizes_follow_static_point() {
+        let s = Slider::seed();
+        let c = characteristic_sizes(&s);
+        assert!((c[0] - 16.5612e-6).abs() < 1e-10);
+        assert!((c[4] - 16.5612e-6 / 0.065).abs() < 1e-8);
+        let _ = Params::seed();
+    }
+}

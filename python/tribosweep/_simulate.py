@@ -1,0 +1,248 @@
+"""Time-domain API: one trajectory (`simulate`) and many in parallel (`ensemble`)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import xarray as xr
+
+from . import _checks, _core
+from ._flags import OUTCOME_NAMES, STATUS_NAMES, flag_attrs
+from ._model import PARAM_LONG_NAMES, PARAM_NAMES, PARAM_UNITS, SliderModel
+
+#: Default initial disturbance: z = 1 um, everything else at rest on the static point.
+DEFAULT_Y0 = np.array([1e-6, 0.0, 0.0, 0.0, 0.0, 0.0])
+
+#: State components: (name, units, long name).
+STATE_VARS: tuple[tuple[str, str, str], ...] = (
+    ("z", "m", "normal displacement from the static point (positive away from the disk)"),
+    ("z_dot", "m s-1", "normal velocity"),
+    ("x", "m", "frictional displacement"),
+    ("x_dot", "m s-1", "frictional velocity"),
+    ("phi", "rad", "twist of the arm"),
+    ("phi_dot", "rad s-1", "twist rate"),
+)
+
+_RUN_VARS = {
+    "t_reached": ("s", "time reached by the integration"),
+    "min_normal_force": ("N", "minimum total normal force at step ends and events"),
+    "max_gap": ("m", "largest pin position relative to the disk surface zc = z_st + z (> 0: contact open)"),
+    "min_slip_velocity": ("m s-1", "minimum sliding velocity v_r (<= 0: stick-slip)"),
+    "max_abs_z": ("m", "largest |z|"),
+}
+_STAT_VARS = {
+    "n_rhs": "right-hand-side evaluations",
+    "n_jac": "Jacobian evaluations",
+    "n_lu": "LU decompositions",
+    "n_accept": "accepted steps",
+    "n_reject": "rejected steps",
+    "n_events": "located events",
+}
+
+
+def _check_common(model, t_end, method, rtol, atol, t_eval):
+    if not isinstance(model, SliderModel):
+        raise ValueError(f"model = {model!r} must be a tribosweep.SliderModel")
+    t_end = _checks.positive("t_end", t_end)
+    return (
+        t_end,
+        _checks.method(method),
+        _checks.rtol(rtol),
+        _checks.atol(atol),
+        _checks.times("t_eval", t_eval, t_end),
+    )
+
+
+def _status_vars(out: dict, dims: tuple[str, ...]) -> dict:
+    v = {
+        "status": (dims, np.asarray(out["status"], dtype=np.uint8), flag_attrs(STATUS_NAMES, "status of the computation")),
+        "reason": (dims, np.asarray(out["reason"], dtype=str), {"long_name": "reason for a non-success status"}),
+    }
+    for k, text in _STAT_VARS.items():
+        v[k] = (dims, np.asarray(out[k], dtype=np.int64), {"long_name": text, "units": "1"})
+    return v
+
+
+def _run_vars(out: dict, dims: tuple[str, ...]) -> dict:
+    v = _status_vars(out, dims)
+    for k, (units, text) in _RUN_VARS.items():
+        v[k] = (dims, np.asarray(out[k]), {"units": units, "long_name": text})
+    return v
+
+
+def _model_attrs(model: SliderModel, method: str, rtol: float) -> dict:
+    attrs = {f"model_{k}": v for k, v in model.values().items()}
+    attrs.update(model_contact=model.contact, model_friction_law=model.friction_law, method=method, rtol=rtol)
+    return attrs
+
+
+def simulate(
+    model: SliderModel,
+    t_end: float,
+    *,
+    y0: Sequence[float] | None = None,
+    method: str = "dopri5",
+    rtol: float = 1e-8,
+    atol: float | Sequence[float] | None = None,
+    t_eval: Sequence[float] | None = None,
+) -> xr.Dataset:
+    """Integrate one trajectory of ``model`` from ``t = 0`` to ``t_end``.
+
+    Parameters
+    ----------
+    model : SliderModel
+        The slider.
+    t_end : float, s
+        End time (> 0).
+    y0 : array_like (6,), optional
+        Initial state ``[z (m), z_dot (m/s), x (m), x_dot (m/s), phi (rad), phi_dot (rad/s)]``,
+        measured from the static point. Default ``DEFAULT_Y0`` (``z = 1 um``).
+    method : {"dopri5", "dop853", "rodas4"}
+        Integrator: Dormand-Prince 5(4), DOP853 (8th order), or the stiffly accurate Rosenbrock
+        Rodas4 (for stiff friction regularisation).
+    rtol : float
+        Relative tolerance, in [1e-15, 1).
+    atol : float or array_like (6,), optional
+        Absolute tolerance per component. Default: ``rtol`` times each component's characteristic
+        size (``|z_st|`` for z and x, ``|z_st|/L`` for phi, those times ``omega_torsion`` for rates).
+    t_eval : array_like, s, optional
+        Increasing output times in ``[0, t_end]``; default: every accepted step.
+
+    Returns
+    -------
+    xarray.Dataset
+        Variables ``z, z_dot, x, x_dot, phi, phi_dot`` on dimension ``time``, and the run's
+        ``status`` (0 = success; see ``tribosweep.STATUS_NAMES``), work counters, and extremes
+        (``min_normal_force``, ``max_gap``, ``min_slip_velocity``) as scalar variables.
+
+    Examples
+    --------
+    >>> import tribosweep as ts
+    >>> ds = ts.simulate(ts.SliderModel(), 0.01, t_eval=[0.0, 0.005, 0.01])
+    >>> int(ds.status), ds.z.shape
+    (0, (3,))
+    """
+    t_end, method, rtol, atol, t_eval = _check_common(model, t_end, method, rtol, atol, t_eval)
+    y0 = _checks.state("y0", DEFAULT_Y0 if y0 is None else y0)
+    out = _core.simulate(model.values(), model.contact, model.friction_law, y0, t_end, method, rtol, atol, t_eval)
+    data = {
+        name: (("time",), out["y"][:, i], {"units": units, "long_name": text})
+        for i, (name, units, text) in enumerate(STATE_VARS)
+    }
+    scalar = {k: ((), v[1][0], v[2]) for k, v in _run_vars(out, ("trajectory",)).items()}
+    data.update(scalar)
+    return xr.Dataset(
+        data,
+        coords={"time": ("time", out["t"], {"units": "s", "long_name": "time"})},
+        attrs=_model_attrs(model, method, rtol),
+    )
+
+
+def ensemble(
+    model: SliderModel,
+    t_end: float,
+    params: dict[str, Sequence[float]],
+    *,
+    y0: Sequence[float] | Sequence[Sequence[float]] | None = None,
+    method: str = "dopri5",
+    rtol: float = 1e-8,
+    atol: float | Sequence[float] | None = None,
+    t_eval: Sequence[float] | None = None,
+    threads: int | None = None,
+    steady: bool = False,
+    periodic_tol: float = 1e-5,
+    decay_amplitude: float | None = None,
+) -> xr.Dataset:
+    """Integrate many parameter sets of ``model`` in parallel (GIL released, Rust threads).
+
+    Results are bit-identical for any ``threads``; a point that fails gets a status code and a
+    reason, and never stops the others.
+
+    Parameters
+    ----------
+    model : SliderModel
+        Base model; ``params`` override some of its real fields per trajectory.
+    t_end : float, s
+        End time (> 0); with ``steady=True`` the longest simulated time.
+    params : dict of str to 1-D array_like
+        ``{field name: values}``, all of the same length ``n`` (e.g. ``{"mu": ..., "normal_load": ...}``).
+    y0 : array_like (6,) or (n, 6), optional
+        Initial state(s); default ``DEFAULT_Y0``.
+    method, rtol, atol
+        As in :func:`simulate`.
+    t_eval : array_like, s, optional
+        Output times: adds ``z, ..., phi_dot`` on ``(trajectory, time)``.
+    threads : int, optional
+        Worker threads; default ``TRIBOSWEEP_THREADS`` or all cores.
+    steady : bool
+        Run each trajectory to its steady state (decay, periodic cycle, escape, or ``t_end``) and
+        return its summary: ``outcome``, ``omega``, harmonics of z, phi, x, minimum normal force,
+        fraction of the period off the disk, minimum sliding velocity.
+    periodic_tol : float
+        Relative repetition tolerance of the Poincare-section state that declares a cycle.
+    decay_amplitude : float, m, optional
+        Amplitude below which a shrinking motion counts as decayed (default ``1e-3 |z_st|``).
+
+    Returns
+    -------
+    xarray.Dataset
+        Dimension ``trajectory`` with the overridden parameters as coordinates.
+    """
+    t_end, method, rtol, atol, t_eval = _check_common(model, t_end, method, rtol, atol, t_eval)
+    names, values = _checks.param_arrays(params, PARAM_NAMES)
+    n = values.shape[0]
+    y0 = _checks.state("y0", DEFAULT_Y0 if y0 is None else y0, n)
+    threads = _checks.threads(threads)
+    periodic_tol = _checks.positive("periodic_tol", periodic_tol)
+    if decay_amplitude is not None:
+        decay_amplitude = _checks.positive("decay_amplitude", decay_amplitude)
+    kind = "steady" if steady else ("sampled" if t_eval is not None else "final")
+    if steady and t_eval is not None:
+        raise ValueError("t_eval cannot be combined with steady=True: a steady run returns a summary")
+    out = _core.ensemble(
+        model.values(), model.contact, model.friction_law, names, values, np.atleast_2d(y0), t_end, method, rtol,
+        atol, t_eval, threads, kind, periodic_tol, decay_amplitude,
+    )
+    dims = ("trajectory",)
+    coords = {"trajectory": ("trajectory", np.arange(n))}
+    for i, k in enumerate(names):
+        coords[k] = (dims, values[:, i], {"units": PARAM_UNITS[k], "long_name": PARAM_LONG_NAMES[k]})
+    if steady:
+        data = _status_vars(out, dims)
+        data["outcome"] = (dims, out["outcome"], flag_attrs(OUTCOME_NAMES, "how the run to steady state ended"))
+        summary_units = {
+            "t_end": ("s", "simulated time when the steady state was recognised"),
+            "omega": ("rad s-1", "angular frequency of the fundamental"),
+            "period": ("s", "period of the cycle"),
+            "z0": ("m", "mean of z over the period"),
+            "z1_amp": ("m", "amplitude of the first harmonic of z"),
+            "z2_amp": ("m", "amplitude of the second harmonic of z"),
+            "z3_amp": ("m", "amplitude of the third harmonic of z"),
+            "z1_phase": ("rad", "phase of z1 (0 by definition)"),
+            "z2_phase": ("rad", "phase theta of z2 relative to z1"),
+            "z3_phase": ("rad", "phase of z3 relative to z1"),
+            "phi1_amp": ("rad", "amplitude of the first harmonic of phi"),
+            "phi1_phase": ("rad", "phase of phi1 relative to z1"),
+            "x1_amp": ("m", "amplitude of the first harmonic of x"),
+            "x1_phase": ("rad", "phase of x1 relative to z1"),
+            "min_normal_force": ("N", "minimum total normal force (over the period if periodic)"),
+            "fraction_off_disk": ("1", "fraction of the period with the pin off the disk (zc > 0)"),
+            "min_slip_velocity": ("m s-1", "minimum sliding velocity v_r"),
+            "max_gap": ("m", "largest zc = z_st + z over the run"),
+            "max_abs_z": ("m", "largest |z| over the run"),
+        }
+        for k, (units, text) in summary_units.items():
+            data[k] = (dims, out[k], {"units": units, "long_name": text})
+        data["multiplicity"] = (dims, out["multiplicity"], {"units": "1", "long_name": "section crossings per period"})
+    else:
+        data = _run_vars(out, dims)
+        for i, (name, units, text) in enumerate(STATE_VARS):
+            data[f"{name}_end"] = (dims, out["y_end"][:, i], {"units": units, "long_name": f"{text} at the end"})
+        if t_eval is not None:
+            coords["time"] = ("time", t_eval, {"units": "s", "long_name": "time"})
+            for i, (name, units, text) in enumerate(STATE_VARS):
+                data[name] = (("trajectory", "time"), out["y"][:, :, i], {"units": units, "long_name": text})
+    attrs = _model_attrs(model, method, rtol)
+    attrs["threads"] = -1 if threads is None else threads
+    return xr.Dataset(data, coords=coords, attrs=attrs)
