@@ -1,0 +1,47 @@
+# One entry point for every check. `make run` and `make test` are the README's two commands.
+PYTHON ?= python3
+VENV   ?= .venv
+BIN    := $(VENV)/bin
+# Two cores on CI: build and test with both.
+export CARGO_BUILD_JOBS ?= 2
+
+.PHONY: run test test-rust test-python install install-test lint bench bench-quick clean
+
+$(BIN)/python:
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install -q --upgrade pip
+
+# Release build of the extension (maturin through pip) with the runtime and plotting extras.
+install: $(BIN)/python
+	$(BIN)/python -m pip install -q ".[plot]"
+
+install-test: $(BIN)/python
+	$(BIN)/python -m pip install -q ".[test]"
+
+# The main job: a default sweep around the seed configuration -> netCDF + regime map + report.
+run: install
+	$(BIN)/tribosweep seed --out out
+	$(BIN)/tribosweep sweep -o out/seed_sweep.nc --plot out/seed_sweep.png
+
+test-rust:
+	cargo test --release --workspace --exclude tribosweep-py
+
+test-python: install-test
+	$(BIN)/python -m pytest -q tests
+
+# Everything the tests need, then every test (Rust numerics, then the Python package), release-built.
+test: test-rust test-python
+
+lint:
+	cargo fmt --all -- --check
+	cargo clippy --release --workspace --all-targets -- -D warnings
+	$(BIN)/python -m ruff check python tests benches
+
+bench: install-test
+	$(BIN)/python benches/run_all.py --out bench_out
+
+bench-quick: install-test
+	$(BIN)/tribosweep bench --quick --out bench_out
+
+clean:
+	rm -rf target $(VENV) out bench_out

@@ -1,0 +1,45 @@
+"""Type stubs of the compiled core (private; use the tribosweep package)."""
+
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+
+def param_names() -> list[str]: ...
+def seed_params() -> dict[str, float]: ...
+def status_names() -> list[str]: ...
+def method_names() -> list[str]: ...
+def steady_outcome_names() -> list[str]: ...
+def validate_params(values: dict[str, float], contact: str, friction_law: str) -> None: ...
+def static_point(values: dict[str, float]) -> tuple[float, float]: ...
+def simulate(
+    values: dict[str, float],
+    contact: str,
+    friction_law: str,
+    y0: npt.NDArray[np.float64],
+    t_end: float,
+    method: str,
+    rtol: float,
+    atol: npt.NDArray[np.float64] | None = None,
+    t_eval: npt.NDArray[np.float64] | None = None,
+) -> dict[str, Any]: ...
+def ensemble(
+    base: dict[str, float],
+    contact: str,
+    friction_law: str,
+    names: list[str],
+    values: npt.NDArray[np.float64],
+    y0: npt.NDArray[np.float64],
+    t_end: float,
+    method: str,
+    rtol: float,
+    atol: npt.NDArray[np.float64] | None = None,
+    t_eval: npt.NDArray[np.float64] | None = None,
+    threads: int | None = None,
+    kind: str = "final",
+    periodic_tol: float = 1e-5,
+    decay_amplitude: float | None = None,
+    n_fourier: int = 512,
+) -> dict[str, Any]: ...

@@ -1,0 +1,120 @@
+"""Time-domain core against truth: scipy at tight tolerance, analytic limits, the bouncing cycle of MODEL.md §6."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import tribosweep as ts
+from tribosweep import reference
+
+METHODS = ["dopri5", "dop853", "rodas4"]
+
+
+@pytest.fixture(scope="module")
+def seed_scipy():
+    """Seed trajectory (bilateral, z(0) = 1 um) from scipy DOP853 at rtol 1e-13."""
+    t = np.linspace(0.0, 0.5, 1001)
+    sol = reference.solve(reference.seed_parameters(), ts.DEFAULT_Y0, 0.5, t_eval=t, rtol=1e-13)
+    return t, sol.y.T
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_seed_trajectory_matches_scipy(method, seed_scipy):
+    t, y_ref = seed_scipy
+    ds = ts.simulate(ts.SliderModel(), 0.5, method=method, rtol=1e-10, t_eval=t)
+    assert int(ds.status) == ts.STATUS["success"]
+    zmax = np.abs(y_ref[:, 0]).max()
+    err = np.abs(ds.z.values - y_ref[:, 0]).max() / zmax
+    assert err < 1e-7, f"{method}: max |z - z_scipy| / max|z| = {err:.2e}"
+    # The other components too, each relative to its own range.
+    for i, name in enumerate(["z_dot", "x", "x_dot", "phi", "phi_dot"], start=1):
+        scale = np.abs(y_ref[:, i]).max()
+        assert np.abs(ds[name].values - y_ref[:, i]).max() < 1e-6 * scale, name
+
+
+def _damped(x0, v0, k, c, m, t):
+    """Closed-form free response of m x'' + c x' + k x = 0 (underdamped)."""
+    wn = np.sqrt(k / m)
+    zeta = c / (2 * np.sqrt(k * m))
+    wd = wn * np.sqrt(1 - zeta**2)
+    a = x0
+    b = (v0 + zeta * wn * x0) / wd
+    return np.exp(-zeta * wn * t) * (a * np.cos(wd * t) + b * np.sin(wd * t))
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_decoupled_limit_is_three_damped_oscillators(method):
+    # K_a = 0, mu = 0, K_phi = 0: each axis is an independent damped oscillator (the z one
+    # stiffened by K_s and damped by C_zc).
+    m = ts.SliderModel(contact_quadratic=0.0, mu=0.0, twist_coupling=0.0)
+    y0 = np.array([2e-6, 1e-3, -1.5e-6, 4e-4, 3e-4, -0.2])
+    t = np.linspace(0, 0.2, 401)
+    ds = ts.simulate(m, 0.2, y0=y0, method=method, rtol=1e-12, t_eval=t)
+    assert int(ds.status) == 0
+    z_st, k_s = m.static_point()
+    assert k_s == m.contact_stiffness
+    z = _damped(y0[0], y0[1], m.mass * m.omega_normal**2 + k_s,
+                2 * m.zeta_normal * m.mass * m.omega_normal + m.contact_damping, m.mass, t)
+    x = _damped(y0[2], y0[3], m.omega_friction**2, 2 * m.zeta_friction * m.omega_friction, 1.0, t)
+    phi = _damped(y0[4], y0[5], m.omega_torsion**2, 2 * m.zeta_torsion * m.omega_torsion, 1.0, t)
+    for name, exact in [("z", z), ("x", x), ("phi", phi)]:
+        err = np.abs(ds[name].values - exact).max() / np.abs(exact).max()
+        assert err < 1e-9, f"{method} {name}: {err:.2e}"
+
+
+def test_threads_give_identical_results():
+    rng = np.random.default_rng(1)
+    n = 64
+    params = {"mu": rng.uniform(0.15, 0.3, n), "normal_load": rng.uniform(17, 152, n)}
+    a = ts.ensemble(ts.SliderModel(), 0.05, params, rtol=1e-7, threads=1)
+    b = ts.ensemble(ts.SliderModel(), 0.05, params, rtol=1e-7, threads=2)
+    c = ts.ensemble(ts.SliderModel(), 0.05, params, rtol=1e-7, threads=5)
+    for v in ["z_end", "phi_dot_end", "n_rhs", "min_normal_force"]:
+        assert np.array_equal(a[v].values, b[v].values), v
+        assert np.array_equal(a[v].values, c[v].values), v
+    assert np.all(a.status.values == 0)
+
+
+def test_ensemble_matches_single_runs():
+    params = {"mu": [0.2, 0.3], "normal_load": [30.0, 120.0]}
+    t = np.linspace(0, 0.02, 5)
+    ens = ts.ensemble(ts.SliderModel(), 0.02, params, t_eval=t, rtol=1e-9)
+    for i in range(2):
+        one = ts.simulate(ts.SliderModel(mu=params["mu"][i], normal_load=params["normal_load"][i]), 0.02,
+                          t_eval=t, rtol=1e-9)
+        assert np.array_equal(ens.z.values[i], one.z.values)
+
+
+@pytest.mark.slow
+def test_unilateral_seed_reaches_bouncing_cycle(seed_values):
+    """MODEL.md §6: at mu = 0.30 from z = 0.1 um for 22 s, then mu = 0.215: a stable bouncing cycle."""
+    ref = seed_values["unilateral_bouncing_cycle_seed"]
+    hot = ts.SliderModel(contact="unilateral", mu=0.30)
+    y0 = np.array([0.1e-6, 0, 0, 0, 0, 0])
+    first = ts.simulate(hot, 22.0, y0=y0, t_eval=[22.0], rtol=1e-8)
+    assert int(first.status) == 0
+    y1 = np.array([first[v].values[-1] for v in ["z", "z_dot", "x", "x_dot", "phi", "phi_dot"]])
+    ds = ts.ensemble(ts.SliderModel(contact="unilateral"), 30.0, {"mu": [0.215]}, y0=y1, steady=True, rtol=1e-9)
+    assert ts.OUTCOME_NAMES[int(ds.outcome[0])] == "periodic", ds
+    assert ds.t_end[0] >= 1.0  # it had to settle from the mu = 0.30 cycle
+    assert abs(float(ds.omega[0]) / ref["omega"] - 1) < 0.01
+    assert abs(float(ds.z1_amp[0]) / ref["A1"] - 1) < 0.01
+    assert abs(float(ds.fraction_off_disk[0]) - ref["fraction_off_disk"]) < 0.01
+    assert float(ds.min_normal_force[0]) == 0.0  # the pin leaves the disk
+
+
+def test_bilateral_seed_decays_to_sliding_from_small_disturbance():
+    ds = ts.ensemble(ts.SliderModel(), 60.0, {"mu": [0.215]}, y0=[0.5e-6, 0, 0, 0, 0, 0], steady=True,
+                     rtol=1e-8, decay_amplitude=0.2e-6)
+    assert ts.OUTCOME_NAMES[int(ds.outcome[0])] == "decayed"
+    # The torsion mode decays slowest: its frequency, 646.6 rad/s, is what is left.
+    assert abs(float(ds.omega[0]) - 646.63) < 2.0
+
+
+def test_unstable_sliding_without_unilateral_contact_diverges():
+    # mu = 0.215 at 15 N is below the Hopf load (24.9 N): sliding is unstable and the bilateral
+    # model has no stable cycle, so the motion escapes.
+    ds = ts.ensemble(ts.SliderModel(normal_load=15.0), 20.0, {"mu": [0.215]}, steady=True, rtol=1e-8)
+    assert ts.OUTCOME_NAMES[int(ds.outcome[0])] == "diverged"
+    assert int(ds.status[0]) == 0
