@@ -1,1 +1,167 @@
-//! (in progress)
+//! Step-size control: the error norm, the PI controller and the starting step.
+//!
+//! - [`error_norm`] is Hairer's weighted RMS norm; a step is accepted when it is `<= 1`.
+//! - [`Controller`] is the PI (Gustafsson/Hairer) controller of DOPRI5/DOP853,
+//!   `h_new = h * safety * err^-alpha * err_old^beta`, clipped to `[facmin, facmax] * h`, with no
+//!   growth right after a rejection. For Rodas4 it adds Gustafsson's predictive factor (as in
+//!   Hairer's `rodas.f`), which copes better with the error behaviour of stiff problems.
+//! - [`initial_step`] is Hairer's starting-step algorithm (`hinit` of `dopri5.f`), in RMS norms.
+
+use super::OdeSystem;
+use nalgebra::SVector;
+
+/// Weighted RMS norm of an error estimate:
+/// `sqrt(mean_i (err_i / (atol_i + rtol * max(|y0_i|, |y1_i|)))^2)`.
+/// NaN or infinity in any input propagates to the result (the driver then rejects the step).
+#[inline]
+pub fn error_norm<const N: usize>(
+    err: &SVector<f64, N>,
+    y0: &SVector<f64, N>,
+    y1: &SVector<f64, N>,
+    atol: &SVector<f64, N>,
+    rtol: f64,
+) -> f64 {
+    let mut s = 0.0;
+    for i in 0..N {
+        let sk = atol[i] + rtol * y0[i].abs().max(y1[i].abs());
+        let q = err[i] / sk;
+        s += q * q;
+    }
+    (s / N as f64).sqrt()
+}
+
+/// Safety factor on the optimal step.
+pub const SAFETY: f64 = 0.9;
+/// Smallest step ratio `h_new / h` in one adjustment.
+pub const FAC_MIN: f64 = 0.2;
+/// Largest step ratio `h_new / h` in one adjustment.
+pub const FAC_MAX: f64 = 10.0;
+
+/// PI step-size controller (Hairer's DOPRI5/DOP853 form) with optional Gustafsson prediction.
+#[derive(Clone, Copy, Debug)]
+pub struct Controller {
+    /// Exponent on the current error, `1/k - 0.75 beta` with `k` the error estimate's order + 1.
+    alpha: f64,
+    /// Exponent on the previous accepted error (0: a plain I controller).
+    beta: f64,
+    /// Use Gustafsson's predictive factor (stiff methods).
+    predictive: bool,
+    /// Previous accepted error (floored at 1e-4 as in Hairer's codes).
+    err_old: f64,
+    /// Previous accepted step and error, for the predictive factor (`h_acc <= 0`: none yet).
+    h_acc: f64,
+    err_acc: f64,
+}
+
+impl Controller {
+    /// A controller for an error estimate that scales as `h^k` (`k = 5` for Dopri5, 8 for
+    /// DOP853's combined estimate, 4 for Rodas4) with PI weight `beta`.
+    pub fn new(k: u32, beta: f64, predictive: bool) -> Self {
+        Controller { alpha: 1.0 / k as f64 - 0.75 * beta, beta, predictive, err_old: 1e-4, h_acc: 0.0, err_acc: 1e-2 }
+    }
+
+    /// Forget the step history (at a restart after a mode switch the error behaviour changes).
+    pub fn reset(&mut self) {
+        self.err_old = 1e-4;
+        self.h_acc = 0.0;
+        self.err_acc = 1e-2;
+    }
+
+    /// Step ratio `h_new / h` after accepting a step of size `h` with error `err <= 1`.
+    #[inline]
+    pub fn accept(&mut self, h: f64, err: f64) -> f64 {
+        // fac = 1 / ratio, as in Hairer's codes: large err -> large fac -> small step.
+        let mut fac = err.powf(self.alpha) / (self.err_old.powf(self.beta) * SAFETY);
+        if self.predictive && self.h_acc > 0.0 {
+            // Gustafsson: use the error trend of the last two accepted steps; never let it
+            // increase the step more than the plain estimate does.
+            let gus = (self.h_acc / h) * (err * err / self.err_acc).powf(self.alpha) / SAFETY;
+            fac = fac.max(gus);
+        }
+        if self.predictive {
+            self.h_acc = h;
+            self.err_acc = err.max(1e-2);
+        }
+        self.err_old = err.max(1e-4);
+        let fac = fac.clamp(1.0 / FAC_MAX, 1.0 / FAC_MIN);
+        1.0 / fac
+    }
+
+    /// Step ratio `h_new / h` after rejecting a step with error `err > 1` (finite).
+    #[inline]
+    pub fn reject(&self, err: f64) -> f64 {
+        let fac = (err.powf(self.alpha) / SAFETY).min(1.0 / FAC_MIN);
+        (1.0 / fac).min(1.0)
+    }
+}
+
+/// Hairer's starting step for a method of order `order`, in the RMS norms of [`error_norm`].
+/// Costs one right-hand-side evaluation (counted in `n_rhs`). The result is in `(0, h_max]` and
+/// never beyond `t_end - t0`.
+#[allow(clippy::too_many_arguments)]
+pub fn initial_step<const N: usize, S: OdeSystem<N>>(
+    sys: &S,
+    mode: S::Mode,
+    t0: f64,
+    y0: &SVector<f64, N>,
+    f0: &SVector<f64, N>,
+    t_end: f64,
+    order: u32,
+    atol: &SVector<f64, N>,
+    rtol: f64,
+    h_max: f64,
+    n_rhs: &mut u64,
+) -> f64 {
+    let span = (t_end - t0).abs();
+    let h_cap = h_max.min(span);
+    let zero = SVector::<f64, N>::zeros();
+    let d0 = error_norm(y0, &zero, &zero, atol, rtol);
+    let d1 = error_norm(f0, y0, y0, atol, rtol);
+    let mut h = if d0 < 1e-5 || d1 < 1e-5 || !d1.is_finite() { 1e-6 } else { 0.01 * d0 / d1 };
+    h = h.min(h_cap);
+    let y1 = y0 + f0 * h;
+    let f1 = sys.rhs(t0 + h, &y1, mode);
+    *n_rhs += 1;
+    let d2 = error_norm(&(f1 - f0), y0, y0, atol, rtol) / h;
+    let d12 = d1.max(d2);
+    let h1 = if !d12.is_finite() {
+        // The derivative blows up next to y0: start tiny and let the controller find out.
+        h * 1e-3
+    } else if d12 <= 1e-15 {
+        (h * 1e-3).max(1e-6)
+    } else {
+        (0.01 / d12).powf(1.0 / order as f64)
+    };
+    (100.0 * h).min(h1).min(h_cap)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn error_norm_is_weighted_rms() {
+        let e = SVector::<f64, 2>::new(1e-6, 0.0);
+        let y0 = SVector::<f64, 2>::new(1.0, 0.0);
+        let y1 = SVector::<f64, 2>::new(-2.0, 0.0);
+        let atol = SVector::<f64, 2>::repeat(1e-8);
+        // sk_0 = 1e-8 + 1e-6 * 2; only the first component contributes.
+        let want = (1e-6 / (1e-8 + 2e-6)) / 2f64.sqrt();
+        assert!((error_norm(&e, &y0, &y1, &atol, 1e-6) - want).abs() < 1e-15);
+        let nan = SVector::<f64, 2>::new(f64::NAN, 0.0);
+        assert!(error_norm(&nan, &y0, &y1, &atol, 1e-6).is_nan());
+    }
+
+    #[test]
+    fn controller_limits() {
+        let mut c = Controller::new(5, 0.04, false);
+        // Zero error: the largest growth.
+        assert_eq!(c.accept(1.0, 0.0), FAC_MAX);
+        // Huge error: the largest cut, never growth on rejection.
+        assert_eq!(c.reject(1e30), FAC_MIN);
+        assert!(c.reject(1.0 + 1e-12) <= 1.0);
+        // err = 1 on accept shrinks a little (safety) — roughly 0.9.
+        let mut c = Controller::new(5, 0.0, false);
+        assert!((c.accept(1.0, 1.0) - SAFETY).abs() < 1e-12);
+    }
+}
