@@ -1,0 +1,457 @@
+"""The work of one sweep chunk: a pure, picklable function of its inputs.
+
+:func:`compute_chunk` is the only thing a worker runs. It is a module-level function of plain
+data (dicts of floats, strings and 1-D numpy arrays) with no closures and no global state, so
+the same call runs in-process, in a ``concurrent.futures`` pool or on a dask cluster, and gives
+the same numbers everywhere (apart from the measured ``wall_time``).
+
+Stages (MODEL.md §4, §6):
+
+``linear``
+    Eigenvalues of the 6x6 Jacobian of steady sliding, for every point (cheap, vectorised numpy;
+    to move to the Rust core). Gives the growth rate, the frequency of the least stable mode and
+    the normal-mode frequency the wear model needs (MODEL.md §8).
+``transient``
+    A run to steady state in the Rust core (``tribosweep._core.ensemble(kind="steady")``), from
+    a small disturbance, classified from its summary.
+
+The sweep methods combine them: ``linear`` (only the eigenvalues: an unstable point is
+``unstable_undetermined``), ``transient`` (every point integrated), ``auto`` (eigenvalues, then
+the transient only where sliding is unstable). ``tidf`` and ``shooting`` stages are not written
+yet.
+"""
+
+from __future__ import annotations
+
+import itertools
+import time
+from collections.abc import Mapping
+
+import numpy as np
+
+from . import _core
+from ._flags import OUTCOME_NAMES, STATUS, STATUS_NAMES
+
+#: Regime of a sweep point, in code order (the netCDF ``flag_values`` of ``regime``).
+REGIME_NAMES: tuple[str, ...] = (
+    "steady_sliding",
+    "self_excited",
+    "contact_loss",
+    "stick_slip",
+    "diverged",
+    "failed",
+    "unstable_undetermined",
+)
+#: One-line meaning of every regime, for documentation and the ``regime`` variable's ``comment``.
+REGIME_DOC: dict[str, str] = {
+    "steady_sliding": "steady sliding: linearly stable, or a disturbance decayed",
+    "self_excited": "a periodic cycle with the pin always on the disk and the contact always sliding",
+    "contact_loss": "a periodic cycle on which the pin leaves the disk (bouncing)",
+    "stick_slip": "the sliding velocity reached zero (outside the constant-friction law)",
+    "diverged": "|z| reached the escape limit",
+    "failed": "the computation failed (see status and reason)",
+    "unstable_undetermined": "sliding unstable; the cycle was not computed (method=linear) or the run did not "
+    "settle by t_max",
+}
+REGIME: dict[str, int] = {name: i for i, name in enumerate(REGIME_NAMES)}
+
+#: Which stage decided a point's regime, in code order.
+DECIDED_BY_NAMES: tuple[str, ...] = ("linear", "tidf", "shooting", "transient")
+DECIDED_BY: dict[str, int] = {name: i for i, name in enumerate(DECIDED_BY_NAMES)}
+
+#: Bistability check: value -> meaning (int8; -1 = the method did not check).
+BISTABLE_VALUES: tuple[int, ...] = (-1, 0, 1)
+BISTABLE_NAMES: tuple[str, ...] = ("not_checked", "monostable", "bistable")
+
+#: Whether the mild-wear model applies at a point, in code order.
+WEAR_APPLICABILITY_NAMES: tuple[str, ...] = ("mild_wear_regime", "outside_mild_wear_regime", "undetermined")
+
+#: Default longest simulated time of a transient run [s]: near a Hopf point the growth rate is
+#: small (0.07 1/s at 10 N and 7.6 cm), and a run costs about 2.5 ms of wall time per simulated second.
+T_MAX: float = 100.0
+
+#: Analysis methods of a sweep.
+METHODS: tuple[str, ...] = ("auto", "linear", "tidf", "shooting", "transient")
+#: Methods whose stages exist so far.
+IMPLEMENTED_METHODS: tuple[str, ...] = ("auto", "linear", "transient")
+
+#: Per-point output of :func:`compute_chunk`: name -> (dtype, units or None, long name).
+#: Flag variables carry their meanings in ``FLAG_MEANINGS``. Every name here is an output key.
+POINT_VARIABLES: dict[str, tuple[str, str | None, str]] = {
+    "regime": ("u1", None, "dynamic regime of the slider"),
+    "status": ("u1", None, "status of the computation that decided the regime"),
+    "reason": ("str", None, "reason for a failed or undetermined point (empty otherwise)"),
+    "decided_by": ("u1", None, "analysis stage that decided the regime"),
+    "bistable": ("i1", None, "coexistence of stable sliding and a stable cycle"),
+    "growth_rate": ("f8", "s-1", "largest real part of the eigenvalues of steady sliding (> 0: unstable)"),
+    "linear_frequency": ("f8", "rad s-1", "angular frequency of the least stable linear mode"),
+    "normal_mode_frequency": ("f8", "Hz", "frequency Im(lambda_normal)/2 pi of the linearised normal mode"),
+    "cycle_omega": ("f8", "rad s-1", "angular frequency of the steady cycle (NaN if none)"),
+    "z1_amplitude": ("f8", "m", "amplitude of the first harmonic of z on the cycle"),
+    "z2_amplitude": ("f8", "m", "amplitude of the second harmonic of z on the cycle"),
+    "phi1_amplitude": ("f8", "rad", "amplitude of the first harmonic of the twist phi on the cycle"),
+    "min_normal_force": ("f8", "N", "minimum total normal force (over the cycle if periodic, else the run)"),
+    "fraction_off_disk": ("f8", "1", "fraction of the cycle with the pin off the disk"),
+    "min_slip_velocity": ("f8", "m s-1", "minimum sliding velocity of the contact point"),
+    "wear_rate_relative": ("f8", "1", "mild-wear rate per sliding distance relative to the reference point"),
+    "wear_applicability": ("u1", None, "whether the mild-wear model applies"),
+    "wall_time": ("f8", "s", "wall-clock time of the point (its chunk's stage times shared evenly)"),
+    "n_rhs": ("i8", "1", "right-hand-side evaluations of the time integration (0: none run)"),
+    "newton_iterations": ("i8", "1", "Newton iterations of the TIDF and shooting stages (0: none run)"),
+}
+#: Optional per-point output (present only when configured).
+OPTIONAL_POINT_VARIABLES: dict[str, tuple[str, str | None, str]] = {
+    "wear_rate": ("f8", "kg m-1", "mild-wear mass loss per sliding distance (eq. 8, calibrated)"),
+}
+#: Flag meanings of the categorical per-point variables.
+FLAG_MEANINGS: dict[str, tuple[tuple[int, ...], tuple[str, ...]]] = {
+    "regime": (tuple(range(len(REGIME_NAMES))), REGIME_NAMES),
+    "status": (tuple(range(len(STATUS_NAMES))), STATUS_NAMES),
+    "decided_by": (tuple(range(len(DECIDED_BY_NAMES))), DECIDED_BY_NAMES),
+    "bistable": (BISTABLE_VALUES, BISTABLE_NAMES),
+    "wear_applicability": (tuple(range(len(WEAR_APPLICABILITY_NAMES))), WEAR_APPLICABILITY_NAMES),
+}
+
+_LINEAR_FIELDS = (
+    "mass", "inertia", "moment_arm", "omega_normal", "omega_friction", "omega_torsion", "zeta_normal",
+    "zeta_friction", "zeta_torsion", "contact_stiffness", "contact_quadratic", "contact_damping",
+    "twist_coupling", "mu", "normal_load", "sliding_speed", "torsion_sign", "friction_regularization",
+    "mu_static", "stribeck_velocity",
+)  # fmt: skip
+_PERMUTATIONS = np.array(list(itertools.permutations(range(3))))  # (6, 3): mode -> dof label
+_DOF_NORMAL = 2  # participation order [x, phi, z], as in rust_core/src/linear.rs
+
+
+def jacobians(values: Mapping[str, np.ndarray | float], friction_law: str = "constant") -> np.ndarray:
+    """Jacobians of steady sliding ``y = 0`` (in contact), shape ``(n, 6, 6)``, MODEL.md §2.
+
+    Parameters
+    ----------
+    values : mapping of str to float or 1-D array
+        Every real SliderModel field (SI units); arrays of one length ``n`` and scalars broadcast.
+    friction_law : {"constant", "coulomb"}
+        Friction law (the Coulomb law adds the Stribeck slope and the tanh regularisation).
+
+    Returns
+    -------
+    numpy.ndarray, shape (n, 6, 6), 1/s and 1/s^2
+        ``d rhs / dy`` for the state ``[z, zd, x, xd, phi, phid]``.
+    """
+    v = {k: np.asarray(values[k], dtype=np.float64) for k in _LINEAR_FIELDS}
+    n = int(np.broadcast_shapes(*(a.shape for a in v.values()), (1,))[0])
+    v = {k: np.broadcast_to(a, (n,)) for k, a in v.items()}
+    f, k0, ka = v["normal_load"], v["contact_stiffness"], v["contact_quadratic"]
+    z_st = -2.0 * f / (k0 + np.sqrt(k0 * k0 + 4.0 * ka * f))  # cancellation-free root, MODEL.md §3
+    k_s = k0 - 2.0 * ka * z_st
+    dfz = np.zeros((n, 6))
+    dfz[:, 0] = -k_s
+    dfz[:, 1] = -v["contact_damping"]
+    dfz[:, 4] = v["twist_coupling"]
+    s, arm = v["torsion_sign"], v["moment_arm"]
+    if friction_law == "constant":
+        dfx = dfz * v["mu"][:, None]
+    elif friction_law == "coulomb":
+        # F_x = mu(v_r) N tanh(v_r/eps) - mu(V) F_st, v_r = V - xd - s L phid (MODEL.md §2).
+        vel, vs, mus, eps = v["sliding_speed"], v["stribeck_velocity"], v["mu_static"], v["friction_regularization"]
+        e = np.exp(-vel / vs)
+        mu_k = (v["mu"] - mus * e) / (1.0 - e)
+        mu_v = mu_k + (mus - mu_k) * e
+        th = np.tanh(vel / eps)
+        dmu = -(mus - mu_k) / vs * e
+        dg = dmu * th + mu_v * (1.0 - th * th) / eps
+        dfx = dfz * (mu_v * th)[:, None]
+        dfx[:, 3] -= f * dg
+        dfx[:, 5] -= f * dg * s * arm
+    else:
+        raise ValueError(f"friction_law = {friction_law!r} is not valid: must be 'constant' or 'coulomb'")
+    m = v["mass"]
+    wz, wx, wt = v["omega_normal"], v["omega_friction"], v["omega_torsion"]
+    j = np.zeros((n, 6, 6))
+    j[:, 0, 1] = j[:, 2, 3] = j[:, 4, 5] = 1.0
+    j[:, 1, :] = dfz / m[:, None]
+    j[:, 3, :] = dfx / m[:, None]
+    j[:, 5, :] = (s * arm / v["inertia"])[:, None] * dfx
+    j[:, 1, 0] -= wz * wz
+    j[:, 1, 1] -= 2.0 * v["zeta_normal"] * wz
+    j[:, 3, 2] -= wx * wx
+    j[:, 3, 3] -= 2.0 * v["zeta_friction"] * wx
+    j[:, 5, 4] -= wt * wt
+    j[:, 5, 5] -= 2.0 * v["zeta_torsion"] * wt
+    return j
+
+
+def _eig_batch(j: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Eigenvalues/vectors of a stack; a point whose QR iteration fails gets NaN and ``ok = False``."""
+    n = j.shape[0]
+    w = np.full((n, 6), np.nan + 0j)
+    vec = np.full((n, 6, 6), np.nan + 0j)
+    ok = np.all(np.isfinite(j), axis=(1, 2))
+    if not ok.any():
+        return w, vec, ok
+    try:
+        w[ok], vec[ok] = np.linalg.eig(j[ok])
+    except np.linalg.LinAlgError:
+        for i in np.flatnonzero(ok):
+            try:
+                w[i], vec[i] = np.linalg.eig(j[i])
+            except np.linalg.LinAlgError:
+                ok[i] = False
+    return w, vec, ok
+
+
+def linear_stability(values: Mapping[str, np.ndarray | float], friction_law: str = "constant") -> dict[str, np.ndarray]:
+    """Linear stability of steady sliding at many points (MODEL.md §4), vectorised numpy.
+
+    The modes are labelled by the energy participation ``[m |u_x|^2, I |u_phi|^2, m |u_z|^2]`` of
+    their eigenvectors, choosing the labelling with the largest total participation (as the Rust
+    core's ``linear.rs``), so the normal mode is found even where frequencies cross.
+
+    Parameters
+    ----------
+    values : mapping of str to float or 1-D array
+        Every real SliderModel field (SI units).
+    friction_law : {"constant", "coulomb"}
+        Friction law.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        ``growth_rate`` [1/s] (largest real part), ``linear_frequency`` [rad/s] (``|Im|`` of the
+        least stable eigenvalue), ``normal_mode_frequency`` [Hz] (``Im(lambda_normal)/2 pi``),
+        ``stable`` (bool), ``status`` (uint8: success, non_finite or not_converged) and
+        ``eigenvalues`` (complex, ``(n, 6)``).
+
+    Examples
+    --------
+    >>> from tribosweep import SliderModel
+    >>> out = linear_stability(SliderModel().values())
+    >>> round(float(out["normal_mode_frequency"][0]), 1), bool(out["stable"][0])
+    (229.2, True)
+    """
+    v = {k: np.asarray(values[k], dtype=np.float64) for k in _LINEAR_FIELDS}
+    j = jacobians(v, friction_law)
+    n = j.shape[0]
+    w, vec, ok = _eig_batch(j)
+    status = np.where(np.all(np.isfinite(j), axis=(1, 2)), STATUS["not_converged"], STATUS["non_finite"])
+    status = np.where(ok, STATUS["success"], status).astype(np.uint8)
+    growth = np.full(n, np.nan)
+    freq = np.full(n, np.nan)
+    normal_hz = np.full(n, np.nan)
+    if ok.any():
+        wo = w[ok]
+        k = np.argmax(wo.real, axis=1)
+        growth[ok] = wo.real[np.arange(wo.shape[0]), k]
+        freq[ok] = np.abs(wo.imag[np.arange(wo.shape[0]), k])
+        # Displacement part u = [z, x, phi] of each eigenvector -> energies in [x, phi, z] order.
+        mass = np.broadcast_to(v["mass"], (n,))[ok]
+        inertia = np.broadcast_to(v["inertia"], (n,))[ok]
+        u = vec[ok][:, [0, 2, 4], :]
+        energy = np.stack(
+            [mass[:, None] * np.abs(u[:, 1]) ** 2, inertia[:, None] * np.abs(u[:, 2]) ** 2,
+             mass[:, None] * np.abs(u[:, 0]) ** 2],
+            axis=2,
+        )  # fmt: skip  (points, eigenvalue, dof)
+        part = energy / energy.sum(axis=2, keepdims=True)
+        upper = wo.imag > 0
+        three = upper.sum(axis=1) == 3
+        idx_ok = np.flatnonzero(ok)
+        if three.any():
+            # The three eigenvalues with Im > 0, sorted by frequency; best label permutation.
+            order = np.argsort(np.where(upper, wo.imag, np.inf), axis=1, kind="stable")[three][:, :3]
+            p3 = np.take_along_axis(part[three], order[:, :, None], axis=1)  # (k, mode, dof)
+            score = p3[:, np.arange(3)[None, :], _PERMUTATIONS].sum(axis=2)  # (k, perm)
+            perm = _PERMUTATIONS[np.argmax(score, axis=1)]  # (k, mode) -> dof label
+            mode_normal = np.argmax(perm == _DOF_NORMAL, axis=1)
+            lam = np.take_along_axis(wo[three], order, axis=1)[np.arange(order.shape[0]), mode_normal]
+            normal_hz[idx_ok[three]] = lam.imag / (2.0 * np.pi)
+        for i in np.flatnonzero(~three):
+            # Overdamped pairs (real eigenvalues): the normal mode is the upper eigenvalue with the
+            # largest z participation, frequency 0 if it is real.
+            cand = np.flatnonzero(wo[i].imag >= 0)
+            best = cand[np.argmax(part[i, cand, _DOF_NORMAL])]
+            normal_hz[idx_ok[i]] = wo[i, best].imag / (2.0 * np.pi)
+    return {
+        "growth_rate": growth,
+        "linear_frequency": freq,
+        "normal_mode_frequency": normal_hz,
+        "stable": ok & (growth < 0),
+        "status": status,
+        "eigenvalues": w,
+    }
+
+
+def empty_result(n: int, *, wear_rate: bool = False) -> dict[str, np.ndarray]:
+    """Output arrays of ``n`` points with fill values (NaN, 0, empty strings)."""
+    out: dict[str, np.ndarray] = {}
+    spec = dict(POINT_VARIABLES)
+    if wear_rate:
+        spec.update(OPTIONAL_POINT_VARIABLES)
+    for name, (dtype, _units, _long) in spec.items():
+        if dtype == "str":
+            out[name] = np.full(n, "", dtype="<U1")
+        elif dtype == "f8":
+            out[name] = np.full(n, np.nan)
+        else:
+            out[name] = np.zeros(n, dtype=dtype)
+    out["bistable"][:] = -1
+    return out
+
+
+def _classify(summary: dict, stable: np.ndarray, t_max: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Regime, status, reason and deciding stage of transient runs from their steady-state summaries.
+
+    A run that did not settle by ``t_max`` (outcome ``unsettled``) leaves the regime to linear
+    stability: ``steady_sliding`` where sliding is stable, ``unstable_undetermined`` where it is
+    not (a slowly growing or slowly decaying motion near a Hopf point), with the transient's status
+    (``not_converged``) and a reason saying so. Only a failed integration makes a point ``failed``.
+    """
+    status = np.asarray(summary["status"], dtype=np.uint8)
+    outcome = np.asarray(summary["outcome"], dtype=np.uint8)
+    off = np.asarray(summary["fraction_off_disk"])
+    vmin = np.asarray(summary["min_slip_velocity"])
+    names = [OUTCOME_NAMES[o] for o in outcome]
+    n = len(names)
+    regime = np.full(n, REGIME["failed"], dtype=np.uint8)
+    decided = np.full(n, DECIDED_BY["transient"], dtype=np.uint8)
+    reason = np.asarray(summary["reason"], dtype=str).astype(object)
+    for i, name in enumerate(names):
+        st = STATUS_NAMES[status[i]] if status[i] < len(STATUS_NAMES) else str(status[i])
+        if name == "diverged" or st == "diverged":
+            regime[i] = REGIME["diverged"]
+        elif name == "unsettled":
+            decided[i] = DECIDED_BY["linear"]
+            if stable[i]:
+                regime[i] = REGIME["steady_sliding"]
+                reason[i] = f"the transient did not settle by t_max = {t_max:g} s; sliding is linearly stable"
+            else:
+                regime[i] = REGIME["unstable_undetermined"]
+                reason[i] = f"sliding unstable; the transient did not settle by t_max = {t_max:g} s"
+        elif st != "success" or name == "failed":
+            regime[i] = REGIME["failed"]
+            detail = f": {reason[i]}" if reason[i] else ""
+            reason[i] = f"transient {name}, status {st}{detail}"
+        elif name == "decayed":
+            regime[i] = REGIME["steady_sliding"]
+        elif name == "periodic":
+            if not (vmin[i] > 0):
+                regime[i] = REGIME["stick_slip"]
+            elif off[i] > 0:
+                regime[i] = REGIME["contact_loss"]
+            else:
+                regime[i] = REGIME["self_excited"]
+    return regime, status, reason.astype(str), decided
+
+
+def _transient(model_values, contact, friction_law, point_params, sel, options) -> dict:
+    names = sorted(point_params)
+    values = np.column_stack([np.asarray(point_params[k], dtype=np.float64)[sel] for k in names])
+    y0 = np.asarray(options.get("y0", [1e-6, 0, 0, 0, 0, 0]), dtype=np.float64).reshape(1, 6)
+    atol = options.get("atol")
+    return _core.ensemble(
+        {k: float(v) for k, v in model_values.items()}, contact, friction_law, names, values, y0,
+        float(options.get("t_max", T_MAX)), options.get("integrator", "dopri5"), float(options.get("rtol", 1e-8)),
+        None if atol is None else np.asarray(atol, dtype=np.float64), None, options.get("threads"), "steady",
+        float(options.get("periodic_tol", 1e-5)), options.get("decay_amplitude"),
+    )  # fmt: skip
+
+
+def compute_chunk(
+    model_values: dict,
+    contact: str,
+    friction_law: str,
+    point_params: dict[str, np.ndarray],
+    method: str,
+    options: dict,
+) -> dict[str, np.ndarray]:
+    """Compute one chunk of sweep points: pure, deterministic, picklable.
+
+    Parameters
+    ----------
+    model_values : dict of str to float
+        Base parameters (``SliderModel.values()``, SI units).
+    contact : {"bilateral", "unilateral"}
+        Contact model of the transient runs.
+    friction_law : {"constant", "coulomb"}
+        Friction law.
+    point_params : dict of str to 1-D numpy.ndarray
+        Per-point overrides of real SliderModel fields, all of length ``n``.
+    method : {"auto", "linear", "transient"}
+        Analysis method (see the module docstring); ``tidf`` and ``shooting`` are not available yet.
+    options : dict
+        Plain data: ``t_max`` [s], ``integrator``, ``rtol``, ``atol``, ``periodic_tol``,
+        ``decay_amplitude`` [m], ``y0`` (initial disturbance, 6 values), ``threads``, and ``wear``
+        (``{"normal_load": N, "sliding_speed": m/s, "frequency_hz": Hz}`` of the reference point,
+        optional ``"calibration"``: ``WearCalibration.as_dict()``).
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        The per-point variables of ``POINT_VARIABLES`` (and ``wear_rate`` when calibrated), each
+        of length ``n``.
+    """
+    if method not in IMPLEMENTED_METHODS:
+        raise NotImplementedError(f"method = {method!r} is not available yet: use one of {IMPLEMENTED_METHODS}")
+    from . import _wear  # _wear imports this module for its normal-mode frequency
+
+    full = {k: np.asarray(v, dtype=np.float64) for k, v in model_values.items()}
+    n = len(next(iter(point_params.values())))
+    for k, a in point_params.items():
+        full[k] = np.asarray(a, dtype=np.float64)
+    wear = options.get("wear") or {}
+    out = empty_result(n, wear_rate=bool(wear.get("calibration")))
+    reason = np.full(n, "", dtype=object)
+
+    t0 = time.perf_counter()
+    lin = linear_stability(full, friction_law)
+    for k in ("growth_rate", "linear_frequency", "normal_mode_frequency"):
+        out[k] = lin[k]
+    out["status"][:] = lin["status"]
+    out["decided_by"][:] = DECIDED_BY["linear"]
+    out["regime"][:] = np.where(lin["stable"], REGIME["steady_sliding"], REGIME["unstable_undetermined"])
+    lin_failed = lin["status"] != STATUS["success"]
+    out["regime"][lin_failed] = REGIME["failed"]
+    reason[lin_failed] = "linear stability: eigenvalues failed"
+    wall = np.full(n, (time.perf_counter() - t0) / max(n, 1))
+
+    if method == "linear":
+        reason[out["regime"] == REGIME["unstable_undetermined"]] = REGIME_DOC["unstable_undetermined"]
+    else:
+        sel = np.arange(n) if method == "transient" else np.flatnonzero(out["regime"] == REGIME["unstable_undetermined"])
+        if sel.size:
+            t1 = time.perf_counter()
+            summary = _transient(model_values, contact, friction_law, point_params, sel, options)
+            wall[sel] += (time.perf_counter() - t1) / sel.size
+            regime, status, why, decided = _classify(summary, lin["stable"][sel], float(options.get("t_max", T_MAX)))
+            out["regime"][sel] = regime
+            out["status"][sel] = status
+            reason[sel] = why
+            out["decided_by"][sel] = decided
+            periodic = np.isin(regime, [REGIME["self_excited"], REGIME["contact_loss"], REGIME["stick_slip"]])
+            for key, src in (("z1_amplitude", "z1_amp"), ("z2_amplitude", "z2_amp"), ("phi1_amplitude", "phi1_amp"),
+                             ("fraction_off_disk", "fraction_off_disk")):  # fmt: skip
+                out[key][sel] = np.where(periodic, summary[src], np.nan)
+            out["cycle_omega"][sel] = np.where(periodic, summary["omega"], np.nan)
+            out["min_normal_force"][sel] = summary["min_normal_force"]
+            out["min_slip_velocity"][sel] = summary["min_slip_velocity"]
+            out["n_rhs"][sel] = summary["n_rhs"]
+
+    # Wear (MODEL.md §8): only in the mild (steady-sliding) regime.
+    mild = out["regime"] == REGIME["steady_sliding"]
+    undetermined = out["regime"] == REGIME["failed"]
+    out["wear_applicability"][:] = np.where(mild, 0, np.where(undetermined, 2, 1))
+    if wear:
+        rel = _wear.relative_wear_rate(
+            full["normal_load"], full["sliding_speed"], out["normal_mode_frequency"],
+            reference_load=wear["normal_load"], reference_speed=wear["sliding_speed"],
+            reference_frequency_hz=wear["frequency_hz"],
+        )  # fmt: skip
+        out["wear_rate_relative"] = np.where(mild, np.broadcast_to(rel, (n,)), np.nan)
+        calibration = wear.get("calibration")
+        if calibration:
+            absolute = _wear.calibrated_wear_rate(
+                calibration, full["normal_load"], full["sliding_speed"], out["normal_mode_frequency"]
+            )
+            out["wear_rate"] = np.where(mild, np.broadcast_to(absolute, (n,)), np.nan)
+    out["wall_time"] = wall
+    out["reason"] = reason.astype(str)
+    return out
