@@ -7,20 +7,33 @@ Datasets. Units are SI throughout (m, kg, s, N, rad; frequencies in rad/s unless
 from __future__ import annotations
 
 from . import _core
+from ._apparatus import ARM_EXPONENTS, apparatus_model, arm_frequencies
+from ._chunk import REGIME_NAMES
 from ._flags import OUTCOME_NAMES, STATUS, STATUS_NAMES
 from ._model import PARAM_NAMES, SliderModel
 from ._simulate import DEFAULT_Y0, ensemble, simulate
+from ._sweep import sweep
+from ._wear import WearCalibration, WearReference, normal_mode_frequency_hz, relative_wear_rate
 
 __version__: str = _core.__version__
 
 __all__ = [
+    "ARM_EXPONENTS",
     "DEFAULT_Y0",
     "OUTCOME_NAMES",
     "PARAM_NAMES",
+    "REGIME_NAMES",
     "STATUS",
     "STATUS_NAMES",
     "SliderModel",
+    "WearCalibration",
+    "WearReference",
     "__version__",
+    "apparatus_model",
+    "arm_frequencies",
     "ensemble",
+    "normal_mode_frequency_hz",
+    "relative_wear_rate",
     "simulate",
+    "sweep",
 ]

@@ -1,0 +1,483 @@
+"""tribosweep.sweep: axes, regimes, chunking, executors, interruption and resume."""
+
+from __future__ import annotations
+
+import concurrent.futures
+import json
+import math
+import multiprocessing
+import pickle
+
+import numpy as np
+import pytest
+import xarray as xr
+
+import tribosweep as ts
+from tribosweep import _chunk, _sweep
+from tribosweep._chunk import REGIME
+
+LINEAR = {"method": "linear", "progress": False}
+_REAL_COMPUTE_CHUNK = _chunk.compute_chunk
+
+
+def _driver_ready() -> bool:
+    out = ts._core.ensemble(ts.SliderModel().values(), "bilateral", "constant", ["mu"], np.array([[0.215]]),
+                            np.array([[1e-6, 0, 0, 0, 0, 0]]), 1e-3, "dopri5", 1e-6)  # fmt: skip
+    return "driver in progress" not in str(out["reason"][0])
+
+
+requires_driver = pytest.mark.skipif(not _driver_ready(), reason="the Rust ODE driver is not implemented yet (stub)")
+
+
+def strip(ds: xr.Dataset) -> xr.Dataset:
+    """Everything a rerun must reproduce: drop the measured wall time and the history timestamp."""
+    ds = ds.drop_vars("wall_time").load()
+    ds.attrs = {k: v for k, v in ds.attrs.items() if k != "history"}
+    return ds
+
+
+# --- axes ----------------------------------------------------------------------------------------
+
+
+def test_missing_axes_default_to_the_seed_as_length_one_dimensions():
+    ds = ts.sweep(**LINEAR)
+    assert ds.regime.dims == ("normal_load", "arm_length", "sliding_speed")
+    assert ds.regime.shape == (1, 1, 1)
+    assert ds.normal_load.values.tolist() == [84.46]
+    assert ds.arm_length.values.tolist() == [0.072]
+    assert ds.sliding_speed.values.tolist() == [0.46]
+    assert ds.normal_load.attrs == {"units": "N", "long_name": "normal load F_st"}
+    assert ds.sliding_speed.attrs["units"] == "m s-1"
+
+
+@pytest.mark.parametrize("axis", ["normal_load", "arm_length", "sliding_speed"])
+@pytest.mark.parametrize(
+    ("values", "match"),
+    [
+        ([], "is empty"),
+        ([3.0, 2.0], "not sorted"),
+        ([2.0, 2.0], "duplicate"),
+        ([1.0, float("nan")], "finite"),
+        ([1.0, float("inf")], "finite"),
+        ([0.0, 1.0], "> 0"),
+        ([-1.0, 1.0], "> 0"),
+        ([[1.0, 2.0]], "1-D"),
+        (["a"], "not an array of numbers"),
+    ],
+)
+def test_bad_axes_name_the_axis(axis, values, match):
+    with pytest.raises(ValueError, match=match) as e:
+        ts.sweep(**{axis: values}, **LINEAR)
+    assert str(e.value).startswith(axis)
+
+
+@pytest.mark.parametrize(
+    ("extra", "match"),
+    [
+        ({"mu": [0.3, 0.2]}, r"extra_axes\['mu'\] is not sorted"),
+        ({"mu": [-0.1, 0.2]}, r"extra_axes\['mu'\]: mu = -0.1 is out of range"),
+        ({"bogus": [1.0]}, "unknown field 'bogus'"),
+        ({"normal_load": [1.0]}, "own argument"),
+        ({"omega_torsion": [600.0]}, "follows arm_length"),
+        ({"torsion_sign": [0.0]}, "torsion_sign"),
+    ],
+)
+def test_bad_extra_axes(extra, match):
+    with pytest.raises(ValueError, match=match):
+        ts.sweep(extra_axes=extra, **LINEAR)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"method": "bogus"}, "method = 'bogus'"),
+        ({"chunk_size": 0}, "chunk_size"),
+        ({"threads": 0}, "threads"),
+        ({"t_max": -1.0}, "t_max"),
+        ({"integrator": "euler"}, "integrator"),
+        ({"resume": True}, "resume=True needs output"),
+        ({"disturbance": [1.0, 2.0]}, "disturbance"),
+    ],
+)
+def test_bad_options(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        ts.sweep(**{"method": "linear", "progress": False, **kwargs})
+
+
+@pytest.mark.parametrize(
+    "kwargs",
+    [{"model": "seed"}, {"extra_axes": [("mu", [0.2])]}, {"wear_reference": (1, 2, 3)}, {"wear_calibration": 1.0}],
+)
+def test_wrong_types(kwargs):
+    with pytest.raises(TypeError, match=next(iter(kwargs))):
+        ts.sweep(**{"method": "linear", "progress": False, **kwargs})
+
+
+@pytest.mark.parametrize("method", ["tidf", "shooting"])
+def test_stages_not_written_yet_say_so(method):
+    with pytest.raises(NotImplementedError, match=method):
+        ts.sweep(method=method, progress=False)
+
+
+# --- the linear stage ------------------------------------------------------------------------------
+
+
+def test_linear_stage_at_the_seed(seed_values):
+    ds = ts.sweep(**LINEAR)
+    ev = seed_values["linear_eigenvalues_seed"]
+    assert ds.growth_rate.item() == pytest.approx(ev[1][0], abs=1e-4)
+    assert ds.linear_frequency.item() == pytest.approx(ev[1][1], abs=1e-3)
+    assert ds.normal_mode_frequency.item() == pytest.approx(seed_values["normal_mode_frequency_hz_seed"], abs=0.05)
+    assert ds.regime.item() == REGIME["steady_sliding"]
+    assert ds.decided_by.item() == _chunk.DECIDED_BY["linear"]
+    assert ds.bistable.item() == -1  # not checked
+    assert ds.n_rhs.item() == 0 and ds.newton_iterations.item() == 0
+    assert math.isnan(ds.cycle_omega.item())
+
+
+def test_linear_eigenvalues_match_the_reference_jacobian_at_several_points():
+    # The vectorised numpy Jacobian against finite differences of an independent RHS (MODEL.md §2).
+    base = ts.SliderModel(mu=0.3, normal_load=40.0)
+    v = base.values()
+    _z_st, k_s = base.static_point()
+
+    def rhs(y):
+        p = v
+        fz = -k_s * y[0] + p["contact_quadratic"] * y[0] ** 2 - p["contact_damping"] * y[1] + p["twist_coupling"] * y[4]
+        fx = p["mu"] * fz
+        wz, wx, wt = p["omega_normal"], p["omega_friction"], p["omega_torsion"]
+        return np.array([
+            y[1], fz / p["mass"] - 2 * p["zeta_normal"] * wz * y[1] - wz**2 * y[0],
+            y[3], fx / p["mass"] - 2 * p["zeta_friction"] * wx * y[3] - wx**2 * y[2],
+            y[5], p["torsion_sign"] * p["moment_arm"] / p["inertia"] * fx - 2 * p["zeta_torsion"] * wt * y[5]
+            - wt**2 * y[4],
+        ])  # fmt: skip
+
+    h = np.array([1e-9, 1e-6, 1e-9, 1e-6, 1e-7, 1e-4])
+    j_fd = np.column_stack([(rhs(h[i] * np.eye(6)[i]) - rhs(-h[i] * np.eye(6)[i])) / (2 * h[i]) for i in range(6)])
+    j = _chunk.jacobians(v)[0]
+    np.testing.assert_allclose(j, j_fd, rtol=1e-6, atol=1e-6 * np.abs(j_fd).max())
+
+
+@pytest.mark.parametrize(("mu", "hopf"), [(0.215, 24.904), (0.25, 74.514), (0.3, 148.277)])
+def test_linear_regime_flips_at_the_hopf_load(mu, hopf):
+    ds = ts.sweep(normal_load=[0.97 * hopf, 1.03 * hopf], extra_axes={"mu": [mu]}, **LINEAR)
+    r = ds.regime.values.ravel().tolist()
+    # Unstable BELOW the Hopf load in this model (MODEL.md §4).
+    assert r == [REGIME["unstable_undetermined"], REGIME["steady_sliding"]]
+    reason = ds.reason.values.ravel()
+    assert "not computed" in reason[0] and reason[1] == ""
+    assert "BELOW a Hopf load" in ds.attrs["comment"]
+
+
+def test_extra_axis_dimension_and_attributes():
+    ds = ts.sweep(normal_load=[50.0], extra_axes={"mu": [0.2, 0.25]}, **LINEAR)
+    assert ds.regime.dims == ("normal_load", "arm_length", "sliding_speed", "mu")
+    assert ds.mu.attrs["units"] == "1"
+    # mu = 0.2 has its Hopf load at 4.2 N (stable at 50 N), mu = 0.25 at 74.5 N (unstable at 50 N).
+    assert ds.regime.values.ravel().tolist() == [REGIME["steady_sliding"], REGIME["unstable_undetermined"]]
+
+
+def test_mu_static_follows_a_swept_mu_when_unset():
+    model = ts.SliderModel(friction_law="coulomb")
+    ds = ts.sweep(model, normal_load=[50.0], extra_axes={"mu": [0.2, 0.25]}, **LINEAR)
+    assert ds.regime.shape[-1] == 2
+    plan_params = _sweep._Plan(model, {"normal_load": np.array([1.0]), "arm_length": np.array([0.072]),
+                                       "sliding_speed": np.array([0.46]), "mu": np.array([0.2, 0.3])},
+                               "linear", {}, 4, ts.WearReference(), None).point_params(0, 2)  # fmt: skip
+    np.testing.assert_array_equal(plan_params["mu_static"], [0.2, 0.3])
+
+
+def test_arm_length_sets_the_frequencies():
+    ds = ts.sweep(arm_length=[0.05, 0.072, 0.127], **LINEAR)
+    seed = ts.SliderModel()
+    assert ds.omega_normal.sel(arm_length=0.072).item() == seed.omega_normal
+    np.testing.assert_allclose(ds.omega_torsion.values, ts.arm_frequencies(ds.arm_length.values)["omega_torsion"])
+    assert ds.arm_length_extrapolated.values.tolist() == [0, 0, 0]
+    assert ds.normal_load_extrapolated.values.tolist() == [0]
+
+
+def test_grid_order_invariance_and_chunk_size_invariance():
+    small = ts.sweep(normal_load=[30.0], arm_length=[0.06], **LINEAR)
+    big = ts.sweep(normal_load=[10.0, 30.0, 60.0], arm_length=[0.05, 0.06], chunk_size=1, **LINEAR)
+    sub = big.sel(normal_load=[30.0], arm_length=[0.06])
+    for name in small.data_vars:
+        if name != "wall_time":
+            xr.testing.assert_identical(small[name], sub[name])
+    other = ts.sweep(normal_load=[10.0, 30.0, 60.0], arm_length=[0.05, 0.06], chunk_size=4, **LINEAR)
+    xr.testing.assert_identical(strip(big), strip(other))
+
+
+# --- transient and auto ------------------------------------------------------------------------
+
+
+def _summary(outcome, status="success", off=0.0, vmin=0.1, reason=""):
+    return {
+        "status": [ts.STATUS[status]],
+        "outcome": [ts.OUTCOME_NAMES.index(outcome)],
+        "fraction_off_disk": [off],
+        "min_slip_velocity": [vmin],
+        "reason": [reason],
+    }
+
+
+@pytest.mark.parametrize(
+    ("summary", "stable", "regime", "decided_by"),
+    [
+        (_summary("decayed"), True, "steady_sliding", "transient"),
+        (_summary("periodic"), False, "self_excited", "transient"),
+        (_summary("periodic", off=0.115), True, "contact_loss", "transient"),
+        (_summary("periodic", off=0.115, vmin=-0.01), False, "stick_slip", "transient"),
+        (_summary("periodic", vmin=0.0), False, "stick_slip", "transient"),
+        (_summary("diverged"), False, "diverged", "transient"),
+        (_summary("unsettled", status="not_converged"), False, "unstable_undetermined", "linear"),
+        (_summary("unsettled", status="not_converged"), True, "steady_sliding", "linear"),
+        (_summary("failed", status="panic", reason="panic: boom"), False, "failed", "transient"),
+        (_summary("failed", status="step_too_small"), True, "failed", "transient"),
+    ],
+)
+def test_classification_of_transient_summaries(summary, stable, regime, decided_by):
+    r, status, reason, decided = _chunk._classify(summary, np.array([stable]), 7.0)
+    assert _chunk.REGIME_NAMES[r[0]] == regime
+    assert _chunk.DECIDED_BY_NAMES[decided[0]] == decided_by
+    assert status[0] == summary["status"][0]
+    if regime == "failed":
+        assert ts.STATUS_NAMES[summary["status"][0]] in reason[0]
+    if summary["reason"][0]:
+        assert summary["reason"][0] in reason[0]
+    if decided_by == "linear":
+        assert "did not settle by t_max = 7 s" in reason[0]
+
+
+def test_a_failed_point_is_data_not_an_exception(monkeypatch):
+    # Whatever goes wrong in the core for one point (here a simulated panic) becomes that point's
+    # status and reason; the sweep goes on with the others.
+    def panicking(model_values, contact, friction_law, point_params, sel, options):
+        n = sel.size
+        return {"status": np.full(n, ts.STATUS["panic"], np.uint8), "outcome": np.full(n, 4, np.uint8),
+                "reason": ["panic: boom"] * n, **{k: np.full(n, np.nan) for k in (
+                    "omega", "z1_amp", "z2_amp", "phi1_amp", "fraction_off_disk", "min_normal_force",
+                    "min_slip_velocity")}, "n_rhs": np.zeros(n, np.int64)}  # fmt: skip
+
+    monkeypatch.setattr(_chunk, "_transient", panicking)
+    ds = ts.sweep(normal_load=[10.0, 50.0], method="auto", progress=False)
+    r = ds.regime.values.ravel()
+    assert r.tolist() == [REGIME["failed"], REGIME["steady_sliding"]]
+    assert ds.status.values.ravel().tolist() == [ts.STATUS["panic"], ts.STATUS["success"]]
+    assert "panic: boom" in ds.reason.values.ravel()[0]
+    assert ds.decided_by.values.ravel().tolist() == [_chunk.DECIDED_BY["transient"], _chunk.DECIDED_BY["linear"]]
+    assert ds.wear_applicability.values.ravel().tolist() == [2, 0]  # undetermined, mild
+
+
+@requires_driver
+def test_an_unsettled_run_leaves_the_regime_to_linear_stability():
+    ds = ts.sweep(normal_load=[10.0, 50.0], method="transient", t_max=1e-3, progress=False)
+    assert ds.regime.values.ravel().tolist() == [REGIME["unstable_undetermined"], REGIME["steady_sliding"]]
+    assert (ds.status.values == ts.STATUS["not_converged"]).all()
+    assert (ds.decided_by.values == _chunk.DECIDED_BY["linear"]).all()
+    assert "did not settle by t_max = 0.001 s" in ds.reason.values.ravel()[0]
+    assert (ds.n_rhs.values > 0).all()
+
+
+@requires_driver
+def test_auto_runs_the_transient_only_where_sliding_is_unstable():
+    ds = ts.sweep(normal_load=[10.0, 50.0], method="auto", progress=False, threads=2)
+    r = ds.regime.values.ravel()
+    assert r[1] == REGIME["steady_sliding"] and ds.n_rhs.values.ravel()[1] == 0
+    assert r[0] in (REGIME["self_excited"], REGIME["contact_loss"], REGIME["stick_slip"], REGIME["diverged"])
+    assert ds.n_rhs.values.ravel()[0] > 0
+    if r[0] in (REGIME["self_excited"], REGIME["contact_loss"]):
+        assert ds.cycle_omega.values.ravel()[0] == pytest.approx(ds.linear_frequency.values.ravel()[0], rel=0.1)
+        assert math.isnan(ds.wear_rate_relative.values.ravel()[0])
+
+
+@requires_driver
+def test_transient_decays_at_a_stable_point_and_is_thread_independent():
+    kw = {"normal_load": [50.0, 80.0], "method": "transient", "progress": False}
+    one = ts.sweep(threads=1, **kw)
+    two = ts.sweep(threads=2, **kw)
+    assert one.regime.values.ravel().tolist() == [REGIME["steady_sliding"]] * 2
+    assert (one.decided_by.values == _chunk.DECIDED_BY["transient"]).all()
+    xr.testing.assert_identical(strip(one), strip(two))
+
+
+# --- the chunk function and executors ----------------------------------------------------------
+
+
+def test_compute_chunk_is_pure_and_picklable():
+    assert pickle.loads(pickle.dumps(_chunk.compute_chunk)) is _chunk.compute_chunk
+    args = (ts.SliderModel().values(), "unilateral", "constant",
+            {"normal_load": np.array([10.0, 50.0]), "mu": np.array([0.2, 0.3])}, "linear",
+            {"wear": {"normal_load": 84.46, "sliding_speed": 0.46, "frequency_hz": 229.2}})  # fmt: skip
+    a = _chunk.compute_chunk(*pickle.loads(pickle.dumps(args)))
+    b = _chunk.compute_chunk(*args)
+    assert set(a) == set(_chunk.POINT_VARIABLES)
+    for k in a:
+        if k != "wall_time":
+            np.testing.assert_array_equal(a[k], b[k])
+
+
+def test_thread_pool_executor_gives_the_serial_result():
+    kw = {"normal_load": [10.0, 30.0, 60.0], "arm_length": [0.05, 0.1], "chunk_size": 2, **LINEAR}
+    serial = ts.sweep(**kw)
+    with concurrent.futures.ThreadPoolExecutor(2) as ex:
+        pooled = ts.sweep(executor=ex, **kw)
+    xr.testing.assert_identical(strip(serial), strip(pooled))
+
+
+def test_process_pool_executor_runs_the_chunk_function(tmp_path):
+    kw = {"normal_load": [10.0, 60.0], "chunk_size": 1, **LINEAR}
+    serial = ts.sweep(**kw)
+    ctx = multiprocessing.get_context("spawn")
+    with concurrent.futures.ProcessPoolExecutor(2, mp_context=ctx) as ex:
+        pooled = ts.sweep(executor=ex, output=tmp_path / "p.nc", **kw)
+    xr.testing.assert_identical(strip(serial), strip(pooled))
+    pooled.close()
+
+
+class _FutureExecutor:
+    """A dask-Client-like executor: ``map`` returns futures."""
+
+    def map(self, fn, tasks):
+        out = []
+        for t in tasks:
+            f = concurrent.futures.Future()
+            f.set_result(fn(t))
+            out.append(f)
+        return out
+
+
+def test_executor_returning_futures():
+    kw = {"normal_load": [10.0, 60.0], "chunk_size": 1, **LINEAR}
+    xr.testing.assert_identical(strip(ts.sweep(**kw)), strip(ts.sweep(executor=_FutureExecutor(), **kw)))
+
+
+# --- output, interruption, resume ---------------------------------------------------------------
+
+GRID = {"normal_load": [10.0, 30.0, 60.0], "arm_length": [0.05, 0.1], "chunk_size": 2, **LINEAR}  # 6 points, 3 chunks
+
+
+class _Interrupt:
+    """Patch for compute_chunk: runs ``k`` chunks, then raises KeyboardInterrupt."""
+
+    def __init__(self, k):
+        self.k, self.calls = k, 0
+        self.real = _REAL_COMPUTE_CHUNK
+
+    def __call__(self, *args):
+        if self.calls >= self.k:
+            raise KeyboardInterrupt
+        self.calls += 1
+        return self.real(*args)
+
+
+def test_output_file_is_lazy_and_the_parts_are_removed(tmp_path):
+    out = tmp_path / "s.nc"
+    ds = ts.sweep(output=out, **GRID)
+    assert ds.encoding["source"] == str(out)
+    assert not ds.regime.variable._in_memory  # opened lazily from the file
+    assert not (tmp_path / "s.nc.parts").exists()
+    assert not (tmp_path / "s.nc.tmp").exists()
+    mem = ts.sweep(**GRID)
+    xr.testing.assert_identical(strip(mem), strip(ds))
+    ds.close()
+
+
+def test_interrupt_then_resume_is_identical_to_an_uninterrupted_run(tmp_path, monkeypatch):
+    full = ts.sweep(output=tmp_path / "full.nc", **GRID)
+    out = tmp_path / "s.nc"
+    patch = _Interrupt(2)
+    monkeypatch.setattr(_chunk, "compute_chunk", patch)
+    with pytest.raises(KeyboardInterrupt):
+        ts.sweep(output=out, **GRID)
+    parts = tmp_path / "s.nc.parts"
+    assert sorted(p.name for p in parts.glob("chunk_*.npz")) == ["chunk_000000.npz", "chunk_000001.npz"]
+    assert not out.exists() and not (tmp_path / "s.nc.tmp").exists()
+    assert json.loads((parts / "manifest.json").read_text())["n_chunks"] == 3
+
+    counter = _Interrupt(99)
+    monkeypatch.setattr(_chunk, "compute_chunk", counter)
+    resumed = ts.sweep(output=out, resume=True, **GRID)
+    assert counter.calls == 1  # only the missing chunk
+    assert not parts.exists()
+    xr.testing.assert_identical(strip(full), strip(resumed))
+    # wall_time of the saved chunks came through the parts unchanged and is finite everywhere.
+    assert np.isfinite(resumed.wall_time.values).all()
+    full.close()
+    resumed.close()
+
+
+def test_resume_recomputes_deleted_and_corrupt_chunks(tmp_path, monkeypatch):
+    full = ts.sweep(**GRID)
+    out = tmp_path / "s.nc"
+    monkeypatch.setattr(_chunk, "compute_chunk", _Interrupt(2))
+    with pytest.raises(KeyboardInterrupt):
+        ts.sweep(output=out, **GRID)
+    parts = tmp_path / "s.nc.parts"
+    (parts / "chunk_000000.npz").unlink()
+    (parts / "chunk_000001.npz").write_bytes(b"not an npz")
+    counter = _Interrupt(99)
+    monkeypatch.setattr(_chunk, "compute_chunk", counter)
+    resumed = ts.sweep(output=out, resume=True, **GRID)
+    assert counter.calls == 3
+    xr.testing.assert_identical(strip(full), strip(resumed))
+    resumed.close()
+
+
+@pytest.mark.parametrize(
+    ("change", "named"),
+    [
+        ({"normal_load": [10.0, 30.0, 61.0]}, "normal_load"),
+        ({"method": "auto"}, "method"),
+        ({"chunk_size": 3}, "chunk_size"),
+        ({"extra_axes": {"mu": [0.2]}}, r"axes 'mu' differs \(saved \(absent\), now \[0.2\]\)"),
+        ({"model": ts.SliderModel(contact="unilateral", mu=0.25)}, "mu"),
+        ({"t_max": 5.0}, "t_max"),
+    ],
+)
+def test_resume_with_a_different_configuration_names_the_mismatch(tmp_path, monkeypatch, change, named):
+    out = tmp_path / "s.nc"
+    monkeypatch.setattr(_chunk, "compute_chunk", _Interrupt(1))
+    with pytest.raises(KeyboardInterrupt):
+        ts.sweep(output=out, **GRID)
+    monkeypatch.undo()
+    with pytest.raises(ValueError, match=f"cannot resume.*{named}"):
+        ts.sweep(output=out, resume=True, **{**GRID, **change})
+
+
+def test_existing_parts_without_resume_are_not_discarded(tmp_path, monkeypatch):
+    out = tmp_path / "s.nc"
+    monkeypatch.setattr(_chunk, "compute_chunk", _Interrupt(1))
+    with pytest.raises(KeyboardInterrupt):
+        ts.sweep(output=out, **GRID)
+    monkeypatch.undo()
+    with pytest.raises(FileExistsError, match="resume=True"):
+        ts.sweep(output=out, **GRID)
+    assert (tmp_path / "s.nc.parts" / "chunk_000000.npz").exists()
+
+
+def test_threads_do_not_enter_the_configuration(tmp_path, monkeypatch):
+    out = tmp_path / "s.nc"
+    monkeypatch.setattr(_chunk, "compute_chunk", _Interrupt(1))
+    with pytest.raises(KeyboardInterrupt):
+        ts.sweep(output=out, threads=1, **GRID)
+    monkeypatch.undo()
+    ts.sweep(output=out, resume=True, threads=2, **GRID).close()
+
+
+def test_progress_line_without_tqdm(monkeypatch, capsys):
+    import builtins
+
+    real_import = builtins.__import__
+
+    def no_tqdm(name, *a, **k):
+        if name == "tqdm":
+            raise ImportError("no tqdm")
+        return real_import(name, *a, **k)
+
+    monkeypatch.setattr(builtins, "__import__", no_tqdm)
+    ts.sweep(normal_load=[10.0, 20.0], method="linear", chunk_size=1, progress=True)
+    err = capsys.readouterr().err
+    assert "sweep: 2/2 points (100 %)" in err
+    ts.sweep(normal_load=[10.0, 20.0], method="linear", progress=False)
+    assert capsys.readouterr().err == ""
