@@ -1,0 +1,346 @@
+"""Command line: a thin layer over the Python API (``tribosweep`` or ``python -m tribosweep``).
+
+Sub-commands live in the ``COMMANDS`` registry (name -> :class:`Command`); adding one is adding
+an entry. Bad input exits with status 2 and a one-line message, never a traceback; an
+interrupted sweep exits with 130 and keeps its finished chunks for ``--resume``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+#: The default sweep around the seed (used when no axis is given on the command line or in a config).
+DEFAULT_AXES: dict[str, str] = {"normal_load": "10:150:15", "arm_length": "0.05:0.127:4", "sliding_speed": "0.46"}
+_PHYSICS = ("normal_load", "arm_length", "sliding_speed")
+
+
+@dataclass(frozen=True)
+class Command:
+    """A sub-command: its help line, how it adds its arguments, and what it runs (-> exit status)."""
+
+    help: str
+    add_arguments: Callable[[argparse.ArgumentParser], None]
+    run: Callable[[argparse.Namespace], int]
+
+
+class UsageError(ValueError):
+    """Bad command-line or config input (exit status 2)."""
+
+
+def parse_axis(text: str) -> np.ndarray:
+    """An axis from ``START:STOP:NUM`` (``numpy.linspace``), ``a,b,c`` or a single number.
+
+    Examples
+    --------
+    >>> parse_axis("10:30:3").tolist(), parse_axis("1,2.5").tolist(), parse_axis("0.46").tolist()
+    ([10.0, 20.0, 30.0], [1.0, 2.5], [0.46])
+    """
+    text = str(text).strip()
+    try:
+        if ":" in text:
+            parts = text.split(":")
+            if len(parts) != 3:
+                raise ValueError
+            start, stop, num = float(parts[0]), float(parts[1]), int(parts[2])
+            if num < 1:
+                raise argparse.ArgumentTypeError(f"{text!r}: NUM must be an integer >= 1")
+            return np.linspace(start, stop, num)
+        return np.array([float(v) for v in text.split(",")])
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is not an axis: use START:STOP:NUM, a comma-separated list a,b,c, or one number"
+        ) from None
+
+
+def _axis_value(v, where: str) -> np.ndarray:
+    """An axis from a config value: a string spec or a list of numbers."""
+    if isinstance(v, str):
+        try:
+            return parse_axis(v)
+        except argparse.ArgumentTypeError as e:
+            raise UsageError(f"{where}: {e}") from None
+    if isinstance(v, (int, float)) and not isinstance(v, bool):
+        return np.array([float(v)])
+    if isinstance(v, list) and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in v):
+        return np.asarray(v, dtype=np.float64)
+    raise UsageError(f"{where} = {v!r}: must be a string START:STOP:NUM or a,b,c, a number, or a list of numbers")
+
+
+def _named_axis(text: str) -> tuple[str, np.ndarray]:
+    name, sep, spec = text.partition("=")
+    if not sep or not name.strip():
+        raise argparse.ArgumentTypeError(f"{text!r}: use NAME=SPEC, e.g. mu=0.2:0.3:3")
+    return name.strip(), parse_axis(spec)
+
+
+def _positive_int(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"{text!r} must be >= 1")
+    return v
+
+
+# --- sweep -------------------------------------------------------------------------------------
+
+_CONFIG_KEYS = {"normal_load", "arm_length", "sliding_speed", "method", "output", "chunk_size", "threads", "plot",
+                "axes", "model", "solver", "wear_reference"}  # fmt: skip
+_SOLVER_KEYS = {"t_max", "integrator", "rtol", "atol", "periodic_tol", "decay_amplitude", "disturbance"}
+
+
+def _load_config(path: str) -> dict:
+    try:
+        import tomllib
+    except ImportError:  # Python 3.10
+        try:
+            import tomli as tomllib
+        except ImportError:
+            raise UsageError("--config needs Python >= 3.11 (tomllib) or the tomli package") from None
+    try:
+        with open(path, "rb") as f:
+            cfg = tomllib.load(f)
+    except OSError as e:
+        raise UsageError(f"--config {path}: {e.strerror or e}") from None
+    except tomllib.TOMLDecodeError as e:
+        raise UsageError(f"--config {path}: not valid TOML ({e})") from None
+    unknown = set(cfg) - _CONFIG_KEYS
+    if unknown:
+        raise UsageError(f"--config {path}: unknown keys {sorted(unknown)}; valid keys are {sorted(_CONFIG_KEYS)}")
+    for table in ("axes", "model", "solver", "wear_reference"):
+        if table in cfg and not isinstance(cfg[table], dict):
+            raise UsageError(f"--config {path}: [{table}] must be a table")
+    unknown = set(cfg.get("solver", {})) - _SOLVER_KEYS
+    if unknown:
+        raise UsageError(f"--config {path}: unknown [solver] keys {sorted(unknown)}; valid: {sorted(_SOLVER_KEYS)}")
+    return cfg
+
+
+def _add_sweep_arguments(p: argparse.ArgumentParser) -> None:
+    axes = p.add_argument_group(
+        "axes (SI units; START:STOP:NUM for NUM evenly spaced values, a,b,c for a list, or one value)",
+        "With no axis given (here or in --config): normal load 10:150:15 N x arm length 0.05:0.127:4 m x "
+        "sliding speed 0.46 m/s. Otherwise a missing physics axis is its seed value (84.46 N, 0.072 m, 0.46 m/s).",
+    )
+    axes.add_argument("--normal-load", type=parse_axis, metavar="SPEC", help="normal load F_st [N]")
+    axes.add_argument("--arm-length", type=parse_axis, metavar="SPEC", help="clamped arm length [m]")
+    axes.add_argument("--sliding-speed", type=parse_axis, metavar="SPEC", help="sliding speed V [m/s]")
+    axes.add_argument("--mu", type=parse_axis, metavar="SPEC", help="friction coefficient [1] (an extra axis)")
+    axes.add_argument("--axis", type=_named_axis, action="append", default=[], metavar="NAME=SPEC",
+                      help="an extra axis over any real model field, e.g. contact_damping=100:300:3 (SI units)")  # fmt: skip
+    p.add_argument("-o", "--output", metavar="FILE", help="netCDF output file (default sweep.nc)")
+    p.add_argument("--method", choices=("auto", "linear", "tidf", "shooting", "transient"),
+                   help="auto (default): linear stability, then time integration where sliding is unstable; "
+                   "linear: eigenvalues only; transient: integrate every point")  # fmt: skip
+    p.add_argument("--threads", type=_positive_int, metavar="N", help="worker threads (default: all cores)")
+    p.add_argument("--resume", action="store_true", help="finish an interrupted sweep from FILE.parts/")
+    p.add_argument("--config", metavar="FILE.toml",
+                   help="TOML with keys normal_load, arm_length, sliding_speed, method, output, chunk_size, threads, "
+                   "plot and tables [axes], [model] (SliderModel fields), [solver] (t_max, integrator, rtol, atol, "
+                   "periodic_tol, decay_amplitude, disturbance), [wear_reference]; command-line options win")  # fmt: skip
+    p.add_argument("--chunk-size", type=_positive_int, metavar="N", help="points per saved chunk")
+    p.add_argument("--plot", metavar="PNG", help="also write the regime map to this image")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+def _run_sweep(args: argparse.Namespace) -> int:
+    from ._model import SliderModel
+    from ._sweep import sweep
+    from ._wear import WearReference
+
+    cfg = _load_config(args.config) if args.config else {}
+    axes = {}
+    for name in _PHYSICS:
+        cli = getattr(args, name)
+        if cli is not None:
+            axes[name] = cli
+        elif name in cfg:
+            axes[name] = _axis_value(cfg[name], f"config {name}")
+    if not axes:
+        axes = {name: parse_axis(spec) for name, spec in DEFAULT_AXES.items()}
+    extra = {k: _axis_value(v, f"config [axes] {k}") for k, v in cfg.get("axes", {}).items()}
+    if args.mu is not None:
+        extra["mu"] = args.mu
+    for name, values in args.axis:
+        extra[name] = values
+    model_cfg = dict(cfg.get("model", {}))
+    model_cfg.setdefault("contact", "unilateral")
+    try:
+        model = SliderModel(**model_cfg)
+    except TypeError as e:
+        raise UsageError(f"config [model]: {e}") from None
+    solver = dict(cfg.get("solver", {}))
+    try:
+        wear_reference = WearReference(**cfg["wear_reference"]) if "wear_reference" in cfg else None
+    except TypeError as e:
+        raise UsageError(f"config [wear_reference]: {e}") from None
+    output = args.output or cfg.get("output") or "sweep.nc"
+    plot = args.plot or cfg.get("plot")
+    command = "tribosweep " + " ".join(args.argv)
+    ds = sweep(
+        model,
+        **axes,
+        extra_axes=extra or None,
+        method=args.method or cfg.get("method", "auto"),
+        output=output,
+        chunk_size=args.chunk_size or cfg.get("chunk_size"),
+        threads=args.threads or cfg.get("threads"),
+        resume=args.resume,
+        progress=not args.no_progress,
+        wear_reference=wear_reference,
+        command=command,
+        **solver,
+    )
+    with ds:
+        print(describe(ds, output))
+        if plot:
+            from .plot import save_regime_map
+
+            save_regime_map(ds, plot)
+            print(f"regime map: {plot}")
+    return 0
+
+
+# --- info --------------------------------------------------------------------------------------
+
+
+def describe(ds, path: str | None = None) -> str:
+    """A short text summary of a sweep Dataset: dimensions, regime counts, key attributes."""
+    lines = [str(path)] if path else []
+    dims = []
+    for d in ds.regime.dims:
+        v = ds[d].values
+        units = ds[d].attrs.get("units", "")
+        span = f"{v[0]:g}" if v.size == 1 else f"{v[0]:g} .. {v[-1]:g}"
+        dims.append(f"{d} {v.size} [{span} {units}]".replace(" ]", "]"))
+    lines.append("dimensions: " + ", ".join(dims) + f" ({int(ds.regime.size)} points)")
+    for key in ("method", "source", "history"):
+        if key in ds.attrs:
+            lines.append(f"{key}: {ds.attrs[key]}")
+    for var in ("regime", "decided_by", "status"):
+        if var not in ds:
+            continue
+        names = str(ds[var].attrs.get("flag_meanings", "")).split()
+        values = np.asarray(ds[var].attrs.get("flag_values", np.arange(len(names))))
+        codes = np.asarray(ds[var].values).ravel()
+        counts = [(n, int(np.count_nonzero(codes == v))) for v, n in zip(values, names)]
+        lines.append(f"{var}:")
+        lines.extend(f"  {n:<24s}{c:>8d}" for n, c in counts if c)
+    for var, dim in (("normal_load_extrapolated", "loads"), ("arm_length_extrapolated", "arm lengths")):
+        if var in ds:
+            v = np.asarray(ds[var].values)
+            lines.append(f"extrapolated {dim}: {int(v.sum())} of {v.size}")
+    if "comment" in ds.attrs:
+        lines.append(f"note: {ds.attrs['comment']}")
+    return "\n".join(lines)
+
+
+def _add_info_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("file", metavar="FILE", help="a sweep's netCDF file")
+
+
+def _open(path: str):
+    import xarray as xr
+
+    if not os.path.isfile(path):
+        raise UsageError(f"{path}: no such file")
+    try:
+        ds = xr.open_dataset(path, engine="netcdf4")
+    except (OSError, ValueError) as e:
+        raise UsageError(f"{path}: not a readable netCDF file ({e})") from None
+    if "regime" not in ds:
+        ds.close()
+        raise UsageError(f"{path}: not a tribosweep sweep (no regime variable)")
+    return ds
+
+
+def _run_info(args: argparse.Namespace) -> int:
+    with _open(args.file) as ds:
+        print(describe(ds, args.file))
+    return 0
+
+
+# --- plot --------------------------------------------------------------------------------------
+
+
+def _add_plot_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("file", metavar="FILE", help="a sweep's netCDF file")
+    p.add_argument("-o", "--output", required=True, metavar="PNG", help="image file (format from the extension)")
+    p.add_argument("--x", metavar="DIM", help="dimension on the x axis (default normal_load)")
+    p.add_argument("--y", metavar="DIM", help="dimension on the y axis (default arm_length)")
+    p.add_argument("--facet", metavar="DIM", help="dimension with one panel per value (default sliding_speed)")
+
+
+def _run_plot(args: argparse.Namespace) -> int:
+    from .plot import save_regime_map
+
+    with _open(args.file) as ds:
+        save_regime_map(ds, args.output, x=args.x, y=args.y, facet=args.facet)
+    print(f"regime map: {args.output}")
+    return 0
+
+
+#: Sub-commands by name (add one here to extend the CLI).
+COMMANDS: dict[str, Command] = {
+    "sweep": Command("map the regime over normal load x arm length x sliding speed", _add_sweep_arguments, _run_sweep),
+    "info": Command("summarise a sweep file", _add_info_arguments, _run_info),
+    "plot": Command("draw a sweep file's regime map", _add_plot_arguments, _run_plot),
+}
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser with every registered sub-command."""
+    from . import __version__
+
+    parser = argparse.ArgumentParser(
+        prog="tribosweep",
+        description="Friction-induced vibration of the 1985 pin-on-disk slider: regime maps over load, arm length "
+        "and sliding speed. SI units: N, m, m/s.",
+    )
+    parser.add_argument("--version", action="version", version=f"tribosweep {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name, cmd in COMMANDS.items():
+        p = sub.add_parser(name, help=cmd.help, description=cmd.help)
+        cmd.add_arguments(p)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line; returns the exit status (0 ok, 1 failure, 2 bad input, 130 interrupted)."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as e:  # argparse has printed its message (or --help)
+        return e.code if isinstance(e.code, int) else 2
+    if args.command is None:
+        parser.print_usage(sys.stderr)
+        print("tribosweep: error: give a command: " + ", ".join(COMMANDS), file=sys.stderr)
+        return 2
+    args.argv = argv
+    prog = f"tribosweep {args.command}"
+    try:
+        return COMMANDS[args.command].run(args)
+    except (ValueError, TypeError, NotImplementedError) as e:  # bad input (UsageError is a ValueError)
+        print(f"{prog}: error: {e}", file=sys.stderr)
+        return 2
+    except ImportError as e:
+        print(f"{prog}: error: {e}", file=sys.stderr)
+        return 1
+    except OSError as e:
+        print(f"{prog}: error: {e}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print(f"\n{prog}: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

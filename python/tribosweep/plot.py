@@ -1,0 +1,163 @@
+"""Figures of sweep results. Every function returns a :class:`matplotlib.figure.Figure`.
+
+matplotlib is optional (``pip install 'tribosweep[plot]'``) and imported only inside these
+functions. Figures are built without ``pyplot`` (no global state, no GUI backend, never
+``plt.show()``); ``fig.savefig`` renders them with the Agg canvas.
+"""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+import xarray as xr
+
+from ._chunk import REGIME_NAMES
+
+#: Colour of each regime (colour-blind-safe Okabe-Ito palette plus greys).
+REGIME_COLORS: dict[str, str] = {
+    "steady_sliding": "#56B4E9",
+    "self_excited": "#D55E00",
+    "contact_loss": "#E69F00",
+    "stick_slip": "#CC79A7",
+    "diverged": "#000000",
+    "failed": "#999999",
+    "unstable_undetermined": "#F0E442",
+}
+_PREFERRED = ("normal_load", "arm_length", "sliding_speed")
+
+
+def _matplotlib():
+    try:
+        from matplotlib.figure import Figure
+        from matplotlib.patches import Patch
+    except ImportError as e:  # pragma: no cover - exercised only without matplotlib
+        raise ImportError(
+            "tribosweep.plot needs matplotlib: install it with pip install 'tribosweep[plot]' (or matplotlib)"
+        ) from e
+    return Figure, Patch
+
+
+def _edges(c: np.ndarray) -> np.ndarray:
+    """Cell edges around centres ``c`` (midpoints; a single centre gets a +-5 % cell)."""
+    c = np.asarray(c, dtype=np.float64)
+    if c.size == 1:
+        half = 0.05 * abs(c[0]) or 0.5
+        return np.array([c[0] - half, c[0] + half])
+    mid = 0.5 * (c[1:] + c[:-1])
+    return np.concatenate([[c[0] - (mid[0] - c[0])], mid, [c[-1] + (c[-1] - mid[-1])]])
+
+
+def _label(ds: xr.Dataset, dim: str) -> str:
+    a = ds[dim].attrs
+    name = a.get("long_name", dim)
+    return f"{name} [{a['units']}]" if "units" in a else name
+
+
+def _choose_dims(ds: xr.Dataset, x, y, facet) -> tuple[str, str, str | None, list[str]]:
+    dims = list(ds.regime.dims)
+    order = [d for d in _PREFERRED if d in dims] + [d for d in dims if d not in _PREFERRED]
+    given = [d for d in (x, y, facet) if d is not None]
+    for d in given:
+        if d not in dims:
+            raise ValueError(f"dimension {d!r} is not in the sweep: its dimensions are {tuple(dims)}")
+    if len(set(given)) != len(given):
+        raise ValueError(f"x, y and facet must be different dimensions, got {given}")
+    free = [d for d in order if d not in given]
+    # Swept dimensions first, in the preferred order, then the singleton ones.
+    free = [d for d in free if ds.sizes[d] > 1] + [d for d in free if ds.sizes[d] == 1]
+    x = x or free.pop(0)
+    y = y or free.pop(0)
+    if facet is None and free:  # the next swept dimension, else a singleton one
+        facet = free.pop(0)
+    rest = [d for d in free if d != facet]
+    return x, y, facet, rest
+
+
+def regime_map(ds: xr.Dataset, *, x: str | None = None, y: str | None = None, facet: str | None = None,
+               max_facets: int = 6):  # fmt: skip
+    """Regime map of a sweep over two dimensions, one panel per value of a third.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A :func:`tribosweep.sweep` result (needs ``regime``).
+    x, y : str, optional
+        Dimensions on the axes (default: the swept dimensions in the order normal load, arm
+        length, sliding speed, extras).
+    facet : str, optional
+        Dimension with one panel per value (default: the next swept one).
+    max_facets : int
+        Most panels; a longer facet dimension is subsampled evenly.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Other dimensions are taken at their first value (said in the title). The contact law's
+        identification range (22-93 N) is marked when ``x`` or ``y`` is the normal load.
+
+    Examples
+    --------
+    >>> import tribosweep as ts
+    >>> from tribosweep.plot import regime_map
+    >>> ds = ts.sweep(normal_load=[10.0, 30.0, 60.0], arm_length=[0.05, 0.1], method="linear", progress=False)
+    >>> fig = regime_map(ds)
+    >>> len(fig.axes)
+    1
+    """
+    Figure, Patch = _matplotlib()
+    from matplotlib.colors import BoundaryNorm, ListedColormap
+
+    x, y, facet, rest = _choose_dims(ds, x, y, facet)
+    da = ds.regime.isel({d: 0 for d in rest})
+    fixed = [f"{d} = {ds[d].values[0]:g} {ds[d].attrs.get('units', '')}".strip() for d in rest]
+    fvals = [None] if facet is None else list(range(ds.sizes[facet]))
+    if len(fvals) > max_facets:
+        fvals = sorted(set(np.linspace(0, len(fvals) - 1, max_facets).round().astype(int).tolist()))
+    n = len(fvals)
+    fig = Figure(figsize=(3.6 * n + 1.8, 3.6), layout="constrained")
+    axes = fig.subplots(1, n, squeeze=False, sharey=True)[0]
+    cmap = ListedColormap([REGIME_COLORS[r] for r in REGIME_NAMES])
+    norm = BoundaryNorm(np.arange(len(REGIME_NAMES) + 1) - 0.5, cmap.N)
+    present = set()
+    for ax, fi in zip(axes, fvals):
+        sub = da if fi is None else da.isel({facet: fi})
+        z = sub.transpose(y, x).values
+        present.update(np.unique(z).tolist())
+        ax.pcolormesh(_edges(ds[x].values), _edges(ds[y].values), z, cmap=cmap, norm=norm, shading="flat")
+        ax.set_xlabel(_label(ds, x))
+        if fi is not None:
+            ax.set_title(f"{facet} = {ds[facet].values[fi]:g} {ds[facet].attrs.get('units', '')}".strip(), fontsize=9)
+        for dim, line in ((x, ax.axvline), (y, ax.axhline)):
+            if dim == "normal_load":
+                for bound in (22.0, 93.0):
+                    line(bound, color="k", lw=0.6, ls="--")
+    axes[0].set_ylabel(_label(ds, y))
+    handles = [Patch(facecolor=REGIME_COLORS[r], edgecolor="k", lw=0.3, label=r.replace("_", " "))
+               for i, r in enumerate(REGIME_NAMES) if i in present]  # fmt: skip
+    fig.legend(handles=handles, loc="outside right center", fontsize=8, frameon=False)
+    title = f"regime ({ds.attrs.get('method', '?')})"
+    if fixed:
+        title += "; " + ", ".join(fixed)
+    fig.suptitle(title, fontsize=10)
+    return fig
+
+
+def save_regime_map(ds_or_path, path: str | os.PathLike, **kwargs) -> None:
+    """Write :func:`regime_map` of a Dataset (or of a sweep file) to an image file (PNG, PDF, SVG).
+
+    Parameters
+    ----------
+    ds_or_path : xarray.Dataset or path-like
+        A sweep result or its netCDF file.
+    path : path-like
+        Image file; the format follows its extension.
+    **kwargs
+        Passed to :func:`regime_map`.
+    """
+    if isinstance(ds_or_path, xr.Dataset):
+        fig = regime_map(ds_or_path, **kwargs)
+    else:
+        with xr.open_dataset(ds_or_path, engine="netcdf4") as ds:
+            fig = regime_map(ds, **kwargs)
+    fig.savefig(path, dpi=120)

@@ -1,0 +1,200 @@
+"""The command line: tests call cli.main([...]) and check exit codes, files and messages."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from tribosweep import _chunk, cli
+
+_REAL_COMPUTE_CHUNK = _chunk.compute_chunk
+
+
+def run(argv, capsys):
+    code = cli.main([str(a) for a in argv])
+    out = capsys.readouterr()
+    assert "Traceback" not in out.err
+    return code, out.out, out.err
+
+
+def test_sweep_info_plot(tmp_path, capsys):
+    nc, png = tmp_path / "s.nc", tmp_path / "s.png"
+    code, out, err = run(["sweep", "--normal-load", "10,30,60", "--arm-length", "0.05:0.1:2", "--method", "linear",
+                          "-o", nc, "--plot", png, "--no-progress", "--threads", "1"], capsys)  # fmt: skip
+    assert code == 0, err
+    assert nc.exists() and png.stat().st_size > 0
+    assert "regime:" in out and "steady_sliding" in out
+    with xr.open_dataset(nc) as ds:
+        assert ds.regime.shape == (3, 2, 1)
+        assert ds.attrs["history"].endswith("--no-progress --threads 1")
+        assert "tribosweep sweep --normal-load 10,30,60" in ds.attrs["history"]
+
+    code, out, err = run(["info", nc], capsys)
+    assert code == 0, err
+    assert "dimensions: normal_load 3 [10 .. 60 N], arm_length 2 [0.05 .. 0.1 m]" in out
+    assert "(6 points)" in out and "regime:" in out and "decided_by:" in out and "BELOW a Hopf load" in out
+
+    png2 = tmp_path / "again.png"
+    code, out, err = run(["plot", nc, "-o", png2, "--x", "arm_length", "--y", "normal_load"], capsys)
+    assert code == 0, err
+    assert png2.stat().st_size > 0
+
+
+def test_default_sweep_and_extra_axes(tmp_path, capsys):
+    nc = tmp_path / "d.nc"
+    code, _, err = run(["sweep", "--method", "linear", "-o", nc, "--no-progress"], capsys)
+    assert code == 0, err
+    with xr.open_dataset(nc) as ds:
+        np.testing.assert_allclose(ds.normal_load, np.linspace(10, 150, 15))
+        np.testing.assert_allclose(ds.arm_length, np.linspace(0.05, 0.127, 4))
+        assert ds.sliding_speed.values.tolist() == [0.46]
+        assert ds.attrs["model_contact"] == "unilateral"
+    nc2 = tmp_path / "e.nc"
+    code, _, err = run(["sweep", "--normal-load", "50", "--mu", "0.2,0.25", "--axis", "contact_damping=200:300:2",
+                        "--method", "linear", "-o", nc2, "--no-progress"], capsys)  # fmt: skip
+    assert code == 0, err
+    with xr.open_dataset(nc2) as ds:
+        assert ds.regime.dims == ("normal_load", "arm_length", "sliding_speed", "mu", "contact_damping")
+        assert ds.arm_length.values.tolist() == [0.072]  # one axis given: the others are the seed's
+
+
+def test_config_file(tmp_path, capsys):
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(
+        'normal_load = [10.0, 60.0]\narm_length = "0.05:0.1:2"\nmethod = "auto"\nchunk_size = 2\n'
+        f'output = "{tmp_path / "cfg.nc"}"\n[axes]\nmu = "0.2,0.25"\n[model]\ntwist_coupling = -45.2e3\n'
+        "[solver]\nt_max = 0.001\n"
+    )
+    code, _, err = run(["sweep", "--config", cfg, "--method", "linear", "--no-progress"], capsys)
+    assert code == 0, err
+    with xr.open_dataset(tmp_path / "cfg.nc") as ds:
+        assert ds.attrs["method"] == "linear"  # the command line wins
+        assert ds.attrs["model_twist_coupling"] == -45.2e3
+        assert ds.attrs["solver_t_max"] == 0.001
+        assert ds.mu.values.tolist() == [0.2, 0.25]
+        assert ds.normal_load.values.tolist() == [10.0, 60.0]
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["sweep", "--normal-load", "3,2"], "not sorted"),
+        (["sweep", "--normal-load", "1,1"], "duplicate"),
+        (["sweep", "--normal-load=-5,2"], "> 0"),
+        (["sweep", "--normal-load", "nan"], "finite"),
+        (["sweep", "--normal-load", "a:b:c"], "not an axis"),
+        (["sweep", "--normal-load", "1:2:0"], "NUM must be"),
+        (["sweep", "--arm-length", "1:2"], "not an axis"),
+        (["sweep", "--method", "bogus"], "invalid choice"),
+        (["sweep", "--method", "tidf"], "not available yet"),
+        (["sweep", "--threads", "0"], "must be >= 1"),
+        (["sweep", "--chunk-size", "x"], "not an integer"),
+        (["sweep", "--axis", "nonsense"], "NAME=SPEC"),
+        (["sweep", "--axis", "bogus=1,2"], "unknown field 'bogus'"),
+        (["sweep", "--axis", "omega_normal=1,2"], "follows arm_length"),
+        (["sweep", "--config", "missing.toml"], "missing.toml"),
+        (["info", "missing.nc"], "no such file"),
+        (["plot", "missing.nc", "-o", "x.png"], "no such file"),
+        (["plot", "x.nc"], "required"),
+        (["bogus"], "invalid choice"),
+        ([], "give a command"),
+    ],
+)
+def test_bad_input_exits_2_with_a_message(argv, message, tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    code, _, err = run(argv, capsys)
+    assert code == 2
+    assert message in err
+    assert not (tmp_path / "sweep.nc").exists()
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("bogus = 1\n", "unknown keys ['bogus']"),
+        ("normal_load = [1, 'a']\n", "config normal_load"),
+        ("[solver]\nfoo = 1\n", "unknown [solver] keys"),
+        ("[model]\nfoo = 1\n", "config [model]"),
+        ("[model]\nmu = -1.0\n", "mu = -1 is out of range"),
+        ("normal_load = \n", "not valid TOML"),
+        ("[wear_reference]\nload = 1\n", "config [wear_reference]"),
+        ("[solver]\nt_max = 'long'\n", "t_max"),
+    ],
+)
+def test_bad_config_exits_2(text, message, tmp_path, capsys):
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(text)
+    code, _, err = run(["sweep", "--config", cfg, "-o", tmp_path / "x.nc", "--method", "linear"], capsys)
+    assert code == 2
+    assert message in err
+
+
+def test_info_on_a_file_that_is_not_a_sweep(tmp_path, capsys):
+    path = tmp_path / "other.nc"
+    xr.Dataset({"a": ("x", [1.0])}).to_netcdf(path)
+    code, _, err = run(["info", path], capsys)
+    assert code == 2 and "not a tribosweep sweep" in err
+    (tmp_path / "junk.nc").write_text("junk")
+    code, _, err = run(["info", tmp_path / "junk.nc"], capsys)
+    assert code == 2 and "not a readable netCDF file" in err
+
+
+def test_interrupt_exits_130_and_resume_finishes(tmp_path, monkeypatch, capsys):
+    nc = tmp_path / "r.nc"
+    argv = ["sweep", "--normal-load", "10,30,60", "--method", "linear", "--chunk-size", "1", "-o", nc, "--no-progress"]
+    calls = []
+
+    def interrupt_after_one(*args):
+        if calls:
+            raise KeyboardInterrupt
+        calls.append(1)
+        return _REAL_COMPUTE_CHUNK(*args)
+
+    monkeypatch.setattr(_chunk, "compute_chunk", interrupt_after_one)
+    code, _, err = run(argv, capsys)
+    assert code == 130
+    assert "--resume" in err and "1 of 3 chunks" in err
+    monkeypatch.undo()
+    code, _, err = run(argv, capsys)  # without --resume: refuses to discard the saved chunks
+    assert code == 1 and "--resume" in err
+    code, _, err = run([*argv, "--resume"], capsys)
+    assert code == 0, err
+    assert nc.exists() and not (tmp_path / "r.nc.parts").exists()
+
+
+def test_help_and_version(capsys):
+    assert cli.main(["--help"]) == 0
+    assert "sweep" in capsys.readouterr().out
+    assert cli.main(["sweep", "--help"]) == 0
+    out = capsys.readouterr().out
+    assert "[N]" in out and "[m]" in out and "[m/s]" in out and "SI units" in out
+    assert cli.main(["--version"]) == 0
+    assert "tribosweep" in capsys.readouterr().out
+
+
+def test_python_dash_m(tmp_path):
+    proc = subprocess.run([sys.executable, "-m", "tribosweep", "info", tmp_path / "none.nc"], capture_output=True,
+                          text=True, timeout=120, check=False)  # fmt: skip
+    assert proc.returncode == 2 and "no such file" in proc.stderr and "Traceback" not in proc.stderr
+
+
+def test_parse_axis():
+    assert cli.parse_axis("10:150:15").tolist() == np.linspace(10, 150, 15).tolist()
+    assert cli.parse_axis(" 1, 2 ,3").tolist() == [1.0, 2.0, 3.0]
+    assert cli.parse_axis("0.46").tolist() == [0.46]
+
+
+def test_commands_registry_is_extensible():
+    assert set(cli.COMMANDS) >= {"sweep", "info", "plot"}
+    called = []
+    cmd = cli.Command("say hello", lambda p: p.add_argument("--who", default="x"), lambda a: called.append(a.who) or 0)
+    cli.COMMANDS["hello"] = cmd
+    try:
+        assert cli.main(["hello", "--who", "y"]) == 0
+        assert called == ["y"]
+    finally:
+        del cli.COMMANDS["hello"]
