@@ -347,8 +347,9 @@ class _FutureExecutor:
         return out
 
 
-def test_executor_returning_futures():
-    kw = {"normal_load": [10.0, 60.0], "chunk_size": 1, **LINEAR}
+def test_executor_returning_futures_fed_in_windows(monkeypatch):
+    monkeypatch.setattr(_sweep, "EXECUTOR_WINDOW", 2)
+    kw = {"normal_load": [10.0, 30.0, 60.0], "arm_length": [0.05, 0.1], "chunk_size": 1, **LINEAR}
     xr.testing.assert_identical(strip(ts.sweep(**kw)), strip(ts.sweep(executor=_FutureExecutor(), **kw)))
 
 

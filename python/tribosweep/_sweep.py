@@ -597,6 +597,17 @@ def sweep(
     return xr.open_dataset(output, engine="netcdf4")
 
 
+#: Chunks handed to an executor at a time: executors submit everything they are given at once, so
+#: the tasks (each with its points' parameters) are fed in windows to keep memory bounded.
+EXECUTOR_WINDOW: int = 256
+
+
+def _windowed_map(executor, plan: _Plan, chunks: list[int], threads):
+    for i in range(0, len(chunks), EXECUTOR_WINDOW):
+        window = chunks[i : i + EXECUTOR_WINDOW]
+        yield from executor.map(_run_task, [plan.task(k, threads) for k in window])
+
+
 def _compute(plan: _Plan, chunks, threads, executor, progress: bool, n_done: int, sink) -> None:
     """Run ``chunks`` and hand each result to ``sink(start, stop, arrays)`` in order."""
     chunks = list(chunks)
@@ -606,7 +617,7 @@ def _compute(plan: _Plan, chunks, threads, executor, progress: bool, n_done: int
             # Looked up at call time (not bound at import) so that tests can patch it.
             results = (_chunk.compute_chunk(*plan.task(k, threads)) for k in chunks)
         else:
-            results = executor.map(_run_task, [plan.task(k, threads) for k in chunks])
+            results = _windowed_map(executor, plan, chunks, threads)
         for k, res in zip(chunks, results):
             if hasattr(res, "result"):  # dask futures
                 res = res.result()
