@@ -45,9 +45,11 @@ def test_sweep_info_plot(tmp_path, capsys):
 
 
 def test_default_sweep_and_extra_axes(tmp_path, capsys):
-    nc = tmp_path / "d.nc"
-    code, _, err = run(["sweep", "--method", "linear", "-o", nc, "--no-progress"], capsys)
+    nc = tmp_path / "new_dir" / "d.nc"
+    png = tmp_path / "other_dir" / "d.png"
+    code, _, err = run(["sweep", "--method", "linear", "-o", nc, "--plot", png, "--no-progress"], capsys)
     assert code == 0, err
+    assert png.exists()
     with xr.open_dataset(nc) as ds:
         np.testing.assert_allclose(ds.normal_load, np.linspace(10, 150, 15))
         np.testing.assert_allclose(ds.arm_length, np.linspace(0.05, 0.127, 4))

@@ -568,6 +568,7 @@ def sweep(
         return writer.to_dataset()
 
     output = Path(output)
+    output.parent.mkdir(parents=True, exist_ok=True)
     parts = _Parts(output, plan, resume)
     done = [k for k in range(plan.n_chunks) if parts.is_done(k)]
     todo = [k for k in range(plan.n_chunks) if k not in set(done)]

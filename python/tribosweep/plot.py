@@ -160,4 +160,5 @@ def save_regime_map(ds_or_path, path: str | os.PathLike, **kwargs) -> None:
     else:
         with xr.open_dataset(ds_or_path, engine="netcdf4") as ds:
             fig = regime_map(ds, **kwargs)
+    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
     fig.savefig(path, dpi=120)
