@@ -108,13 +108,20 @@ def test_bilateral_seed_decays_to_sliding_from_small_disturbance():
     ds = ts.ensemble(ts.SliderModel(), 60.0, {"mu": [0.215]}, y0=[0.5e-6, 0, 0, 0, 0, 0], steady=True,
                      rtol=1e-8, decay_amplitude=0.2e-6)
     assert ts.OUTCOME_NAMES[int(ds.outcome[0])] == "decayed"
-    # The torsion mode decays slowest: its frequency, 646.6 rad/s, is what is left.
-    assert abs(float(ds.omega[0]) - 646.63) < 2.0
+    # The torsion mode decays slowest (Re = -0.33 /s): its frequency, 646.63 rad/s, is what is left.
+    assert abs(float(ds.omega[0]) - 646.627) < 0.5
+    # Decay is judged on every component: it takes seconds, not the 50 ms the normal mode needs.
+    assert float(ds.t_end[0]) > 1.0
 
 
 def test_unstable_sliding_without_unilateral_contact_diverges():
-    # mu = 0.215 at 15 N is below the Hopf load (24.9 N): sliding is unstable and the bilateral
-    # model has no stable cycle, so the motion escapes.
-    ds = ts.ensemble(ts.SliderModel(normal_load=15.0), 20.0, {"mu": [0.215]}, steady=True, rtol=1e-8)
+    # mu = 0.35 at the seed load is below its Hopf load (225 N): sliding is unstable (growth
+    # 0.88 /s) and the bilateral model has no stable cycle, so the motion escapes.
+    ds = ts.ensemble(ts.SliderModel(), 20.0, {"mu": [0.35]}, steady=True, rtol=1e-8)
     assert ts.OUTCOME_NAMES[int(ds.outcome[0])] == "diverged"
     assert int(ds.status[0]) == 0
+    assert float(ds.max_abs_z[0]) >= 1e-3 * (1 - 1e-9)
+    # The unilateral model stays bounded: a bouncing cycle near the torsion frequency.
+    uni = ts.ensemble(ts.SliderModel(contact="unilateral"), 20.0, {"mu": [0.35]}, steady=True, rtol=1e-8)
+    assert ts.OUTCOME_NAMES[int(uni.outcome[0])] == "periodic"
+    assert 640 < float(uni.omega[0]) < 660 and float(uni.fraction_off_disk[0]) > 0.1

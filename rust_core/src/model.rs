@@ -65,7 +65,7 @@ pub enum ContactMode {
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum ParamError {
     /// `name` has value `value`, outside `range`.
-    #[error("{name} = {value} is out of range: must be {range}")]
+    #[error("{name} = {value:?} is out of range: must be {range}")]
     OutOfRange {
         name: &'static str,
         value: f64,
