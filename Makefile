@@ -15,13 +15,18 @@ $(BIN)/python:
 install: $(BIN)/python
 	$(BIN)/python -m pip install -q ".[plot]"
 
+# ncdump (Debian netcdf-bin) is used by one test to prove that plain netCDF tools read our files;
+# install it when apt is usable (CI runs as root), else that one test skips with its reason.
 install-test: $(BIN)/python
+	command -v ncdump >/dev/null || { [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null && \
+	  (apt-get install -y -q netcdf-bin >/dev/null 2>&1 || \
+	   (apt-get update -q >/dev/null 2>&1 && apt-get install -y -q netcdf-bin >/dev/null 2>&1)) ; } || true
 	$(BIN)/python -m pip install -q ".[test]"
 
 # The main job: a default sweep around the seed configuration -> netCDF + regime map + report.
 run: install
-	$(BIN)/tribosweep seed --out out
 	$(BIN)/tribosweep sweep -o out/seed_sweep.nc --plot out/seed_sweep.png
+	$(BIN)/tribosweep info out/seed_sweep.nc
 
 test-rust:
 	cargo test --release --workspace --exclude tribosweep-py

@@ -1,0 +1,103 @@
+"""Trajectories per second per core: the Rust core against numba and scipy, with the error of each.
+
+The benchmark of issue 2: 1000 trajectories of the seed configuration with mu uniform in
+[0.15, 0.30] and normal load uniform in [17, 152] N, over 0.5 s from z = 1 um, at rtol 1e-6 and
+1e-9. Every method gets the same absolute tolerances (``reference.default_atol``). Error: the
+largest |z(0.5) - z_ref(0.5)| / max|z_ref| over the ensemble, against the Rust DOP853 at rtol 1e-13
+(itself checked against scipy DOP853 at 1e-13 on a subset). All baselines run in this process, so
+the printed ratios hold on a noisy shared machine; absolute times do not.
+
+    python benches/bench_trajectories.py [--n 1000] [--n-scipy 20] [--json out.json]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import pathlib
+import sys
+import time
+
+import numpy as np
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+import baselines  # noqa: E402
+
+import tribosweep as ts  # noqa: E402
+
+
+def best_of(f, repeat=3):
+    best, out = float("inf"), None
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        out = f()
+        best = min(best, time.perf_counter() - t0)
+    return best, out
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--n", type=int, default=1000)
+    ap.add_argument("--n-scipy", type=int, default=20)
+    ap.add_argument("--json", type=pathlib.Path)
+    args = ap.parse_args(argv)
+
+    params_list, y0, t_end = baselines.seed_ensemble_params(args.n)
+    mu = np.array([p["mu"] for p in params_list])
+    load = np.array([p["normal_load"] for p in params_list])
+    P = baselines.params_to_array(params_list)
+    model = ts.SliderModel()
+    grid = {"mu": mu, "normal_load": load}
+
+    def rust(method, rtol, threads=1):
+        atol = baselines.reference.default_atol(rtol)
+        return ts.ensemble(model, t_end, grid, y0=y0, method=method, rtol=rtol, atol=atol, threads=threads)
+
+    t_ref, ref = best_of(lambda: rust("dop853", 1e-13), repeat=1)
+    z_ref = ref.z_end.values
+    # The scale of the error: the largest |z| of each run (z starts at 1 um and decays or grows).
+    zscale = np.maximum(np.abs(ref.max_abs_z.values), 1e-12)
+    sc = baselines.scipy_seed_batch(params_list[: args.n_scipy], t_end, 1e-13, y0=y0[: args.n_scipy])
+    ref_check = np.max(np.abs(sc["y_end"][:, 0] - z_ref[: args.n_scipy]) / zscale[: args.n_scipy])
+    rows = []
+    print(f"reference: Rust DOP853 rtol 1e-13, {t_ref / args.n * 1e3:.2f} ms/trajectory; "
+          f"vs scipy DOP853 1e-13 on {args.n_scipy}: max rel. diff {ref_check:.1e}")
+    baselines.warmup()
+    for rtol in (1e-6, 1e-9):
+        for method in ("dopri5", "dop853", "rodas4"):
+            t, ds = best_of(lambda: rust(method, rtol))
+            err = np.max(np.abs(ds.z_end.values - z_ref) / zscale)
+            rows.append(dict(impl="rust", method=method, rtol=rtol, threads=1, per_s_core=args.n / t,
+                             err=float(err), n_rhs=float(ds.n_rhs.mean()), failed=int((ds.status != 0).sum())))
+        t2, ds2 = best_of(lambda: rust("dopri5", rtol, threads=2))
+        rows.append(dict(impl="rust", method="dopri5", rtol=rtol, threads=2, per_s_core=args.n / t2 / 2,
+                         err=rows[-3]["err"], n_rhs=float(ds2.n_rhs.mean()), failed=int((ds2.status != 0).sum())))
+        assert np.array_equal(ds2.z_end.values, rust("dopri5", rtol).z_end.values), "1 vs 2 threads differ"
+        tn = baselines.time_numba(P, y0, t_end, rtol)
+        err = np.nanmax(np.abs(tn["y_end"][:, 0] - z_ref) / zscale)
+        rows.append(dict(impl="numba", method="dp5", rtol=rtol, threads=1, per_s_core=1 / tn["seconds_per_trajectory"],
+                         err=float(err), n_rhs=float(np.mean(tn["n_rhs"])), failed=int(np.isnan(tn["y_end"][:, 0]).sum())))
+        k = args.n_scipy
+        ss = baselines.scipy_seed_batch(params_list[:k], t_end, rtol, y0=y0[:k])
+        err = np.max(np.abs(ss["y_end"][:, 0] - z_ref[:k]) / zscale[:k])
+        rows.append(dict(impl="scipy", method="DOP853", rtol=rtol, threads=1, per_s_core=1 / ss["seconds_per_trajectory"],
+                         err=float(err), n_rhs=float(np.mean(ss["n_rhs"])), failed=0))
+    by = {(r["impl"], r["method"], r["rtol"], r["threads"]): r for r in rows}
+    print(f"{'impl':6} {'method':7} {'rtol':>6} {'thr':>3} {'traj/s/core':>12} {'vs numba':>9} {'vs scipy':>9} "
+          f"{'max err':>9} {'rhs/traj':>9} {'failed':>6}")
+    for r in rows:
+        nb = by[("numba", "dp5", r["rtol"], 1)]["per_s_core"]
+        sp = by[("scipy", "DOP853", r["rtol"], 1)]["per_s_core"]
+        print(f"{r['impl']:6} {r['method']:7} {r['rtol']:6.0e} {r['threads']:3d} {r['per_s_core']:12.0f} "
+              f"{r['per_s_core'] / nb:9.2f} {r['per_s_core'] / sp:9.1f} {r['err']:9.1e} {r['n_rhs']:9.0f} {r['failed']:6d}")
+    for rtol in (1e-6, 1e-9):
+        one = by[("rust", "dopri5", rtol, 1)]["per_s_core"]
+        two = by[("rust", "dopri5", rtol, 2)]["per_s_core"]
+        print(f"2-thread efficiency at rtol {rtol:.0e}: {two / one:.2f} (per-core rate, 2 threads / 1 thread)")
+    if args.json:
+        args.json.write_text(json.dumps(rows, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
