@@ -1,1 +1,808 @@
-//! (in progress)
+//! Periodic orbits of the full ODE by shooting, with Floquet multipliers (MODEL.md §6).
+//!
+//! Unknowns: the initial state without its `zd` component (phase condition `zd(0) = 0`) and the
+//! period `T`. Residual: `y(T; y0) - y0` (six equations). Newton uses the monodromy matrix
+//! `Phi(T) = dy(T)/dy0` from the variational equations `Phi' = J(y) Phi`, integrated with the state
+//! as one 42-dimensional system ([`Variational`]) by `ode::integrate` (DOP853 by default). At every
+//! contact switch of the unilateral model the integration stops, `Phi` jumps by the saltation matrix
+//!
+//! ```text
+//! S = I + (f+ - f-) n^T / (n^T f-)          n = grad h, h the switching function
+//! ```
+//!
+//! (`h = zc` for the gap event, `h = N_law` for the normal-force event), and the run restarts in the
+//! new mode. The Newton matrix is `[Phi(T) - I]` without the `zd` column, plus the column `f(y(T))`
+//! for `T`. The Floquet multipliers are the eigenvalues of `Phi(T)` at the converged orbit, sorted
+//! by modulus; one of them is the trivial 1 of an autonomous system, and the orbit is stable when
+//! every other one has modulus below `1 - stability_tol`.
+//!
+//! The orbit is then sampled densely over one period (the 6-state integrated again, with the
+//! slider's own mode switching) for its harmonics, `z_max`, the fraction of the period with the
+//! contact open (`zc > 0`, from the located gap events) and the minimum normal force.
+
+use crate::linear::eigenvalues;
+use crate::model::{event, idx, ContactMode, Jacobian, Slider, State};
+use crate::ode::{integrate, Control, EventAction, Method, Observer, OdeSystem, Options, Outcome, Stats, StepView, MAX_EVENTS};
+use crate::status::Status;
+use crate::tidf::{two_harmonic_argmax, Root};
+use nalgebra::{Complex, SMatrix, SVector};
+use std::f64::consts::PI;
+
+type C64 = Complex<f64>;
+/// State and column-major monodromy matrix `[y, Phi[:,0], ..., Phi[:,5]]`.
+pub type Augmented = SVector<f64, 42>;
+
+/// The slider with its variational equations: `y' = f(y)`, `Phi' = J(y) Phi` in the same mode,
+/// with the slider's events and mode logic. `start` is the mode a run begins in (the shooting
+/// restarts after each switch in the new mode).
+#[derive(Clone, Copy, Debug)]
+pub struct Variational<'a> {
+    /// The slider.
+    pub slider: &'a Slider,
+    /// Mode at the start of a run.
+    pub start: ContactMode,
+}
+
+#[inline]
+fn split(y: &Augmented) -> (State, Jacobian) {
+    let x = State::from_fn(|i, _| y[i]);
+    let phi = Jacobian::from_fn(|r, c| y[6 + 6 * c + r]);
+    (x, phi)
+}
+
+#[inline]
+fn join(x: &State, phi: &Jacobian) -> Augmented {
+    Augmented::from_fn(|i, _| if i < 6 { x[i] } else { phi[((i - 6) % 6, (i - 6) / 6)] })
+}
+
+impl OdeSystem<42> for Variational<'_> {
+    type Mode = ContactMode;
+
+    #[inline]
+    fn rhs(&self, _t: f64, y: &Augmented, mode: ContactMode) -> Augmented {
+        let x = State::from_fn(|i, _| y[i]);
+        let f = self.slider.rhs(&x, mode);
+        let j = self.slider.jacobian(&x, mode);
+        let mut out = Augmented::zeros();
+        for i in 0..6 {
+            out[i] = f[i];
+        }
+        // Phi' = J Phi, column by column (explicit loops: several times faster than a generic
+        // 6x6 product here, and this is the inner loop of the shooting).
+        for c in 0..6 {
+            let b = 6 + 6 * c;
+            for r in 0..6 {
+                let mut acc = 0.0;
+                for k in 0..6 {
+                    acc += j[(r, k)] * y[b + k];
+                }
+                out[b + r] = acc;
+            }
+        }
+        out
+    }
+
+    fn initial_mode(&self, _t: f64, _y: &Augmented) -> ContactMode {
+        self.start
+    }
+
+    fn n_events(&self) -> usize {
+        OdeSystem::<6>::n_events(self.slider)
+    }
+
+    #[inline]
+    fn events(&self, t: f64, y: &Augmented, mode: ContactMode, g: &mut [f64; MAX_EVENTS]) {
+        OdeSystem::<6>::events(self.slider, t, &split(y).0, mode, g);
+    }
+
+    fn on_event(&self, t: f64, y: &Augmented, mode: ContactMode, index: usize) -> EventAction<ContactMode> {
+        OdeSystem::<6>::on_event(self.slider, t, &split(y).0, mode, index)
+    }
+}
+
+/// Saltation matrix of a switch from mode `before` to `after` on event `index` at state `y`:
+/// `S = I + (f+ - f-) n^T / (n^T f-)` with `n` the gradient of the switching function.
+/// Identity for events that do not switch the vector field.
+pub fn saltation(s: &Slider, y: &State, before: ContactMode, after: ContactMode, index: usize) -> Jacobian {
+    let p = &s.p;
+    let mut n = State::zeros();
+    match index {
+        event::GAP => n[idx::Z] = 1.0,
+        event::NORMAL => {
+            n[idx::Z] = -s.k_s + 2.0 * p.contact_quadratic * y[idx::Z];
+            n[idx::ZD] = -p.contact_damping;
+            n[idx::PHI] = p.twist_coupling;
+        }
+        _ => return Jacobian::identity(),
+    }
+    if before == after {
+        return Jacobian::identity();
+    }
+    let fm = s.rhs(y, before);
+    let fp = s.rhs(y, after);
+    Jacobian::identity() + (fp - fm) * n.transpose() / n.dot(&fm)
+}
+
+/// Stops a run at the first event that changes the mode.
+struct StopAtSwitch {
+    hit: Option<(usize, ContactMode, ContactMode)>,
+}
+
+impl<const N: usize> Observer<N, ContactMode> for StopAtSwitch {
+    fn on_event(&mut self, index: usize, _t: f64, _y: &SVector<f64, N>, before: ContactMode, after: ContactMode) -> Control {
+        if before != after {
+            self.hit = Some((index, before, after));
+            Control::Stop
+        } else {
+            Control::Continue
+        }
+    }
+}
+
+/// Options of the shooting solver.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShootingOptions {
+    /// Integration method (DOP853 by default).
+    pub method: Method,
+    /// Relative tolerance of the integration; absolute tolerances are this times the slider's
+    /// characteristic sizes (`steady::characteristic_sizes`), and for `Phi[i][j]` their ratio.
+    pub rtol: f64,
+    /// Most Newton iterations.
+    pub max_iter: u32,
+    /// Converged when the residual `y(T) - y0`, scaled by the characteristic sizes, is below this
+    /// (infinity norm), or the scaled Newton step (with `T` relative) is below `tol / 100`.
+    pub tol: f64,
+    /// A multiplier other than the trivial one counts as on the unit circle within this.
+    pub stability_tol: f64,
+    /// Uniform samples per period for the harmonics and extremes.
+    pub n_samples: usize,
+    /// Most contact switches in one period before the solve gives up (`EventChatter`).
+    pub max_switches: u32,
+}
+
+impl Default for ShootingOptions {
+    fn default() -> Self {
+        ShootingOptions {
+            method: Method::Dop853,
+            rtol: 1e-11,
+            max_iter: 30,
+            tol: 1e-9,
+            stability_tol: 1e-6,
+            n_samples: 2048,
+            max_switches: 64,
+        }
+    }
+}
+
+/// Harmonics of `z` over one period, `z = A0 + A1 sin(psi + a1) + A2 sin(2 psi + a2) + ...`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Harmonics {
+    /// Mean [m].
+    pub a0: f64,
+    /// Fundamental amplitude [m].
+    pub a1: f64,
+    /// Second harmonic amplitude [m].
+    pub a2: f64,
+    /// Third harmonic amplitude [m].
+    pub a3: f64,
+    /// Phase of the second harmonic relative to the first, `a2 - 2 a1`, in `[0, 2 pi)` [rad]
+    /// (the describing function's `theta`).
+    pub theta: f64,
+}
+
+/// A periodic orbit of the full ODE (MODEL.md §6).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PeriodicOrbit {
+    /// Period T [s].
+    pub period: f64,
+    /// 2 pi / T [rad/s].
+    pub omega: f64,
+    /// State at t = 0 (`zd = 0`).
+    pub state0: State,
+    /// Contact mode at t = 0.
+    pub mode0: ContactMode,
+    /// Floquet multipliers (eigenvalues of the monodromy matrix), by modulus descending.
+    pub multipliers: [C64; 6],
+    /// Their moduli.
+    pub moduli: [f64; 6],
+    /// Index in `multipliers` of the trivial multiplier (the one closest to 1).
+    pub trivial: usize,
+    /// `|rho_trivial - 1|`: an accuracy check of the monodromy matrix.
+    pub trivial_error: f64,
+    /// True when every non-trivial multiplier has modulus below `1 - stability_tol`.
+    pub stable: bool,
+    /// Harmonics of `z`.
+    pub harmonics: Harmonics,
+    /// Largest dynamic `z` over the period [m].
+    pub z_max: f64,
+    /// Smallest dynamic `z` [m].
+    pub z_min: f64,
+    /// True if `zc = z_st + z > 0` somewhere: the pin leaves the disk (for the bilateral law, the
+    /// orbit is outside the law's validity, MODEL.md §2).
+    pub contact_opens: bool,
+    /// Fraction of the period with `zc > 0`.
+    pub open_fraction: f64,
+    /// Smallest total normal force N over the period [N] (0 if the pin leaves the disk in the
+    /// unilateral model; negative = tension in the bilateral model).
+    pub min_normal_force: f64,
+    /// Smallest value of the contact law's total force [N] (may be negative in either model).
+    pub min_law_force: f64,
+    /// Mode switches per period.
+    pub n_switches: u32,
+    /// Scaled residual of the periodicity condition at the end.
+    pub residual_norm: f64,
+    /// Newton iterations.
+    pub newton_iterations: u32,
+    /// `Success`; `NewtonNotConverged` (no convergence: the other fields describe the last iterate),
+    /// `Diverged` (the escape event fired), or an integrator status.
+    pub status: Status,
+    /// Integrator work, summed over every integration of the solve.
+    pub stats: Stats,
+}
+
+/// Initial state and period of the shooting guess from a describing-function root: the state of
+/// `z = A0 + A1 sin psi + A2 sin(2 psi + theta)`, `phi`, `x` (from the root's phasors and means)
+/// at the phase `psi0` where `z` is largest (`zd = 0` there).
+pub fn guess_from_root(root: &Root) -> (State, f64) {
+    let (psi0, z) = two_harmonic_argmax(root.a0, root.a1, root.a2, root.theta);
+    let w = root.omega;
+    let e1 = C64::from_polar(1.0, psi0);
+    let e2 = C64::from_polar(1.0, 2.0 * psi0);
+    // |p| sin(k psi + arg p) = Im(p e^{jk psi}); its rate is k w Re(p e^{jk psi}).
+    let val = |p1: C64, p2: C64| (p1 * e1).im + (p2 * e2).im;
+    let rate = |p1: C64, p2: C64| w * ((p1 * e1).re + 2.0 * (p2 * e2).re);
+    let y = State::new(
+        z,
+        0.0,
+        root.x0 + val(root.x1, root.x2),
+        rate(root.x1, root.x2),
+        root.phi0 + val(root.phi1, root.phi2),
+        rate(root.phi1, root.phi2),
+    );
+    (y, 2.0 * PI / w)
+}
+
+/// Periodic orbit near a describing-function root (see [`guess_from_root`] and [`shoot`]).
+pub fn shoot_from_root(s: &Slider, root: &Root, opts: &ShootingOptions) -> PeriodicOrbit {
+    let (y0, t) = guess_from_root(root);
+    shoot(s, &y0, t, opts)
+}
+
+fn scales(s: &Slider) -> State {
+    State::from(crate::steady::characteristic_sizes(s))
+}
+
+fn options_42(s: &Slider, rtol: f64) -> Options<42> {
+    let sz = scales(s);
+    let mut o = Options::<42>::new(rtol, 1.0);
+    for i in 0..6 {
+        o.atol[i] = rtol * sz[i];
+        for j in 0..6 {
+            o.atol[6 + 6 * j + i] = rtol * sz[i] / sz[j];
+        }
+    }
+    o
+}
+
+/// One period of the flow with its monodromy matrix.
+struct Flow {
+    y: State,
+    phi: Jacobian,
+    mode: ContactMode,
+    n_switches: u32,
+}
+
+/// Integrate `y0` (mode `mode0`) with its variational equations over `[0, t_end]`, applying the
+/// saltation matrix at every switch.
+fn flow(s: &Slider, y0: &State, mode0: ContactMode, t_end: f64, opts: &ShootingOptions, o42: &Options<42>, stats: &mut Stats) -> Result<Flow, Status> {
+    let mut t = 0.0;
+    let mut y = *y0;
+    let mut phi = Jacobian::identity();
+    let mut mode = mode0;
+    let mut n_switches = 0;
+    loop {
+        let sys = Variational { slider: s, start: mode };
+        let mut obs = StopAtSwitch { hit: None };
+        let sol = integrate(&sys, opts.method, t, join(&y, &phi), t_end, o42, &mut obs);
+        *stats += sol.stats;
+        let (ye, phie) = split(&sol.y);
+        match sol.outcome {
+            Outcome::Finished => return Ok(Flow { y: ye, phi: phie, mode: sol.mode, n_switches }),
+            Outcome::StoppedByObserver => {
+                let Some((index, before, after)) = obs.hit else { return Err(Status::NotConverged) };
+                n_switches += 1;
+                if n_switches > opts.max_switches {
+                    return Err(Status::EventChatter);
+                }
+                let sm = saltation(s, &ye, before, after, index);
+                if !sm.iter().all(|v| v.is_finite()) {
+                    return Err(Status::NonFinite);
+                }
+                t = sol.t;
+                y = ye;
+                phi = sm * phie;
+                mode = after;
+            }
+            Outcome::StoppedByEvent => return Err(Status::Diverged),
+            other => return Err(other.status()),
+        }
+    }
+}
+
+/// The free unknowns: every state component except `zd` (fixed at 0 by the phase condition).
+const FREE: [usize; 5] = [idx::Z, idx::X, idx::XD, idx::PHI, idx::PHID];
+
+/// Periodic orbit through the neighbourhood of `y0` with period near `period` (MODEL.md §6).
+///
+/// If `y0` has `zd != 0` it is first carried along the flow to the next maximum of `z` (the
+/// section `zd = 0`, `zd` decreasing), at most `2 period` ahead. Newton then solves
+/// `y(T; y0) = y0` with `zd(0) = 0` (see the module docs), damped by halving the step while the
+/// scaled residual grows.
+///
+/// # Errors
+/// A failure is in `status` (see [`PeriodicOrbit::status`]), never a panic.
+pub fn shoot(s: &Slider, y0: &State, period: f64, opts: &ShootingOptions) -> PeriodicOrbit {
+    let mut stats = Stats::default();
+    let sz = scales(s);
+    let mut y = *y0;
+    if !period.is_finite() || period <= 0.0 || !y.iter().all(|v| v.is_finite()) {
+        return failed(y, period, Status::InvalidInput, stats);
+    }
+    if y[idx::ZD] != 0.0 {
+        match to_section(s, &y, 2.0 * period, opts, &mut stats) {
+            Some(v) => y = v,
+            None => return failed(y, period, Status::NotConverged, stats),
+        }
+    }
+    y[idx::ZD] = 0.0;
+    let mut t = period;
+    let mut iterations = 0;
+    let eval = |y: &State, t: f64, rtol: f64, stats: &mut Stats| -> Result<(Flow, State, f64), Status> {
+        let mode0 = s.mode_at(y);
+        let fl = flow(s, y, mode0, t, opts, &options_42(s, rtol), stats)?;
+        let r = fl.y - y;
+        let rn = r.component_div(&sz).amax();
+        Ok((fl, r, rn))
+    };
+    // Graded accuracy: while far from the orbit the flow is integrated only as accurately as the
+    // next Newton iterate can use (1e-2 of the residual expected after a quadratic step, at most
+    // 1e-6); convergence is only declared, and the monodromy matrix only kept, from an integration
+    // at `opts.rtol`.
+    let graded = |rn_prev: f64| (1e-2 * rn_prev * rn_prev).clamp(opts.rtol, 1e-6);
+    let mut rtol = opts.rtol.max(1e-8);
+    let (mut fl, mut r, mut rn) = match eval(&y, t, rtol, &mut stats) {
+        Ok(v) => v,
+        Err(st) => return failed(y, t, st, stats),
+    };
+    let mut status = Status::NewtonNotConverged;
+    loop {
+        if !rn.is_finite() {
+            status = Status::NonFinite;
+            break;
+        }
+        if rn <= opts.tol || (rtol > opts.rtol && graded(rn) <= opts.rtol) {
+            if rtol > opts.rtol {
+                // Re-evaluate at full accuracy before deciding.
+                rtol = opts.rtol;
+                match eval(&y, t, rtol, &mut stats) {
+                    Ok(v) => (fl, r, rn) = v,
+                    Err(st) => {
+                        status = st;
+                        break;
+                    }
+                }
+                continue;
+            }
+            status = Status::Success;
+            break;
+        }
+        if iterations >= opts.max_iter {
+            break;
+        }
+        iterations += 1;
+        // Scaled Newton matrix: rows by sizes, columns by sizes (state) and T (period).
+        let f_end = s.rhs(&fl.y, fl.mode);
+        let mut a = SMatrix::<f64, 6, 6>::zeros();
+        for (col, &j) in FREE.iter().enumerate() {
+            for i in 0..6 {
+                let m = fl.phi[(i, j)] - if i == j { 1.0 } else { 0.0 };
+                a[(i, col)] = m * sz[j] / sz[i];
+            }
+        }
+        for i in 0..6 {
+            a[(i, 5)] = f_end[i] * t / sz[i];
+        }
+        let rhs = -r.component_div(&sz);
+        let Some(du) = a.lu().solve(&rhs) else { break };
+        if !du.iter().all(|v| v.is_finite()) {
+            break;
+        }
+        let small_step = du.amax() <= opts.tol * 1e-2;
+        let rtol_next = graded(rn);
+        let mut lambda = 1.0;
+        let mut accepted = false;
+        for _ in 0..8 {
+            let mut yt = y;
+            for (col, &j) in FREE.iter().enumerate() {
+                yt[j] += lambda * du[col] * sz[j];
+            }
+            let tt = t * (1.0 + lambda * du[5]);
+            if let Ok((flt, rt, rnt)) = eval(&yt, tt, rtol_next, &mut stats) {
+                if rnt < rn || small_step {
+                    y = yt;
+                    t = tt;
+                    fl = flt;
+                    r = rt;
+                    rn = rnt;
+                    rtol = rtol_next;
+                    accepted = true;
+                    break;
+                }
+            }
+            lambda *= 0.5;
+        }
+        if !accepted {
+            break;
+        }
+        if small_step && rtol <= opts.rtol {
+            status = if rn <= opts.tol * 100.0 { Status::Success } else { Status::NewtonNotConverged };
+            break;
+        }
+    }
+    let mut orbit = analyse(s, &y, t, &fl, opts, &mut stats);
+    orbit.residual_norm = rn;
+    orbit.newton_iterations = iterations;
+    if orbit.status == Status::Success {
+        orbit.status = status;
+    }
+    orbit.stats = stats;
+    orbit
+}
+
+fn failed(y: State, t: f64, status: Status, stats: Stats) -> PeriodicOrbit {
+    let nan = f64::NAN;
+    PeriodicOrbit {
+        period: t,
+        omega: 2.0 * PI / t,
+        state0: y,
+        mode0: ContactMode::Contact,
+        multipliers: [C64::new(nan, nan); 6],
+        moduli: [nan; 6],
+        trivial: 0,
+        trivial_error: nan,
+        stable: false,
+        harmonics: Harmonics { a0: nan, a1: nan, a2: nan, a3: nan, theta: nan },
+        z_max: nan,
+        z_min: nan,
+        contact_opens: false,
+        open_fraction: nan,
+        min_normal_force: nan,
+        min_law_force: nan,
+        n_switches: 0,
+        residual_norm: nan,
+        newton_iterations: 0,
+        status,
+        stats,
+    }
+}
+
+/// Carries `y` along the flow to the next point with `zd = 0` and `zd` decreasing (a maximum of `z`).
+fn to_section(s: &Slider, y: &State, t_max: f64, opts: &ShootingOptions, stats: &mut Stats) -> Option<State> {
+    struct Section {
+        hit: Option<State>,
+    }
+    impl Observer<6, ContactMode> for Section {
+        fn on_step(&mut self, st: &StepView<'_, 6, ContactMode>) -> Control {
+            let (a, b) = (st.y0[idx::ZD], st.y1[idx::ZD]);
+            if a > 0.0 && b <= 0.0 {
+                // Bisection on the dense output (zd is monotone enough inside one step).
+                let (mut lo, mut hi) = (st.t0, st.t1);
+                for _ in 0..200 {
+                    let mid = 0.5 * (lo + hi);
+                    if mid <= lo || mid >= hi {
+                        break;
+                    }
+                    if st.dense.eval(mid)[idx::ZD] > 0.0 {
+                        lo = mid;
+                    } else {
+                        hi = mid;
+                    }
+                }
+                self.hit = Some(st.dense.eval(hi));
+                return Control::Stop;
+            }
+            Control::Continue
+        }
+    }
+    let o = crate::steady::options_for(s, &crate::steady::Tolerances { rtol: opts.rtol, atol: None });
+    let mut obs = Section { hit: None };
+    let sol = integrate(s, opts.method, 0.0, *y, t_max, &o, &mut obs);
+    *stats += sol.stats;
+    obs.hit
+}
+
+/// Dense samples and gap events over one period.
+struct Recorder {
+    t_eval: Vec<f64>,
+    z: Vec<f64>,
+    min_n: f64,
+    min_law: f64,
+    z_min: f64,
+    z_max: f64,
+    gap_events: Vec<f64>,
+    switches: u32,
+    slider: Slider,
+}
+
+impl Observer<6, ContactMode> for Recorder {
+    fn on_step(&mut self, st: &StepView<'_, 6, ContactMode>) -> Control {
+        while let Some(&t) = self.t_eval.get(self.z.len()) {
+            if t > st.t1 {
+                break;
+            }
+            let v = if t <= st.t0 { *st.y0 } else if t == st.t1 { *st.y1 } else { st.dense.eval(t) };
+            self.z.push(v[idx::Z]);
+            let f = self.slider.forces(&v, st.mode);
+            self.min_n = self.min_n.min(f.normal);
+            self.min_law = self.min_law.min(f.normal_law);
+            // Extremes: samples plus a parabola through the last three samples near a turn.
+            let n = self.z.len();
+            self.z_max = self.z_max.max(v[idx::Z]);
+            self.z_min = self.z_min.min(v[idx::Z]);
+            if n >= 3 {
+                let (a, b, c) = (self.z[n - 3], self.z[n - 2], self.z[n - 1]);
+                let curv = a - 2.0 * b + c;
+                if (b >= a && b >= c) || (b <= a && b <= c) {
+                    let ext = if curv != 0.0 { b - (c - a) * (c - a) / (8.0 * curv) } else { b };
+                    self.z_max = self.z_max.max(ext);
+                    self.z_min = self.z_min.min(ext);
+                }
+            }
+        }
+        // The step end point too (a switch lands on it exactly).
+        let f = self.slider.forces(st.y1, st.mode);
+        self.min_n = self.min_n.min(f.normal);
+        self.min_law = self.min_law.min(f.normal_law);
+        Control::Continue
+    }
+
+    fn on_event(&mut self, index: usize, t: f64, _y: &State, before: ContactMode, after: ContactMode) -> Control {
+        if index == event::GAP {
+            self.gap_events.push(t);
+        }
+        if before != after {
+            self.switches += 1;
+        }
+        Control::Continue
+    }
+}
+
+fn analyse(s: &Slider, y0: &State, t: f64, fl: &Flow, opts: &ShootingOptions, stats: &mut Stats) -> PeriodicOrbit {
+    let m = opts.n_samples.max(16);
+    let mut rec = Recorder {
+        t_eval: (0..m).map(|k| t * k as f64 / m as f64).collect(),
+        z: Vec::with_capacity(m),
+        min_n: f64::INFINITY,
+        min_law: f64::INFINITY,
+        z_min: f64::INFINITY,
+        z_max: f64::NEG_INFINITY,
+        gap_events: Vec::new(),
+        switches: 0,
+        slider: *s,
+    };
+    let o = crate::steady::options_for(s, &crate::steady::Tolerances { rtol: opts.rtol, atol: None });
+    let sol = integrate(s, opts.method, 0.0, *y0, t, &o, &mut rec);
+    *stats += sol.stats;
+    let mut out = failed(*y0, t, sol.outcome.status(), *stats);
+    if sol.outcome == Outcome::StoppedByEvent {
+        out.status = Status::Diverged;
+    }
+    out.mode0 = s.mode_at(y0);
+    // Floquet multipliers.
+    if let Some(ev) = eigenvalues(&fl.phi) {
+        let mut ev = ev;
+        ev.sort_by(|a, b| b.norm().total_cmp(&a.norm()).then(b.im.total_cmp(&a.im)));
+        let trivial = (0..6).min_by(|&a, &b| (ev[a] - 1.0).norm().total_cmp(&(ev[b] - 1.0).norm())).unwrap_or(0);
+        out.multipliers = ev;
+        out.moduli = ev.map(|e| e.norm());
+        out.trivial = trivial;
+        out.trivial_error = (ev[trivial] - 1.0).norm();
+        out.stable = (0..6).filter(|&k| k != trivial).all(|k| out.moduli[k] < 1.0 - opts.stability_tol);
+    } else {
+        out.status = Status::NonFinite;
+    }
+    if rec.z.len() == m {
+        // Fourier integrals on the uniform samples (trapezoid rule on one period).
+        let coef = |k: usize| {
+            let (mut a, mut b) = (0.0, 0.0);
+            for (n, z) in rec.z.iter().enumerate() {
+                let (sn, cs) = (2.0 * PI * (k * n) as f64 / m as f64).sin_cos();
+                a += z * cs;
+                b += z * sn;
+            }
+            // z_k = a cos + b sin = A sin(k psi + alpha), A sin alpha = a, A cos alpha = b
+            let (a, b) = (2.0 * a / m as f64, 2.0 * b / m as f64);
+            (a.hypot(b), a.atan2(b))
+        };
+        let a0 = rec.z.iter().sum::<f64>() / m as f64;
+        let (a1, al1) = coef(1);
+        let (a2, al2) = coef(2);
+        let (a3, _) = coef(3);
+        out.harmonics = Harmonics { a0, a1, a2, a3, theta: (al2 - 2.0 * al1).rem_euclid(2.0 * PI) };
+        out.z_max = rec.z_max;
+        out.z_min = rec.z_min;
+        out.min_normal_force = rec.min_n;
+        out.min_law_force = rec.min_law;
+    }
+    // Fraction of the period with the contact open, from the located gap crossings.
+    let mut open = s.gap(y0) > 0.0;
+    let mut t_prev = 0.0;
+    let mut acc = 0.0;
+    for &te in &rec.gap_events {
+        if open {
+            acc += te - t_prev;
+        }
+        open = !open;
+        t_prev = te;
+    }
+    if open {
+        acc += t - t_prev;
+    }
+    out.open_fraction = acc / t;
+    out.contact_opens = s.gap(y0) > 0.0 || !rec.gap_events.is_empty() || s.z_st + out.z_max > 0.0;
+    out.n_switches = fl.n_switches;
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::{ContactModel, Params};
+    use crate::tidf::{SearchOptions, Tidf, Variant};
+
+    fn seed_root(s: &Slider) -> Root {
+        Tidf::new(s, Variant::Consistent).find_roots(s, &SearchOptions::default()).roots.into_iter().find(|r| r.physical).unwrap()
+    }
+
+    fn rel(a: f64, b: f64) -> f64 {
+        (a - b).abs() / b.abs()
+    }
+
+    #[test]
+    fn saltation_is_identity_without_a_jump() {
+        let s = Slider::seed();
+        let y = State::new(-s.z_st, 0.01, 0.0, 0.0, 0.0, 0.0);
+        assert_eq!(saltation(&s, &y, ContactMode::Contact, ContactMode::Contact, event::GAP), Jacobian::identity());
+        let sm = saltation(&s, &y, ContactMode::Contact, ContactMode::Free, event::GAP);
+        // Only the velocity rows change, and the z column carries the jump.
+        assert!(sm[(0, 0)] == 1.0 && sm[(1, 0)] != 0.0);
+    }
+
+    #[test]
+    fn monodromy_matches_finite_differences() {
+        // Bilateral (smooth): Phi(T) against central differences of the flow.
+        let s = Slider::seed();
+        let root = seed_root(&s);
+        let (y0, t) = guess_from_root(&root);
+        let opts = ShootingOptions::default();
+        let o42 = options_42(&s, opts.rtol);
+        let mut st = Stats::default();
+        let fl = flow(&s, &y0, ContactMode::Contact, t, &opts, &o42, &mut st).unwrap();
+        let sz = scales(&s);
+        for j in 0..6 {
+            let h = 1e-5 * sz[j];
+            let mut yp = y0;
+            let mut ym = y0;
+            yp[j] += h;
+            ym[j] -= h;
+            let fp = flow(&s, &yp, ContactMode::Contact, t, &opts, &o42, &mut st).unwrap().y;
+            let fm = flow(&s, &ym, ContactMode::Contact, t, &opts, &o42, &mut st).unwrap().y;
+            for i in 0..6 {
+                let fd = (fp[i] - fm[i]) / (2.0 * h);
+                let scale = sz[i] / sz[j];
+                assert!((fd - fl.phi[(i, j)]).abs() < 1e-5 * scale, "Phi[{i},{j}] = {} fd {fd}", fl.phi[(i, j)]);
+            }
+        }
+    }
+
+    #[test]
+    fn unilateral_monodromy_with_saltation_matches_finite_differences() {
+        // A state that leaves the disk and lands again within the horizon: the saltation matrices
+        // must make Phi the derivative of the non-smooth flow.
+        let s = Slider::new(Params { contact: ContactModel::Unilateral, ..Params::seed() }).unwrap();
+        let y0 = State::new(30e-6, 0.0, 1e-6, 0.0, 1e-3, 0.5);
+        let t = 0.012;
+        let opts = ShootingOptions::default();
+        let o42 = options_42(&s, opts.rtol);
+        let mut st = Stats::default();
+        let mode0 = s.mode_at(&y0);
+        let fl = flow(&s, &y0, mode0, t, &opts, &o42, &mut st).unwrap();
+        assert!(fl.n_switches >= 2, "{}", fl.n_switches);
+        let sz = scales(&s);
+        // A relative step of 3e-4: the flow is smooth between switches, and a smaller step is
+        // dominated by the event-location noise divided by h (worst scaled error 1.8e-4 at h = 1e-6,
+        // 1.8e-5 at 1e-5, 6e-7 at 3e-4, 3e-6 at 1e-3 where truncation takes over).
+        for j in 0..6 {
+            let h = 3e-4 * sz[j];
+            let mut yp = y0;
+            let mut ym = y0;
+            yp[j] += h;
+            ym[j] -= h;
+            let fp = flow(&s, &yp, s.mode_at(&yp), t, &opts, &o42, &mut st).unwrap();
+            let fm = flow(&s, &ym, s.mode_at(&ym), t, &opts, &o42, &mut st).unwrap();
+            assert_eq!(fp.n_switches, fl.n_switches);
+            for i in 0..6 {
+                let fd = (fp.y[i] - fm.y[i]) / (2.0 * h);
+                let scale = sz[i] / sz[j];
+                assert!((fd - fl.phi[(i, j)]).abs() < 1e-5 * scale, "Phi[{i},{j}] = {} fd {fd}", fl.phi[(i, j)]);
+            }
+        }
+    }
+
+    #[test]
+    fn seed_bilateral_orbit_matches_model_md() {
+        let s = Slider::seed();
+        let root = seed_root(&s);
+        let o = shoot_from_root(&s, &root, &ShootingOptions::default());
+        eprintln!(
+            "bilateral: T {:.9e} w {:.4} moduli {:?} stable {} A0 {:.4e} A1 {:.5e} A2 {:.4e} A3 {:.4e} theta {:.2} deg z_max {:.4e} open {:.4} minN {:.2} res {:.1e} newton {} trivial err {:.1e} stats {:?}",
+            o.period, o.omega, o.moduli, o.stable, o.harmonics.a0, o.harmonics.a1, o.harmonics.a2, o.harmonics.a3,
+            o.harmonics.theta * 180.0 / PI, o.z_max, o.open_fraction, o.min_normal_force, o.residual_norm, o.newton_iterations, o.trivial_error, o.stats
+        );
+        assert_eq!(o.status, Status::Success);
+        // MODEL.md §6 / seed_values.json bilateral_periodic_orbit_seed.
+        assert!(rel(o.period, 9.702674e-3) < 1e-6, "T = {}", o.period);
+        let expect = [1.00762, 1.0, 0.98883, 0.98883, 0.61117, 0.61117];
+        for (m, e) in o.moduli.iter().zip(expect) {
+            assert!((m - e).abs() < 1e-4, "{:?}", o.moduli);
+        }
+        assert!(!o.stable);
+        assert!(o.trivial_error < 1e-6);
+        assert!((o.harmonics.a1 - 22.27e-6).abs() < 0.01e-6, "A1 {}", o.harmonics.a1);
+        assert!((o.harmonics.a2 - 5.26e-6).abs() < 0.01e-6, "A2 {}", o.harmonics.a2);
+        assert!((o.z_max - 27.8e-6).abs() < 0.05e-6, "z_max {}", o.z_max);
+        assert!(o.contact_opens);
+        assert!((o.open_fraction - 0.26).abs() < 0.01, "open {}", o.open_fraction);
+    }
+
+    #[test]
+    #[ignore = "timing; run with --ignored --nocapture in release"]
+    fn timing() {
+        let s = Slider::seed();
+        let root = seed_root(&s);
+        let (y0, t) = guess_from_root(&root);
+        let opts = ShootingOptions::default();
+        let n = 200;
+        let t0 = std::time::Instant::now();
+        let mut it = 0;
+        for _ in 0..n {
+            it += std::hint::black_box(shoot(&s, &y0, t, &opts)).newton_iterations;
+        }
+        let dt = t0.elapsed().as_secs_f64() / n as f64;
+        eprintln!("shooting from the DF root (bilateral seed): {:.0} us per solve, {:.1} Newton iterations", dt * 1e6, it as f64 / n as f64);
+        let o42 = options_42(&s, opts.rtol);
+        let t0 = std::time::Instant::now();
+        let mut st = Stats::default();
+        for _ in 0..n {
+            std::hint::black_box(flow(&s, &y0, ContactMode::Contact, t, &opts, &o42, &mut st).ok());
+        }
+        let dt = t0.elapsed().as_secs_f64() / n as f64;
+        eprintln!("one variational period: {:.0} us, {} rhs, {} steps", dt * 1e6, st.n_rhs / n as u64, st.n_accept / n as u64);
+        let o6 = crate::steady::options_for(&s, &crate::steady::Tolerances { rtol: opts.rtol, atol: None });
+        let t0 = std::time::Instant::now();
+        let mut st = Stats::default();
+        for _ in 0..n {
+            st += std::hint::black_box(integrate(&s, opts.method, 0.0, y0, t, &o6, &mut crate::ode::NoObserver)).stats;
+        }
+        let dt = t0.elapsed().as_secs_f64() / n as f64;
+        eprintln!("one plain period: {:.0} us, {} rhs, {} steps", dt * 1e6, st.n_rhs / n as u64, st.n_accept / n as u64);
+        let sys = Variational { slider: &s, start: ContactMode::Contact };
+        let mut ya = join(&y0, &Jacobian::identity());
+        let t0 = std::time::Instant::now();
+        for _ in 0..100_000 {
+            let d = sys.rhs(0.0, std::hint::black_box(&ya), ContactMode::Contact);
+            ya += d * 1e-12;
+        }
+        eprintln!("variational rhs: {:.0} ns", t0.elapsed().as_secs_f64() / 1e5 * 1e9);
+    }
+}

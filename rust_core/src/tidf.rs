@@ -186,6 +186,11 @@ pub struct Root {
     pub a2: f64,
     /// theta [rad], phase of the second harmonic relative to `z1`.
     pub theta: f64,
+    /// Mean twist [rad]: `s mu (L/I) F_z0 / w_t^2` with the mean dynamic contact force `F_z0`
+    /// (`m w_z^2 A0` in the consistent reading, 0 in the dead-load reading).
+    pub phi0: f64,
+    /// Mean of `x` [m]: `mu F_z0 / (m w_x^2)`.
+    pub x0: f64,
     /// Fundamental of `phi` as a phasor relative to `z1`: `s mu (L/I) m L_z(jw) A1 / L_t(jw)` [rad].
     pub phi1: C64,
     /// Second harmonic of `phi`: `s mu (L/I) m L_z(2jw) A2 e^{j theta} / L_t(2jw)` [rad].
@@ -589,6 +594,11 @@ impl Tidf {
         let x1 = self.mu * lz1 * a1 / lx1;
         let x2 = self.mu * lz2 * z2 / lx2;
         let z_max = two_harmonic_max(a0, a1, a2, th);
+        // Mean dynamic contact force per unit mass: w_z^2 A0 with the block fixed, 0 for a dead load.
+        let fz0_m = match self.variant {
+            Variant::Consistent => self.wz * self.wz * a0,
+            Variant::DeadLoad => 0.0,
+        };
         let f1 = (self.m * lz1 * a1).norm();
         let f2 = (self.m * lz2 * a2).norm();
         let f3 = self.k_a * a1 * a2;
@@ -600,6 +610,8 @@ impl Tidf {
             a1,
             a2,
             theta: th,
+            phi0: self.phi_gain * fz0_m / (self.wt * self.wt),
+            x0: self.mu * fz0_m / (self.wx * self.wx),
             phi1,
             phi2,
             x1,
@@ -742,10 +754,15 @@ pub fn canonical(x: &Unknowns) -> Unknowns {
     y
 }
 
-/// Largest value over `psi` of `A0 + A1 sin psi + A2 sin(2 psi + theta)`: 64 samples, then Newton
-/// on the derivative from the best one (converges to rounding: the maximum is a simple one unless
-/// two maxima tie, where either is the maximum value).
+/// Largest value over `psi` of `A0 + A1 sin psi + A2 sin(2 psi + theta)`: see [`two_harmonic_argmax`].
 pub fn two_harmonic_max(a0: f64, a1: f64, a2: f64, theta: f64) -> f64 {
+    two_harmonic_argmax(a0, a1, a2, theta).1
+}
+
+/// Where `A0 + A1 sin psi + A2 sin(2 psi + theta)` is largest, and that value: 64 samples, then
+/// Newton on the derivative from the best one (converges to rounding: the maximum is a simple one
+/// unless two maxima tie, where either is the maximum value). `psi` in `[0, 2 pi)`.
+pub fn two_harmonic_argmax(a0: f64, a1: f64, a2: f64, theta: f64) -> (f64, f64) {
     let f = |p: f64| a0 + a1 * p.sin() + a2 * (2.0 * p + theta).sin();
     const N: usize = 64;
     let mut best = (f64::NEG_INFINITY, 0.0);
@@ -769,7 +786,12 @@ pub fn two_harmonic_max(a0: f64, a1: f64, a2: f64, theta: f64) -> f64 {
             break;
         }
     }
-    f(p).max(best.0)
+    let v = f(p);
+    if v >= best.0 {
+        (wrap_2pi(p), v)
+    } else {
+        (best.1, best.0)
+    }
 }
 
 /// All describing-function roots of the slider with parameters `p` (see [`Tidf::find_roots`]).
