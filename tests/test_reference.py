@@ -34,10 +34,10 @@ ref = _load("_tribosweep_reference_for_benches", ROOT / "python" / "tribosweep" 
 
 @pytest.fixture(scope="module")
 def seed_values():
-    for path in (SEED_VALUES, ROOT / "shared" / "reference" / "seed_values.json"):
+    for path in (ROOT / "tests" / "data" / "seed_values.json", SEED_VALUES, ROOT / "shared" / "reference" / "seed_values.json"):
         if path.exists():
             return json.loads(path.read_text())
-    pytest.skip("seed_values.json not found")
+    raise FileNotFoundError("seed_values.json not found (tests/data or ../shared/reference)")
 
 
 def _damped(q0, v0, mass, damping, stiffness, t):
