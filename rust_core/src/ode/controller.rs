@@ -32,12 +32,17 @@ pub fn error_norm<const N: usize>(
 
 /// Safety factor on the optimal step.
 pub const SAFETY: f64 = 0.9;
+/// `ln SAFETY`.
+const LN_SAFETY: f64 = -0.105_360_515_657_826_3;
 /// Smallest step ratio `h_new / h` in one adjustment.
 pub const FAC_MIN: f64 = 0.2;
 /// Largest step ratio `h_new / h` in one adjustment.
 pub const FAC_MAX: f64 = 10.0;
 
 /// PI step-size controller (Hairer's DOPRI5/DOP853 form) with optional Gustafsson prediction.
+///
+/// Works on logarithms: one `ln` and one `exp` per step instead of Hairer's two `pow` calls
+/// (which cost as much as a right-hand side of the slider); the results agree to rounding.
 #[derive(Clone, Copy, Debug)]
 pub struct Controller {
     /// Exponent on the current error, `1/k - 0.75 beta` with `k` the error estimate's order + 1.
@@ -46,52 +51,73 @@ pub struct Controller {
     beta: f64,
     /// Use Gustafsson's predictive factor (stiff methods).
     predictive: bool,
-    /// Previous accepted error (floored at 1e-4 as in Hairer's codes).
-    err_old: f64,
-    /// Previous accepted step and error, for the predictive factor (`h_acc <= 0`: none yet).
+    /// `ln` of the previous accepted error (floored at 1e-4 as in Hairer's codes).
+    ln_err_old: f64,
+    /// Previous accepted step and `ln` of its error, for the predictive factor (`h_acc <= 0`: none).
     h_acc: f64,
-    err_acc: f64,
+    ln_err_acc: f64,
 }
+
+/// `ln 1e-4`: Hairer's floor on the remembered error.
+const LN_ERR_FLOOR: f64 = -9.210_340_371_976_184;
+/// `ln 1e-2`: `rodas.f`'s floor on the error remembered for the predictive factor.
+const LN_ERR_ACC_FLOOR: f64 = -4.605_170_185_988_091;
 
 impl Controller {
     /// A controller for an error estimate that scales as `h^k` (`k = 5` for Dopri5, 8 for
     /// DOP853's combined estimate, 4 for Rodas4) with PI weight `beta`.
     pub fn new(k: u32, beta: f64, predictive: bool) -> Self {
-        Controller { alpha: 1.0 / k as f64 - 0.75 * beta, beta, predictive, err_old: 1e-4, h_acc: 0.0, err_acc: 1e-2 }
+        Controller {
+            alpha: 1.0 / k as f64 - 0.75 * beta,
+            beta,
+            predictive,
+            ln_err_old: LN_ERR_FLOOR,
+            h_acc: 0.0,
+            ln_err_acc: LN_ERR_ACC_FLOOR,
+        }
     }
 
     /// Forget the step history (at a restart after a mode switch the error behaviour changes).
     pub fn reset(&mut self) {
-        self.err_old = 1e-4;
+        self.ln_err_old = LN_ERR_FLOOR;
         self.h_acc = 0.0;
-        self.err_acc = 1e-2;
+        self.ln_err_acc = LN_ERR_ACC_FLOOR;
     }
 
     /// Step ratio `h_new / h` after accepting a step of size `h` with error `err <= 1`.
     #[inline]
     pub fn accept(&mut self, h: f64, err: f64) -> f64 {
-        // fac = 1 / ratio, as in Hairer's codes: large err -> large fac -> small step.
-        let mut fac = err.powf(self.alpha) / (self.err_old.powf(self.beta) * SAFETY);
+        if err <= 0.0 {
+            // A zero error estimate: the largest growth (ln would be -inf).
+            self.ln_err_old = LN_ERR_FLOOR;
+            if self.predictive {
+                self.h_acc = h;
+                self.ln_err_acc = LN_ERR_ACC_FLOOR;
+            }
+            return FAC_MAX;
+        }
+        let ln_err = err.ln();
+        // ln(1/ratio) = alpha ln err - beta ln err_old - ln safety, as in Hairer's codes
+        // (fac = err^alpha / err_old^beta / safety, h_new = h / fac).
+        let mut ln_fac = self.alpha * ln_err - self.beta * self.ln_err_old - LN_SAFETY;
         if self.predictive && self.h_acc > 0.0 {
             // Gustafsson: use the error trend of the last two accepted steps; never let it
             // increase the step more than the plain estimate does.
-            let gus = (self.h_acc / h) * (err * err / self.err_acc).powf(self.alpha) / SAFETY;
-            fac = fac.max(gus);
+            let gus = (self.h_acc / h).ln() + self.alpha * (2.0 * ln_err - self.ln_err_acc) - LN_SAFETY;
+            ln_fac = ln_fac.max(gus);
         }
         if self.predictive {
             self.h_acc = h;
-            self.err_acc = err.max(1e-2);
+            self.ln_err_acc = ln_err.max(LN_ERR_ACC_FLOOR);
         }
-        self.err_old = err.max(1e-4);
-        let fac = fac.clamp(1.0 / FAC_MAX, 1.0 / FAC_MIN);
-        1.0 / fac
+        self.ln_err_old = ln_err.max(LN_ERR_FLOOR);
+        (-ln_fac).exp().clamp(FAC_MIN, FAC_MAX)
     }
 
     /// Step ratio `h_new / h` after rejecting a step with error `err > 1` (finite).
     #[inline]
     pub fn reject(&self, err: f64) -> f64 {
-        let fac = (err.powf(self.alpha) / SAFETY).min(1.0 / FAC_MIN);
-        (1.0 / fac).min(1.0)
+        (SAFETY * (-self.alpha * err.ln()).exp()).clamp(FAC_MIN, 1.0)
     }
 }
 

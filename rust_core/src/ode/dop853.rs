@@ -15,7 +15,7 @@
 #![allow(clippy::excessive_precision, clippy::unreadable_literal)]
 
 use super::controller::error_norm;
-use super::driver::{StepDense, Stepper};
+use super::driver::{combine, weighted, StepDense, Stepper};
 use super::{Dense, OdeSystem, Stats};
 use nalgebra::SVector;
 use std::cell::{Cell, OnceCell};
@@ -206,62 +206,40 @@ impl<const N: usize, S: OdeSystem<N>> Dop853Dense<'_, N, S> {
         let (t, h, y) = (self.t0, self.h, self.y0);
         let k14 = self.sys.rhs(
             t + C14 * h,
-            &(y + (k[0] * A14_1
-                + k[6] * A14_7
-                + k[7] * A14_8
-                + k[8] * A14_9
-                + k[9] * A14_10
-                + k[10] * A14_11
-                + k[11] * A14_12
-                + k[12] * A14_13)
-                * h),
+            &combine(
+                y,
+                h,
+                [A14_1, A14_7, A14_8, A14_9, A14_10, A14_11, A14_12, A14_13],
+                [&k[0], &k[6], &k[7], &k[8], &k[9], &k[10], &k[11], &k[12]],
+            ),
             self.mode,
         );
         let k15 = self.sys.rhs(
             t + C15 * h,
-            &(y + (k[0] * A15_1
-                + k[5] * A15_6
-                + k[6] * A15_7
-                + k[7] * A15_8
-                + k[10] * A15_11
-                + k[11] * A15_12
-                + k[12] * A15_13
-                + k14 * A15_14)
-                * h),
+            &combine(
+                y,
+                h,
+                [A15_1, A15_6, A15_7, A15_8, A15_11, A15_12, A15_13, A15_14],
+                [&k[0], &k[5], &k[6], &k[7], &k[10], &k[11], &k[12], &k14],
+            ),
             self.mode,
         );
         let k16 = self.sys.rhs(
             t + C16 * h,
-            &(y + (k[0] * A16_1
-                + k[5] * A16_6
-                + k[6] * A16_7
-                + k[7] * A16_8
-                + k[8] * A16_9
-                + k[12] * A16_13
-                + k14 * A16_14
-                + k15 * A16_15)
-                * h),
+            &combine(
+                y,
+                h,
+                [A16_1, A16_6, A16_7, A16_8, A16_9, A16_13, A16_14, A16_15],
+                [&k[0], &k[5], &k[6], &k[7], &k[8], &k[12], &k14, &k15],
+            ),
             self.mode,
         );
         self.extra.set(3);
         let dy = self.y1 - y;
         let f1 = k[0] * h - dy;
         let f2 = dy * 2.0 - (k[0] + k[12]) * h;
-        let row = |d: [f64; 12]| {
-            (k[0] * d[0]
-                + k[5] * d[1]
-                + k[6] * d[2]
-                + k[7] * d[3]
-                + k[8] * d[4]
-                + k[9] * d[5]
-                + k[10] * d[6]
-                + k[11] * d[7]
-                + k[12] * d[8]
-                + k14 * d[9]
-                + k15 * d[10]
-                + k16 * d[11])
-                * h
-        };
+        let stages = [&k[0], &k[5], &k[6], &k[7], &k[8], &k[9], &k[10], &k[11], &k[12], &k14, &k15, &k16];
+        let row = |d: [f64; 12]| weighted(d.map(|x| x * h), stages);
         let f3 = row([D4_1, D4_6, D4_7, D4_8, D4_9, D4_10, D4_11, D4_12, D4_13, D4_14, D4_15, D4_16]);
         let f4 = row([D5_1, D5_6, D5_7, D5_8, D5_9, D5_10, D5_11, D5_12, D5_13, D5_14, D5_15, D5_16]);
         let f5 = row([D6_1, D6_6, D6_7, D6_8, D6_9, D6_10, D6_11, D6_12, D6_13, D6_14, D6_15, D6_16]);
@@ -323,66 +301,48 @@ impl<const N: usize, S: OdeSystem<N>> Stepper<N, S> for Dop853<N> {
         stats: &mut Stats,
     ) -> (SVector<f64, N>, f64) {
         let k1 = *f;
-        let k2 = sys.rhs(t + C2 * h, &(y + k1 * (A2_1 * h)), mode);
-        let k3 = sys.rhs(t + C3 * h, &(y + (k1 * A3_1 + k2 * A3_2) * h), mode);
-        let k4 = sys.rhs(t + C4 * h, &(y + (k1 * A4_1 + k3 * A4_3) * h), mode);
-        let k5 = sys.rhs(t + C5 * h, &(y + (k1 * A5_1 + k3 * A5_3 + k4 * A5_4) * h), mode);
-        let k6 = sys.rhs(t + C6 * h, &(y + (k1 * A6_1 + k4 * A6_4 + k5 * A6_5) * h), mode);
-        let k7 = sys.rhs(t + C7 * h, &(y + (k1 * A7_1 + k4 * A7_4 + k5 * A7_5 + k6 * A7_6) * h), mode);
-        let k8 = sys.rhs(
-            t + C8 * h,
-            &(y + (k1 * A8_1 + k4 * A8_4 + k5 * A8_5 + k6 * A8_6 + k7 * A8_7) * h),
-            mode,
-        );
+        let k2 = sys.rhs(t + C2 * h, &combine(y, h, [A2_1], [&k1]), mode);
+        let k3 = sys.rhs(t + C3 * h, &combine(y, h, [A3_1, A3_2], [&k1, &k2]), mode);
+        let k4 = sys.rhs(t + C4 * h, &combine(y, h, [A4_1, A4_3], [&k1, &k3]), mode);
+        let k5 = sys.rhs(t + C5 * h, &combine(y, h, [A5_1, A5_3, A5_4], [&k1, &k3, &k4]), mode);
+        let k6 = sys.rhs(t + C6 * h, &combine(y, h, [A6_1, A6_4, A6_5], [&k1, &k4, &k5]), mode);
+        let k7 = sys.rhs(t + C7 * h, &combine(y, h, [A7_1, A7_4, A7_5, A7_6], [&k1, &k4, &k5, &k6]), mode);
+        let k8 = sys.rhs(t + C8 * h, &combine(y, h, [A8_1, A8_4, A8_5, A8_6, A8_7], [&k1, &k4, &k5, &k6, &k7]), mode);
         let k9 = sys.rhs(
             t + C9 * h,
-            &(y + (k1 * A9_1 + k4 * A9_4 + k5 * A9_5 + k6 * A9_6 + k7 * A9_7 + k8 * A9_8) * h),
+            &combine(y, h, [A9_1, A9_4, A9_5, A9_6, A9_7, A9_8], [&k1, &k4, &k5, &k6, &k7, &k8]),
             mode,
         );
         let k10 = sys.rhs(
             t + C10 * h,
-            &(y + (k1 * A10_1 + k4 * A10_4 + k5 * A10_5 + k6 * A10_6 + k7 * A10_7 + k8 * A10_8 + k9 * A10_9) * h),
+            &combine(y, h, [A10_1, A10_4, A10_5, A10_6, A10_7, A10_8, A10_9], [&k1, &k4, &k5, &k6, &k7, &k8, &k9]),
             mode,
         );
         let k11 = sys.rhs(
             t + C11 * h,
-            &(y + (k1 * A11_1
-                + k4 * A11_4
-                + k5 * A11_5
-                + k6 * A11_6
-                + k7 * A11_7
-                + k8 * A11_8
-                + k9 * A11_9
-                + k10 * A11_10)
-                * h),
+            &combine(
+                y,
+                h,
+                [A11_1, A11_4, A11_5, A11_6, A11_7, A11_8, A11_9, A11_10],
+                [&k1, &k4, &k5, &k6, &k7, &k8, &k9, &k10],
+            ),
             mode,
         );
         let k12 = sys.rhs(
             t + h,
-            &(y + (k1 * A12_1
-                + k4 * A12_4
-                + k5 * A12_5
-                + k6 * A12_6
-                + k7 * A12_7
-                + k8 * A12_8
-                + k9 * A12_9
-                + k10 * A12_10
-                + k11 * A12_11)
-                * h),
+            &combine(
+                y,
+                h,
+                [A12_1, A12_4, A12_5, A12_6, A12_7, A12_8, A12_9, A12_10, A12_11],
+                [&k1, &k4, &k5, &k6, &k7, &k8, &k9, &k10, &k11],
+            ),
             mode,
         );
         stats.n_rhs += 11;
-        let y_new = y + (k1 * A13_1
-            + k6 * A13_6
-            + k7 * A13_7
-            + k8 * A13_8
-            + k9 * A13_9
-            + k10 * A13_10
-            + k11 * A13_11
-            + k12 * A13_12)
-            * h;
-        let err5 = k1 * ER_1 + k6 * ER_6 + k7 * ER_7 + k8 * ER_8 + k9 * ER_9 + k10 * ER_10 + k11 * ER_11 + k12 * ER_12;
-        let err3 = k1 * E3_1 + k6 * A13_6 + k7 * A13_7 + k8 * A13_8 + k9 * E3_9 + k10 * A13_10 + k11 * A13_11 + k12 * E3_12;
+        let used = [&k1, &k6, &k7, &k8, &k9, &k10, &k11, &k12];
+        let y_new = combine(y, h, [A13_1, A13_6, A13_7, A13_8, A13_9, A13_10, A13_11, A13_12], used);
+        let err5 = weighted([ER_1, ER_6, ER_7, ER_8, ER_9, ER_10, ER_11, ER_12], used);
+        let err3 = weighted([E3_1, A13_6, A13_7, A13_8, E3_9, A13_10, A13_11, E3_12], used);
         self.k = [k1, k2, k3, k4, k5, k6, k7, k8, k9, k10, k11, k12, SVector::zeros()];
         // Hairer's combination: |h| e5^2 / sqrt(n (e5^2 + 0.01 e3^2)) with the sums of squares
         // e5^2, e3^2 of the weighted components; error_norm gives the RMS, hence the factors n.

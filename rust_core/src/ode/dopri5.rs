@@ -7,7 +7,7 @@
 //! Hairer, Nørsett & Wanner, *Solving ODEs I*, §II.5–II.6.
 
 use super::controller::error_norm;
-use super::driver::{StepDense, Stepper};
+use super::driver::{combine, weighted, StepDense, Stepper};
 use super::{Dense, OdeSystem, Stats};
 use nalgebra::SVector;
 
@@ -75,7 +75,7 @@ impl<const N: usize> Dense<N> for Dopri5Dense<'_, N> {
         let dy = self.y1 - self.y0;
         let bspl = k[0] * h - dy;
         let r4 = dy - k[6] * h - bspl;
-        let r5 = (k[0] * D1 + k[2] * D3 + k[3] * D4 + k[4] * D5 + k[5] * D6 + k[6] * D7) * h;
+        let r5 = weighted([D1 * h, D3 * h, D4 * h, D5 * h, D6 * h, D7 * h], [&k[0], &k[2], &k[3], &k[4], &k[5], &k[6]]);
         self.y0 + (dy + (bspl + (r4 + r5 * th1) * th) * th1) * th
     }
 }
@@ -112,15 +112,15 @@ impl<const N: usize, S: OdeSystem<N>> Stepper<N, S> for Dopri5<N> {
         stats: &mut Stats,
     ) -> (SVector<f64, N>, f64) {
         let k1 = *f;
-        let k2 = sys.rhs(t + C2 * h, &(y + k1 * (A21 * h)), mode);
-        let k3 = sys.rhs(t + C3 * h, &(y + (k1 * A31 + k2 * A32) * h), mode);
-        let k4 = sys.rhs(t + C4 * h, &(y + (k1 * A41 + k2 * A42 + k3 * A43) * h), mode);
-        let k5 = sys.rhs(t + C5 * h, &(y + (k1 * A51 + k2 * A52 + k3 * A53 + k4 * A54) * h), mode);
-        let k6 = sys.rhs(t + h, &(y + (k1 * A61 + k2 * A62 + k3 * A63 + k4 * A64 + k5 * A65) * h), mode);
-        let y_new = y + (k1 * B1 + k3 * B3 + k4 * B4 + k5 * B5 + k6 * B6) * h;
+        let k2 = sys.rhs(t + C2 * h, &combine(y, h, [A21], [&k1]), mode);
+        let k3 = sys.rhs(t + C3 * h, &combine(y, h, [A31, A32], [&k1, &k2]), mode);
+        let k4 = sys.rhs(t + C4 * h, &combine(y, h, [A41, A42, A43], [&k1, &k2, &k3]), mode);
+        let k5 = sys.rhs(t + C5 * h, &combine(y, h, [A51, A52, A53, A54], [&k1, &k2, &k3, &k4]), mode);
+        let k6 = sys.rhs(t + h, &combine(y, h, [A61, A62, A63, A64, A65], [&k1, &k2, &k3, &k4, &k5]), mode);
+        let y_new = combine(y, h, [B1, B3, B4, B5, B6], [&k1, &k3, &k4, &k5, &k6]);
         let k7 = sys.rhs(t + h, &y_new, mode);
         stats.n_rhs += 6;
-        let err = (k1 * E1 + k3 * E3 + k4 * E4 + k5 * E5 + k6 * E6 + k7 * E7) * h;
+        let err = weighted([E1 * h, E3 * h, E4 * h, E5 * h, E6 * h, E7 * h], [&k1, &k3, &k4, &k5, &k6, &k7]);
         self.k = [k1, k2, k3, k4, k5, k6, k7];
         (y_new, error_norm(&err, y, &y_new, atol, rtol))
     }
