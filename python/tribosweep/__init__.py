@@ -10,6 +10,7 @@ from . import _core
 from ._apparatus import ARM_EXPONENTS, apparatus_model, arm_frequencies
 from ._chunk import REGIME_NAMES
 from ._flags import OUTCOME_NAMES, STATUS, STATUS_NAMES
+from ._frequency import describing_function, hopf_load, linear_stability, periodic_orbit
 from ._model import PARAM_NAMES, SliderModel
 from ._simulate import DEFAULT_Y0, ensemble, simulate
 from ._sweep import sweep
@@ -31,8 +32,12 @@ __all__ = [
     "__version__",
     "apparatus_model",
     "arm_frequencies",
+    "describing_function",
     "ensemble",
+    "hopf_load",
+    "linear_stability",
     "normal_mode_frequency_hz",
+    "periodic_orbit",
     "relative_wear_rate",
     "simulate",
     "sweep",

@@ -287,11 +287,97 @@ def _run_plot(args: argparse.Namespace) -> int:
     return 0
 
 
+# --- bench -------------------------------------------------------------------------------------
+
+_BENCH_SKIPPABLE = ("scipy", "numba", "diffrax", "maps")
+
+
+def _skip_list(text: str) -> list[str]:
+    items = [t.strip() for t in str(text).split(",") if t.strip()]
+    bad = [t for t in items if t not in _BENCH_SKIPPABLE]
+    if bad:
+        raise argparse.ArgumentTypeError(f"{','.join(bad)}: can skip only {', '.join(_BENCH_SKIPPABLE)}")
+    return items
+
+
+def _rtol_list(text: str) -> list[float]:
+    values = parse_axis(text).tolist()
+    if not values or not all(1e-15 <= v < 1 for v in values):
+        raise argparse.ArgumentTypeError(f"{text!r}: every rtol must be in [1e-15, 1)")
+    return values
+
+
+def _add_bench_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--quick", action="store_true",
+                   help="fewer rtol rungs (1e-4..1e-12, every other decade), trajectories and map points: "
+                   "about a minute on two cores")  # fmt: skip
+    p.add_argument("-o", "--out", default="bench_out", metavar="DIR",
+                   help="output folder: work_precision.csv/.json, wp_<scene>.png, failure_*.png/.nc, summary.md "
+                   "(default bench_out)")  # fmt: skip
+    p.add_argument("--docs", metavar="FILE.md", help="also write the summary (no images) here, e.g. docs/benchmarks.md")
+    p.add_argument("--scene", action="append", choices=("seed", "unilateral", "stick_slip", "large_amplitude"),
+                   help="only this scene (repeatable; default all four)")  # fmt: skip
+    p.add_argument("--rtol", type=_rtol_list, metavar="SPEC", help="the rtol ladder, e.g. 1e-4,1e-8 (overrides --quick's)")
+    p.add_argument("--n", type=_positive_int, metavar="N", help="trajectories per scene (default: per scene)")
+    p.add_argument("--method", action="append", choices=("dopri5", "dop853", "rodas4"),
+                   help="only this Rust integrator (repeatable; default all three)")  # fmt: skip
+    p.add_argument("--skip", type=_skip_list, action="append", default=[], metavar="WHAT",
+                   help="skip baselines or parts: any of scipy,numba,diffrax,maps (comma-separated)")  # fmt: skip
+    p.add_argument("--threads", type=_positive_int, metavar="N",
+                   help="threads of the failure maps (default all cores; the timed runs always use one)")  # fmt: skip
+    p.add_argument("--no-progress", action="store_true", help="no progress lines on stderr")
+
+
+def _run_bench(args: argparse.Namespace) -> int:
+    from ._workprecision import MATCHED_ERRORS, BenchConfig, run_work_precision, speed_ratios
+
+    skip = {s for group in args.skip for s in group}
+    config = BenchConfig(
+        quick=args.quick,
+        scenes=args.scene,
+        ladder=args.rtol,
+        n_traj=args.n,
+        methods=tuple(args.method) if args.method else ("dopri5", "dop853", "rodas4"),
+        baselines=tuple(b for b in ("scipy", "numba", "diffrax") if b not in skip),
+    )
+    payload = run_work_precision(args.out, config, failure_maps="maps" not in skip, docs=args.docs,
+                                 progress=not args.no_progress, command="tribosweep " + " ".join(args.argv),
+                                 map_threads=args.threads)  # fmt: skip
+    rows = payload["rows"]
+    n_fail = sum(r["failed"] for r in rows)
+    print(f"{len(rows)} rungs measured ({n_fail} failed) in {payload['meta']['seconds']:.0f} s")
+    for q in speed_ratios(rows, MATCHED_ERRORS):
+        print(f"  {q['scene']:<16} error {q['error']:.0e}: {q['rust_label']} {q['ratio']:.3g}x faster than "
+              f"{q['baseline_label']}")  # fmt: skip
+    for name in ("summary", "csv", "json", "docs"):
+        if name in payload["files"]:
+            print(f"{name}: {payload['files'][name]}")
+    return 0
+
+
 #: Sub-commands by name (add one here to extend the CLI).
+def _add_seed_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--out", default="out", help="output directory for seed_report.md and seed_report.json (default: out)")
+
+
+def _run_seed(args: argparse.Namespace) -> int:
+    from ._report import write_seed_report
+
+    print(write_seed_report(args.out))
+    return 0
+
+
 COMMANDS: dict[str, Command] = {
+    "seed": Command("analyse the seed configuration: stability, describing function, orbits, comparison table",
+                    _add_seed_arguments, _run_seed),
     "sweep": Command("map the regime over normal load x arm length x sliding speed", _add_sweep_arguments, _run_sweep),
     "info": Command("summarise a sweep file", _add_info_arguments, _run_info),
     "plot": Command("draw a sweep file's regime map", _add_plot_arguments, _run_plot),
+    "bench": Command(
+        "work-precision charts and failure maps of the integrators against scipy/numba baselines",
+        _add_bench_arguments,
+        _run_bench,
+    ),
 }
 
 

@@ -323,8 +323,6 @@ impl Summary {
 struct Crossing {
     t: f64,
     y: State,
-    /// Largest |z| since the previous crossing.
-    peak: f64,
     /// Largest |y_c| of each component since the previous crossing.
     peaks: State,
 }
@@ -471,11 +469,10 @@ impl Observer<6, ContactMode> for SteadyObserver<'_> {
             // Section: zd = 0 falling. Locate on the dense output by Illinois iteration; the
             // dense output is accurate to the integration tolerance, which sets the section's.
             let (t, y) = locate(st, |y| y[idx::ZD], 1e-14 * st.t1.abs().max(1.0));
-            let peak = self.w.peak_since.max(y[idx::Z].abs());
             let peaks = self.w.peaks_since.sup(&y.abs());
             self.w.peak_since = st.y1[idx::Z].abs();
             self.w.peaks_since = st.y1.abs();
-            self.w.push(Crossing { t, y, peak, peaks });
+            self.w.push(Crossing { t, y, peaks });
             if self.w.found.is_some() || self.w.decayed {
                 return Control::Stop;
             }

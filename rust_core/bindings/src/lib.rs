@@ -14,7 +14,10 @@ use tribosweep_core::ensemble::par_map;
 use tribosweep_core::model::{ContactModel, FrictionLaw, Params, Slider, State, PARAM_NAMES};
 use tribosweep_core::ode::{Method, Stats};
 use tribosweep_core::status::Status;
+use tribosweep_core::linear::{self, LinearStability};
+use tribosweep_core::shooting::{self, PeriodicOrbit, ShootingOptions};
 use tribosweep_core::steady::{self, RunResult, SteadyOptions, Summary, Tolerances};
+use tribosweep_core::tidf::{self, RootSearch, SearchOptions, Tidf, Unknowns, Variant};
 
 /// Local wrapper so core errors map into Python exceptions in one place.
 struct CoreError(String);
@@ -381,6 +384,280 @@ fn summaries_into(d: &Bound<'_, PyDict>, out: &[(Summary, String)]) -> PyResult<
     stats_into(d, &stats)
 }
 
+
+fn variant_from(name: &str) -> Result<Variant, CoreError> {
+    match name {
+        "consistent" => Ok(Variant::Consistent),
+        "dead_load" => Ok(Variant::DeadLoad),
+        _ => Err(CoreError(format!("variant = {name:?} is not valid: must be 'consistent' or 'dead_load'"))),
+    }
+}
+
+fn failed_linear() -> LinearStability {
+    let mut l = linear::linear_stability(&Slider::seed());
+    l.status = Status::Panic;
+    l.stable = false;
+    l.max_growth_rate = f64::NAN;
+    l.least_stable_frequency = f64::NAN;
+    l.normal_mode_frequency_hz = f64::NAN;
+    l
+}
+
+/// Linear stability of steady sliding for each parameter set (GIL released, parallel).
+/// Returns eigenvalues (n, 6) complex, per-mode growth rates and frequencies (n, 3) in the
+/// order friction, torsion, normal, and the least stable mode's growth rate and frequency.
+#[pyfunction]
+#[pyo3(signature = (base, contact, friction_law, names, values, threads=None))]
+fn linear_stability<'py>(
+    py: Python<'py>,
+    base: HashMap<String, f64>,
+    contact: &str,
+    friction_law: &str,
+    names: Vec<String>,
+    values: PyReadonlyArray2<'py, f64>,
+    threads: Option<usize>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let params = ensemble_params(&base, contact, friction_law, &names, &values.as_array())?;
+    let n = params.len();
+    let out: Vec<LinearStability> = py.detach(|| {
+        par_map(&params, threads, |p| linear::linear_stability(&Slider::new(*p).expect("validated")), |_| failed_linear())
+    });
+    let d = PyDict::new(py);
+    let mut ev = numpy::ndarray::Array2::<numpy::Complex64>::zeros((n, 6));
+    let mut gr = Array2::<f64>::zeros((n, 3));
+    let mut fr = Array2::<f64>::zeros((n, 3));
+    let kinds = [linear::ModeKind::Friction, linear::ModeKind::Torsion, linear::ModeKind::Normal];
+    for (i, l) in out.iter().enumerate() {
+        for c in 0..6 {
+            ev[(i, c)] = numpy::Complex64::new(l.eigenvalues[c].re, l.eigenvalues[c].im);
+        }
+        for (k, kind) in kinds.iter().enumerate() {
+            let m = l.mode(*kind);
+            gr[(i, k)] = m.growth_rate;
+            fr[(i, k)] = m.frequency;
+        }
+    }
+    let f = |g: fn(&LinearStability) -> f64| Array1::from_iter(out.iter().map(g)).into_pyarray(py);
+    d.set_item("eigenvalues", ev.into_pyarray(py))?;
+    d.set_item("mode_growth_rate", gr.into_pyarray(py))?;
+    d.set_item("mode_frequency", fr.into_pyarray(py))?;
+    d.set_item("mode_names", kinds.iter().map(|k| k.name()).collect::<Vec<_>>())?;
+    d.set_item("max_growth_rate", f(|l| l.max_growth_rate))?;
+    d.set_item("least_stable_frequency", f(|l| l.least_stable_frequency))?;
+    d.set_item("normal_mode_frequency_hz", f(|l| l.normal_mode_frequency_hz))?;
+    d.set_item("stable", Array1::from_iter(out.iter().map(|l| l.stable)).into_pyarray(py))?;
+    d.set_item("status", Array1::from_iter(out.iter().map(|l| l.status.code())).into_pyarray(py))?;
+    Ok(d)
+}
+
+/// Hopf loads in [load_min, load_max] (only z_st and K_s follow the load). List of dicts.
+#[pyfunction]
+fn hopf_loads<'py>(
+    py: Python<'py>,
+    values: HashMap<String, f64>,
+    friction_law: &str,
+    load_min: f64,
+    load_max: f64,
+    n_grid: usize,
+) -> PyResult<Vec<Bound<'py, PyDict>>> {
+    let p = params_from(&values, "bilateral", friction_law)?;
+    let pts = py.detach(|| linear::hopf_loads(&p, load_min, load_max, n_grid)).map_err(CoreError::from)?;
+    let mut out = Vec::new();
+    for h in pts {
+        let d = PyDict::new(py);
+        d.set_item("normal_load", h.normal_load)?;
+        d.set_item(
+            "direction",
+            match h.direction {
+                linear::HopfDirection::StableToUnstable => "stable_to_unstable",
+                linear::HopfDirection::UnstableToStable => "unstable_to_stable",
+            },
+        )?;
+        d.set_item("mode", h.mode.name())?;
+        d.set_item("frequency", h.frequency)?;
+        d.set_item("bracket", h.bracket)?;
+        d.set_item("status", h.status.code())?;
+        d.set_item("extrapolated", h.extrapolated)?;
+        out.push(d);
+    }
+    Ok(out)
+}
+
+fn search_options(w_min: f64, w_max: f64, n_base: usize) -> SearchOptions {
+    SearchOptions { w_min, w_max, n_base, ..SearchOptions::default() }
+}
+
+/// All describing-function roots for each parameter set, padded to the largest root count.
+#[pyfunction]
+#[pyo3(signature = (base, contact, friction_law, names, values, variant="consistent", w_min=150.0, w_max=3000.0, n_base=1000, threads=None))]
+#[allow(clippy::too_many_arguments)]
+fn describing_function<'py>(
+    py: Python<'py>,
+    base: HashMap<String, f64>,
+    contact: &str,
+    friction_law: &str,
+    names: Vec<String>,
+    values: PyReadonlyArray2<'py, f64>,
+    variant: &str,
+    w_min: f64,
+    w_max: f64,
+    n_base: usize,
+    threads: Option<usize>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let params = ensemble_params(&base, contact, friction_law, &names, &values.as_array())?;
+    let variant = variant_from(variant)?;
+    let opts = search_options(w_min, w_max, n_base);
+    let out: Vec<Option<RootSearch>> = py.detach(|| {
+        par_map(
+            &params,
+            threads,
+            |p| Some(Tidf::new(&Slider::new(*p).expect("validated"), variant).find_roots(&Slider::new(*p).expect("validated"), &opts)),
+            |_| None,
+        )
+    });
+    let n = out.len();
+    let r = out.iter().map(|o| o.as_ref().map_or(0, |s| s.roots.len())).max().unwrap_or(0).max(1);
+    let d = PyDict::new(py);
+    let fields: [(&str, fn(&tidf::Root) -> f64); 16] = [
+        ("omega", |x| x.omega),
+        ("A0", |x| x.a0),
+        ("A1", |x| x.a1),
+        ("A2", |x| x.a2),
+        ("theta", |x| x.theta),
+        ("phi0", |x| x.phi0),
+        ("x0", |x| x.x0),
+        ("phi1_amp", |x| x.phi1_amp),
+        ("phi1_phase", |x| x.phi1_phase),
+        ("phi2_amp", |x| x.phi2.norm()),
+        ("phi2_phase", |x| x.phi2.arg()),
+        ("x1_amp", |x| x.x_amp),
+        ("x1_phase", |x| x.x_phase),
+        ("z_max", |x| x.z_max),
+        ("third_harmonic_ratio", |x| x.third_harmonic_ratio),
+        ("residual", |x| x.residual_norm),
+    ];
+    for (name, g) in fields {
+        let mut a = Array2::<f64>::from_elem((n, r), f64::NAN);
+        for (i, o) in out.iter().enumerate() {
+            if let Some(sr) = o {
+                for (k, root) in sr.roots.iter().enumerate() {
+                    a[(i, k)] = g(root);
+                }
+            }
+        }
+        d.set_item(name, a.into_pyarray(py))?;
+    }
+    let flag = |g: fn(&tidf::Root) -> bool| {
+        let mut a = Array2::<i8>::from_elem((n, r), -1);
+        for (i, o) in out.iter().enumerate() {
+            if let Some(sr) = o {
+                for (k, root) in sr.roots.iter().enumerate() {
+                    a[(i, k)] = g(root) as i8;
+                }
+            }
+        }
+        a.into_pyarray(py)
+    };
+    d.set_item("physical", flag(|x| x.physical))?;
+    d.set_item("contact_opens", flag(|x| x.contact_opens))?;
+    let mut iters = Array2::<i64>::from_elem((n, r), -1);
+    for (i, o) in out.iter().enumerate() {
+        if let Some(sr) = o {
+            for (k, root) in sr.roots.iter().enumerate() {
+                iters[(i, k)] = root.newton_iterations as i64;
+            }
+        }
+    }
+    d.set_item("newton_iterations", iters.into_pyarray(py))?;
+    d.set_item("n_roots", Array1::from_iter(out.iter().map(|o| o.as_ref().map_or(0, |s| s.roots.len() as i64))).into_pyarray(py))?;
+    d.set_item(
+        "search_outcome",
+        out.iter().map(|o| o.as_ref().map_or("failed", |s| s.outcome.name())).collect::<Vec<_>>(),
+    )?;
+    d.set_item(
+        "status",
+        Array1::from_iter(out.iter().map(|o| o.as_ref().map_or(Status::Panic, |s| s.status).code())).into_pyarray(py),
+    )?;
+    d.set_item("n_grid", Array1::from_iter(out.iter().map(|o| o.as_ref().map_or(0, |s| s.n_grid as i64))).into_pyarray(py))?;
+    Ok(d)
+}
+
+fn orbit_dict<'py>(py: Python<'py>, o: &PeriodicOrbit) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("period", o.period)?;
+    d.set_item("omega", o.omega)?;
+    d.set_item("state0", o.state0.as_slice().to_vec())?;
+    d.set_item("multipliers_re", o.multipliers.iter().map(|c| c.re).collect::<Vec<_>>())?;
+    d.set_item("multipliers_im", o.multipliers.iter().map(|c| c.im).collect::<Vec<_>>())?;
+    d.set_item("moduli", o.moduli.to_vec())?;
+    d.set_item("trivial_error", o.trivial_error)?;
+    d.set_item("stable", o.stable)?;
+    d.set_item("A0", o.harmonics.a0)?;
+    d.set_item("A1", o.harmonics.a1)?;
+    d.set_item("A2", o.harmonics.a2)?;
+    d.set_item("A3", o.harmonics.a3)?;
+    d.set_item("theta", o.harmonics.theta)?;
+    d.set_item("z_max", o.z_max)?;
+    d.set_item("z_min", o.z_min)?;
+    d.set_item("contact_opens", o.contact_opens)?;
+    d.set_item("open_fraction", o.open_fraction)?;
+    d.set_item("min_normal_force", o.min_normal_force)?;
+    d.set_item("min_law_force", o.min_law_force)?;
+    d.set_item("n_switches", o.n_switches)?;
+    d.set_item("residual", o.residual_norm)?;
+    d.set_item("newton_iterations", o.newton_iterations)?;
+    d.set_item("status", o.status.code())?;
+    d.set_item("n_rhs", o.stats.n_rhs)?;
+    d.set_item("n_accept", o.stats.n_accept)?;
+    d.set_item("n_reject", o.stats.n_reject)?;
+    Ok(d)
+}
+
+/// Periodic orbit by shooting from a state on it and a period guess, or from a describing-function
+/// root `root = [omega, A0, A1, A2, theta]` (with `variant` to rebuild its phasors).
+#[pyfunction]
+#[pyo3(signature = (values, contact, friction_law, y0=None, period=None, root=None, variant="consistent", rtol=1e-11, max_iter=30, tol=1e-9))]
+#[allow(clippy::too_many_arguments)]
+fn periodic_orbit<'py>(
+    py: Python<'py>,
+    values: HashMap<String, f64>,
+    contact: &str,
+    friction_law: &str,
+    y0: Option<PyReadonlyArray1<'py, f64>>,
+    period: Option<f64>,
+    root: Option<PyReadonlyArray1<'py, f64>>,
+    variant: &str,
+    rtol: f64,
+    max_iter: u32,
+    tol: f64,
+) -> PyResult<Bound<'py, PyDict>> {
+    let p = params_from(&values, contact, friction_law)?;
+    let s = Slider::new(p).map_err(CoreError::from)?;
+    let opts = ShootingOptions { rtol, max_iter, tol, ..ShootingOptions::default() };
+    let variant = variant_from(variant)?;
+    let orbit = match (y0, period, root) {
+        (Some(y), Some(t), None) => {
+            let y = State::from_column_slice(y.as_slice()?);
+            py.detach(|| shooting::shoot(&s, &y, t, &opts))
+        }
+        (None, None, Some(r)) => {
+            let r = r.as_slice()?;
+            if r.len() != 5 {
+                return Err(CoreError(format!("root has {} entries: must be [omega, A0, A1, A2, theta]", r.len())).into());
+            }
+            let x = Unknowns::from_column_slice(r);
+            py.detach(|| {
+                let t = Tidf::new(&s, variant);
+                let torsion = linear::linear_stability(&s).mode(linear::ModeKind::Torsion).frequency;
+                let root = t.describe(&x, torsion, SearchOptions::default().physical_band);
+                shooting::shoot_from_root(&s, &root, &opts)
+            })
+        }
+        _ => return Err(CoreError("give either y0 and period, or root".into()).into()),
+    };
+    orbit_dict(py, &orbit)
+}
+
 /// Outcome names of a run to steady state, in code order.
 #[pyfunction]
 fn steady_outcome_names() -> Vec<&'static str> {
@@ -401,5 +678,9 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(static_point, m)?)?;
     m.add_function(wrap_pyfunction!(simulate, m)?)?;
     m.add_function(wrap_pyfunction!(ensemble, m)?)?;
+    m.add_function(wrap_pyfunction!(linear_stability, m)?)?;
+    m.add_function(wrap_pyfunction!(hopf_loads, m)?)?;
+    m.add_function(wrap_pyfunction!(describing_function, m)?)?;
+    m.add_function(wrap_pyfunction!(periodic_orbit, m)?)?;
     Ok(())
 }

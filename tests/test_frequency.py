@@ -1,0 +1,160 @@
+"""Frequency domain against MODEL.md §4-6: linear stability, Hopf loads, describing-function roots, shooting."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import tribosweep as ts
+from tribosweep import _core
+
+
+def rel(a, b):
+    return abs(a / b - 1)
+
+
+def circ_deg(a_rad, b_deg):
+    """Circular distance in degrees."""
+    d = (np.degrees(a_rad) - b_deg + 180) % 360 - 180
+    return abs(d)
+
+
+def test_seed_eigenvalues(seed_values):
+    ds = ts.linear_stability(ts.SliderModel())
+    ref = seed_values["linear_eigenvalues_seed"]
+    for mode, (re, im) in zip(["friction", "torsion", "normal"], ref):
+        assert rel(float(ds.growth_rate.sel(mode=mode)), re) < 1e-4, mode
+        assert rel(float(ds.frequency.sel(mode=mode)), im) < 1e-5, mode
+    assert bool(ds.stable)
+    assert abs(float(ds.normal_mode_frequency_hz) - 229.2) < 0.05
+
+
+@pytest.mark.parametrize("mu", ["0.2", "0.215", "0.25", "0.3", "0.35"])
+def test_hopf_loads(mu, seed_values):
+    ref = seed_values["hopf_load_N"][mu]
+    h = ts.hopf_load(ts.SliderModel(mu=float(mu)), (1.0, 250.0))
+    assert len(h) == 1
+    assert rel(h[0]["normal_load"], ref) < 1e-3
+    assert h[0]["direction"] == "unstable_to_stable" and h[0]["mode"] == "torsion"
+
+
+@pytest.mark.parametrize("mu, stable", [(0.15, True), (0.10, True), (0.40, False), (0.45, False)])
+def test_no_hopf_load_outside_the_band(mu, stable):
+    m = ts.SliderModel(mu=mu)
+    assert ts.hopf_load(m, (1.0, 250.0)) == []
+    loads = np.geomspace(1, 250, 25)
+    out = _core.linear_stability(m.values(), "bilateral", "constant", ["normal_load"], loads[:, None], 2)
+    assert np.all(out["stable"] == stable)
+
+
+def test_seed_tidf_root(seed_values):
+    ref = seed_values["tidf_root_seed"]
+    ds = ts.describing_function(ts.SliderModel())
+    assert ds.attrs["search_outcome"] == "roots"
+    phys = ds.where(ds.physical == 1, drop=True)
+    assert phys.sizes["root"] == 1
+    r = phys.isel(root=0)
+    assert abs(float(r.omega) - ref["omega"]) < 7e-4  # reference printed to 6 digits
+    for k in ("A0", "A1", "A2"):
+        assert rel(float(r[k]), ref[k]) < 1e-3, k  # printed to 4 digits
+    assert circ_deg(float(r.theta), ref["theta_deg"]) < 0.01
+    assert rel(float(r.phi1_amp), ref["phi1_amp"]) < 1e-3
+    assert circ_deg(float(r.phi1_phase), ref["phi1_deg"]) < 0.01
+    assert rel(float(r.x1_amp), ref["x_amp"]) < 1e-3
+    assert circ_deg(float(r.x1_phase), ref["x_deg"]) < 0.01
+    # The seed root's waveform leaves the disk (z_max > |z_st|): flagged, kept.
+    assert int(r.contact_opens) == 1
+    # Third-harmonic truncation check: 2.4 N against 16.0 and 20.0 N.
+    assert abs(float(r.third_harmonic_ratio) - 2.4 / np.hypot(16.0, 20.0)) < 0.01
+    # The other roots are far from the torsion mode, with A0 of 100-200 um: flagged non-physical.
+    others = ds.where(ds.physical == 0, drop=True)
+    assert others.sizes["root"] >= 2
+    assert np.all((others.omega > 280) & (others.omega < 610))
+    assert np.all(np.abs(others.A0) > 90e-6)
+
+
+def test_dead_load_variant(seed_values):
+    ref = seed_values["tidf_root_seed_eq46_dead_load"]
+    ds = ts.describing_function(ts.SliderModel(), variant="dead_load")
+    r = ds.where(ds.physical == 1, drop=True).isel(root=0)
+    assert abs(float(r.omega) - ref["omega"]) < 7e-4
+    for k in ("A0", "A1", "A2"):
+        assert rel(float(r[k]), ref[k]) < 1e-3, k
+    assert circ_deg(float(r.theta), ref["theta_deg"]) < 0.01
+
+
+def test_finer_grid_finds_the_same_roots():
+    m = ts.SliderModel()
+    a = ts.describing_function(m, n_grid=1000)
+    b = ts.describing_function(m, n_grid=2000)
+    assert a.sizes["root"] == b.sizes["root"]
+    for k in ("omega", "A0", "A1", "A2", "theta"):
+        np.testing.assert_allclose(a[k].values, b[k].values, rtol=1e-9, atol=1e-15)
+
+
+def test_no_root_where_sliding_is_unstable():
+    # MODEL.md §6: where sliding is linearly unstable the describing function has no root
+    # near the torsion mode (the Hopf bifurcation is subcritical).
+    ds = ts.describing_function(ts.SliderModel(normal_load=15.0))
+    assert not np.any(ds.physical.values == 1)
+
+
+def test_bilateral_orbit_from_the_seed_root(seed_values):
+    ref = seed_values["bilateral_periodic_orbit_seed"]
+    m = ts.SliderModel()
+    df = ts.describing_function(m)
+    root = df.isel(root=int(np.argmax(df.physical.values)))
+    orb = ts.periodic_orbit(m, root)
+    assert int(orb.status) == 0
+    assert rel(float(orb.period), ref["period_s"]) < 1e-6
+    np.testing.assert_allclose(orb.floquet_moduli.values, ref["floquet_moduli"], atol=1e-4)
+    assert not bool(orb.stable)
+    assert rel(float(orb.A1), ref["A1"]) < 1e-3 and rel(float(orb.A2), ref["A2"]) < 2e-3
+    assert rel(float(orb.z_max), ref["z_max"]) < 1e-3
+    assert bool(orb.contact_opens) and abs(float(orb.open_fraction) - 0.26) < 0.01
+    # The describing function is within 3.3 % in A1 of this orbit (MODEL.md §6).
+    assert abs(float(root.A1) / float(orb.A1) - 1) < 0.035
+
+
+def test_unilateral_cycle_by_shooting_is_stable(seed_values):
+    ref = seed_values["unilateral_bouncing_cycle_seed"]
+    m = ts.SliderModel(contact="unilateral")
+    hot = ts.ensemble(m.replace(mu=0.30), 22.0, {"mu": [0.30]}, y0=[0.1e-6, 0, 0, 0, 0, 0], rtol=1e-8)
+    y = np.array([float(hot[f"{v}_end"][0]) for v in ("z", "z_dot", "x", "x_dot", "phi", "phi_dot")])
+    # Continue at mu = 0.215 for 6 s and take the state at the last period's largest z (zd = 0
+    # there, the shooting's phase condition).
+    t = np.linspace(5.99, 6.0, 10001)
+    warm = ts.simulate(m, 6.0, y0=y, rtol=1e-10, t_eval=t)
+    i = int(np.argmax(warm.z.values))
+    y = np.array([float(warm[v][i]) for v in ("z", "z_dot", "x", "x_dot", "phi", "phi_dot")])
+    orb = ts.periodic_orbit(m, (y, 2 * np.pi / 640.0))
+    assert int(orb.status) == 0, int(orb.status)
+    assert bool(orb.stable)
+    assert rel(float(orb.omega), ref["omega"]) < 1e-4
+    assert rel(float(orb.A1), ref["A1"]) < 1e-3
+    assert abs(float(orb.open_fraction) - ref["fraction_off_disk"]) < 2e-3
+
+
+def test_seed_report_table_is_computed(tmp_path):
+    from tribosweep import cli
+
+    assert cli.main(["seed", "--out", str(tmp_path)]) == 0
+    md = (tmp_path / "seed_report.md").read_text()
+    assert "| describing function, this reading | 647.559 | 0.958 | 21.524 | 5.175 | 251.13 |" in md
+    assert "| shooting orbit, bilateral (unstable; contact open 26%) | 647.573 |" in md
+    assert "24.904 N" in md
+
+
+@pytest.mark.parametrize(
+    "call, needle",
+    [
+        (lambda: ts.describing_function(ts.SliderModel(), omega_range=(300.0, 200.0)), "omega_range"),
+        (lambda: ts.describing_function(ts.SliderModel(), variant="literal"), "variant"),
+        (lambda: ts.hopf_load(ts.SliderModel(), (-1.0, 10.0)), "load_range"),
+        (lambda: ts.periodic_orbit(ts.SliderModel(), ([0.0] * 5, 0.01)), "y0"),
+        (lambda: ts.periodic_orbit(ts.SliderModel(), ([0.0] * 6, -0.01)), "period"),
+    ],
+)
+def test_bad_frequency_arguments(call, needle):
+    with pytest.raises(ValueError, match=needle):
+        call()
