@@ -92,7 +92,6 @@ def test_config_file(tmp_path, capsys):
         (["sweep", "--normal-load", "1:2:0"], "NUM must be"),
         (["sweep", "--arm-length", "1:2"], "not an axis"),
         (["sweep", "--method", "bogus"], "invalid choice"),
-        (["sweep", "--method", "tidf"], "not available yet"),
         (["sweep", "--threads", "0"], "must be >= 1"),
         (["sweep", "--chunk-size", "x"], "not an integer"),
         (["sweep", "--axis", "nonsense"], "NAME=SPEC"),

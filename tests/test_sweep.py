@@ -113,10 +113,32 @@ def test_wrong_types(kwargs):
         ts.sweep(**{"method": "linear", "progress": False, **kwargs})
 
 
-@pytest.mark.parametrize("method", ["tidf", "shooting"])
-def test_stages_not_written_yet_say_so(method):
-    with pytest.raises(NotImplementedError, match=method):
-        ts.sweep(method=method, progress=False)
+def test_tidf_and_shooting_stages_at_the_seed(seed_values):
+    ref = seed_values["tidf_root_seed"]
+    orb = seed_values["bilateral_periodic_orbit_seed"]
+    d = ts.sweep(normal_load=[84.46], method="tidf", progress=False)
+    assert int(d.decided_by.values.ravel()[0]) == _chunk.DECIDED_BY["tidf"]
+    assert int(d.tidf_roots.values.ravel()[0]) == 5
+    assert abs(float(d.tidf_omega.values.ravel()[0]) - ref["omega"]) < 7e-4
+    assert abs(float(d.tidf_a1.values.ravel()[0]) / ref["A1"] - 1) < 1e-3
+    assert int(d.tidf_contact_opens.values.ravel()[0]) == 1
+    s = ts.sweep(normal_load=[84.46], method="shooting", progress=False)
+    assert int(s.decided_by.values.ravel()[0]) == _chunk.DECIDED_BY["shooting"]
+    assert abs(float(s.orbit_a1.values.ravel()[0]) / orb["A1"] - 1) < 1e-3
+    assert int(s.orbit_stable.values.ravel()[0]) == 0
+    # MODEL.md §6: the describing function is within 3.3 % in A1 of the orbit.
+    assert -0.035 < float(s.tidf_a1_error.values.ravel()[0]) < 0
+    assert int(s.newton_iterations.values.ravel()[0]) > 0
+
+
+@requires_driver
+def test_auto_finds_the_seed_bistable():
+    # MODEL.md §6: at the seed, stable sliding and a stable bouncing cycle coexist.
+    ds = ts.sweep(normal_load=[84.46], method="auto", progress=False)
+    assert int(ds.regime.values.ravel()[0]) == REGIME["steady_sliding"]
+    assert int(ds.bistable.values.ravel()[0]) == 1
+    assert abs(float(ds.cycle_omega.values.ravel()[0]) / 640.371 - 1) < 1e-3
+    assert abs(float(ds.fraction_off_disk.values.ravel()[0]) - 0.115) < 0.005
 
 
 # --- the linear stage ------------------------------------------------------------------------------
@@ -252,7 +274,7 @@ def test_classification_of_transient_summaries(summary, stable, regime, decided_
 def test_a_failed_point_is_data_not_an_exception(monkeypatch):
     # Whatever goes wrong in the core for one point (here a simulated panic) becomes that point's
     # status and reason; the sweep goes on with the others.
-    def panicking(model_values, contact, friction_law, point_params, sel, options):
+    def panicking(model_values, contact, friction_law, point_params, sel, options, y0=None):
         n = sel.size
         return {"status": np.full(n, ts.STATUS["panic"], np.uint8), "outcome": np.full(n, 4, np.uint8),
                 "reason": ["panic: boom"] * n, **{k: np.full(n, np.nan) for k in (
@@ -265,7 +287,7 @@ def test_a_failed_point_is_data_not_an_exception(monkeypatch):
     assert r.tolist() == [REGIME["failed"], REGIME["steady_sliding"]]
     assert ds.status.values.ravel().tolist() == [ts.STATUS["panic"], ts.STATUS["success"]]
     assert "panic: boom" in ds.reason.values.ravel()[0]
-    assert ds.decided_by.values.ravel().tolist() == [_chunk.DECIDED_BY["transient"], _chunk.DECIDED_BY["linear"]]
+    assert ds.decided_by.values.ravel().tolist() == [_chunk.DECIDED_BY["transient"], _chunk.DECIDED_BY["tidf"]]
     assert ds.wear_applicability.values.ravel().tolist() == [2, 0]  # undetermined, mild
 
 
@@ -281,7 +303,7 @@ def test_an_unsettled_run_leaves_the_regime_to_linear_stability():
 
 @requires_driver
 def test_auto_runs_the_transient_only_where_sliding_is_unstable():
-    ds = ts.sweep(normal_load=[10.0, 50.0], method="auto", progress=False, threads=2)
+    ds = ts.sweep(normal_load=[10.0, 50.0], method="auto", progress=False, threads=2, check_bistability=False)
     r = ds.regime.values.ravel()
     assert r[1] == REGIME["steady_sliding"] and ds.n_rhs.values.ravel()[1] == 0
     assert r[0] in (REGIME["self_excited"], REGIME["contact_loss"], REGIME["stick_slip"], REGIME["diverged"])
@@ -482,3 +504,24 @@ def test_progress_line_without_tqdm(monkeypatch, capsys):
     assert "sweep: 2/2 points (100 %)" in err
     ts.sweep(normal_load=[10.0, 20.0], method="linear", progress=False)
     assert capsys.readouterr().err == ""
+
+
+@requires_driver
+def test_auto_agrees_with_transient_where_the_transient_settles():
+    # Issue 4: on a test grid, the regime of `auto` (cheapest model per point) equals the regime of
+    # always integrating, at every point where the integration settled.
+    kw = dict(normal_load=[8.0, 30.0, 70.0, 140.0], extra_axes={"mu": [0.2, 0.3, 0.4]}, progress=False, t_max=40.0)
+    auto = ts.sweep(method="auto", **kw)
+    full = ts.sweep(method="transient", **kw)
+    ra, rt = auto.regime.values.ravel(), full.regime.values.ravel()
+    settled = (full.status.values.ravel() == ts.STATUS["success"]) & (rt != REGIME["unstable_undetermined"])
+    assert settled.sum() >= 8, settled
+    assert np.array_equal(ra[settled], rt[settled]), (ra, rt)
+    # auto decides many points without integrating, and without the bistability question (which
+    # `transient` from a small disturbance does not ask) it integrates less.
+    assert (auto.decided_by.values != _chunk.DECIDED_BY["transient"]).sum() >= 4
+    lean = ts.sweep(method="auto", check_bistability=False, **kw)
+    assert np.array_equal(lean.regime.values, auto.regime.values)
+    cheap = lean.decided_by.values.ravel() != _chunk.DECIDED_BY["transient"]
+    assert np.all(lean.n_rhs.values.ravel()[cheap] == 0) and np.all(full.n_rhs.values.ravel()[cheap] > 10_000)
+    assert lean.n_rhs.values.sum() < full.n_rhs.values.sum()

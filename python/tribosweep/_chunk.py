@@ -15,10 +15,36 @@ Stages (MODEL.md §4, §6):
     A run to steady state in the Rust core (``tribosweep._core.ensemble(kind="steady")``), from
     a small disturbance, classified from its summary.
 
-The sweep methods combine them: ``linear`` (only the eigenvalues: an unstable point is
-``unstable_undetermined``), ``transient`` (every point integrated), ``auto`` (eigenvalues, then
-the transient only where sliding is unstable). ``tidf`` and ``shooting`` stages are not written
-yet.
+``tidf``
+    The triple-input describing function of the bilateral model (Rust, all roots in 150-3000
+    rad/s). At a linearly stable point a physical root is the subcritical saddle cycle around stable
+    sliding (MODEL.md §6): a disturbance smaller than it decays.
+``shooting``
+    The periodic orbit of the full ODE near the describing-function root, with Floquet multipliers:
+    the root's own error (its ``A1`` against the orbit's) and the saddle's true size.
+
+The sweep methods combine them, modelling no more than each point needs:
+
+- ``linear``: eigenvalues only; an unstable point is ``unstable_undetermined``.
+- ``tidf``: linear, then the describing function at every point. Stable points: steady sliding,
+  with the saddle amplitude when there is a root. Unstable points: a root without contact opening
+  is a predicted cycle (``self_excited``, decided by tidf, flagged as a prediction); otherwise
+  ``unstable_undetermined``.
+- ``shooting``: as ``tidf``, then the orbit of every physical root (its stability and the DF error).
+- ``transient``: every point integrated from the disturbance ``y0``.
+- ``auto``: linear; at stable points the describing function; shooting only where the disturbance
+  is within a factor ``SHOOT_MARGIN`` of the describing function's amplitude (there the DF's error
+  matters); a transient only where those cannot decide: unstable sliding (the DF has no cycle
+  there: the bifurcation is subcritical), a disturbance at or beyond the saddle, or a failed stage.
+  With ``check_bistability`` (default on), a stable point with a saddle cycle also gets a
+  unilateral transient started outside the saddle: if it settles on a cycle, stable sliding and
+  that cycle coexist (``bistable``).
+
+Transients of linearly unstable points start on the unstable (torsion) mode with
+``|z| = unstable_disturbance |z_st|`` (default 1: the size at which the contact opens) instead of ``y0``: a small disturbance
+grows at the linear rate (0.07 /s near the Hopf load), which would cost about 100 s of simulated
+time for nothing. The attractor reached is the same when it is the only one; where it is not, the
+bistability check is what tells.
 """
 
 from __future__ import annotations
@@ -73,7 +99,11 @@ T_MAX: float = 100.0
 #: Analysis methods of a sweep.
 METHODS: tuple[str, ...] = ("auto", "linear", "tidf", "shooting", "transient")
 #: Methods whose stages exist so far.
-IMPLEMENTED_METHODS: tuple[str, ...] = ("auto", "linear", "transient")
+IMPLEMENTED_METHODS: tuple[str, ...] = METHODS
+
+#: ``auto`` shoots the saddle orbit when the disturbance's z exceeds the describing function's A1
+#: divided by this margin (the DF's A1 error grows with amplitude: 10-20 % at tens of um).
+SHOOT_MARGIN: float = 2.0
 
 #: Per-point output of :func:`compute_chunk`: name -> (dtype, units or None, long name).
 #: Flag variables carry their meanings in ``FLAG_MEANINGS``. Every name here is an output key.
@@ -97,6 +127,13 @@ POINT_VARIABLES: dict[str, tuple[str, str | None, str]] = {
     "wear_applicability": ("u1", None, "whether the mild-wear model applies"),
     "wall_time": ("f8", "s", "wall-clock time of the point (its chunk's stage times shared evenly)"),
     "n_rhs": ("i8", "1", "right-hand-side evaluations of the time integration (0: none run)"),
+    "tidf_roots": ("i8", "1", "describing-function roots in 150-3000 rad/s (-1: not computed)"),
+    "tidf_omega": ("f8", "rad s-1", "angular frequency of the physical describing-function root"),
+    "tidf_a1": ("f8", "m", "first-harmonic amplitude of z of the physical describing-function root"),
+    "tidf_contact_opens": ("i1", None, "the physical root's waveform leaves the disk (outside the law's validity)"),
+    "orbit_a1": ("f8", "m", "first-harmonic amplitude of z of the shooting orbit near the root"),
+    "orbit_stable": ("i1", None, "stability of the shooting orbit (Floquet multipliers)"),
+    "tidf_a1_error": ("f8", "1", "relative error of the describing function's A1 against the shooting orbit"),
     "newton_iterations": ("i8", "1", "Newton iterations of the TIDF and shooting stages (0: none run)"),
 }
 #: Optional per-point output (present only when configured).
@@ -110,6 +147,8 @@ FLAG_MEANINGS: dict[str, tuple[tuple[int, ...], tuple[str, ...]]] = {
     "decided_by": (tuple(range(len(DECIDED_BY_NAMES))), DECIDED_BY_NAMES),
     "bistable": (BISTABLE_VALUES, BISTABLE_NAMES),
     "wear_applicability": (tuple(range(len(WEAR_APPLICABILITY_NAMES))), WEAR_APPLICABILITY_NAMES),
+    "tidf_contact_opens": ((-1, 0, 1), ("not_computed", "closed", "opens")),
+    "orbit_stable": ((-1, 0, 1), ("not_computed", "unstable", "stable")),
 }
 
 _LINEAR_FIELDS = (
@@ -294,6 +333,9 @@ def empty_result(n: int, *, wear_rate: bool = False) -> dict[str, np.ndarray]:
         else:
             out[name] = np.zeros(n, dtype=dtype)
     out["bistable"][:] = -1
+    out["tidf_roots"][:] = -1
+    out["tidf_contact_opens"][:] = -1
+    out["orbit_stable"][:] = -1
     return out
 
 
@@ -342,13 +384,41 @@ def _classify(summary: dict, stable: np.ndarray, t_max: float) -> tuple[np.ndarr
     return regime, status, reason.astype(str), decided
 
 
-def _transient(model_values, contact, friction_law, point_params, sel, options) -> dict:
+def _static_penetration(full: Mapping[str, np.ndarray], sel: np.ndarray) -> np.ndarray:
+    """Static penetration z_st [m] of the selected points (MODEL.md §3, cancellation-free form)."""
+    n = max(np.size(v) for v in full.values())
+    k0 = np.broadcast_to(full["contact_stiffness"], (n,))[sel]
+    ka = np.broadcast_to(full["contact_quadratic"], (n,))[sel]
+    f = np.broadcast_to(full["normal_load"], (n,))[sel]
+    return -2.0 * f / (k0 + np.sqrt(k0 * k0 + 4.0 * ka * f))
+
+
+def _mode_start(full: Mapping[str, np.ndarray], friction_law: str, sel: np.ndarray, z_amp: np.ndarray) -> np.ndarray:
+    """Initial states on the least stable linear mode of each selected point, with ``|z| = z_amp``.
+
+    A disturbance along the mode that self-excites (the torsion mode) reaches the attractor far
+    sooner than one in ``z`` alone, which mostly excites the heavily damped normal mode.
+    """
+    n = max(np.size(v) for v in full.values())
+    sub = {k: np.broadcast_to(np.asarray(full[k], dtype=np.float64), (n,))[sel] for k in _LINEAR_FIELDS}
+    lam, vec = np.linalg.eig(jacobians(sub, friction_law))
+    k = np.argmax(lam.real + 1e-9 * np.abs(lam.imag), axis=1)  # least stable; the +Im member of the pair
+    v = vec[np.arange(sel.size), :, k]
+    # Rotate so that z is real and positive at t = 0 (zd then follows from the mode), scale |z|.
+    v = v * np.exp(-1j * np.angle(v[:, 0]))[:, None]
+    y0 = v.real / np.maximum(np.abs(v[:, :1].real), 1e-300) * np.asarray(z_amp)[:, None]
+    return np.ascontiguousarray(y0)
+
+
+def _transient(model_values, contact, friction_law, point_params, sel, options, y0=None) -> dict:
     names = sorted(point_params)
     values = np.column_stack([np.asarray(point_params[k], dtype=np.float64)[sel] for k in names])
-    y0 = np.asarray(options.get("y0", [1e-6, 0, 0, 0, 0, 0]), dtype=np.float64).reshape(1, 6)
+    if y0 is None:
+        y0 = np.asarray(options.get("y0", [1e-6, 0, 0, 0, 0, 0]), dtype=np.float64).reshape(1, 6)
     atol = options.get("atol")
     return _core.ensemble(
-        {k: float(v) for k, v in model_values.items()}, contact, friction_law, names, values, y0,
+        {k: float(v) for k, v in model_values.items()}, contact, friction_law, names, values,
+        np.ascontiguousarray(y0, dtype=np.float64),
         float(options.get("t_max", T_MAX)), options.get("integrator", "dopri5"), float(options.get("rtol", 1e-8)),
         None if atol is None else np.asarray(atol, dtype=np.float64), None, options.get("threads"), "steady",
         float(options.get("periodic_tol", 1e-5)), options.get("decay_amplitude"),
@@ -376,7 +446,7 @@ def compute_chunk(
     point_params : dict of str to 1-D numpy.ndarray
         Per-point overrides of real SliderModel fields, all of length ``n``.
     method : {"auto", "linear", "transient"}
-        Analysis method (see the module docstring); ``tidf`` and ``shooting`` are not available yet.
+        Analysis method (see the module docstring).
     options : dict
         Plain data: ``t_max`` [s], ``integrator``, ``rtol``, ``atol``, ``periodic_tol``,
         ``decay_amplitude`` [m], ``y0`` (initial disturbance, 6 values), ``threads``, and ``wear``
@@ -390,7 +460,7 @@ def compute_chunk(
         of length ``n``.
     """
     if method not in IMPLEMENTED_METHODS:
-        raise NotImplementedError(f"method = {method!r} is not available yet: use one of {IMPLEMENTED_METHODS}")
+        raise NotImplementedError(f"method = {method!r} is not available: use one of {IMPLEMENTED_METHODS}")
     from . import _wear  # _wear imports this module for its normal-mode frequency
 
     full = {k: np.asarray(v, dtype=np.float64) for k, v in model_values.items()}
@@ -400,40 +470,153 @@ def compute_chunk(
     wear = options.get("wear") or {}
     out = empty_result(n, wear_rate=bool(wear.get("calibration")))
     reason = np.full(n, "", dtype=object)
+    base = {k: float(v) for k, v in model_values.items()}
+    names = sorted(point_params)
+    values = np.column_stack([np.asarray(point_params[k], dtype=np.float64) for k in names])
+    threads = options.get("threads")
+    y0 = np.asarray(options.get("y0", [1e-6, 0, 0, 0, 0, 0]), dtype=np.float64)
+    disturbance = float(np.abs(y0[0]))
 
+    # Stage 1: linear stability of steady sliding (every point).
     t0 = time.perf_counter()
-    lin = linear_stability(full, friction_law)
-    for k in ("growth_rate", "linear_frequency", "normal_mode_frequency"):
-        out[k] = lin[k]
+    lin = _core.linear_stability(base, contact, friction_law, names, values, threads)
+    out["growth_rate"] = lin["max_growth_rate"]
+    out["linear_frequency"] = lin["least_stable_frequency"]
+    out["normal_mode_frequency"] = lin["normal_mode_frequency_hz"]
+    stable = np.asarray(lin["stable"], dtype=bool)
     out["status"][:] = lin["status"]
     out["decided_by"][:] = DECIDED_BY["linear"]
-    out["regime"][:] = np.where(lin["stable"], REGIME["steady_sliding"], REGIME["unstable_undetermined"])
+    out["regime"][:] = np.where(stable, REGIME["steady_sliding"], REGIME["unstable_undetermined"])
     lin_failed = lin["status"] != STATUS["success"]
     out["regime"][lin_failed] = REGIME["failed"]
     reason[lin_failed] = "linear stability: eigenvalues failed"
     wall = np.full(n, (time.perf_counter() - t0) / max(n, 1))
+    to_transient = np.zeros(n, dtype=bool)
 
     if method == "linear":
         reason[out["regime"] == REGIME["unstable_undetermined"]] = REGIME_DOC["unstable_undetermined"]
+    elif method == "transient":
+        to_transient[:] = True
     else:
-        sel = np.arange(n) if method == "transient" else np.flatnonzero(out["regime"] == REGIME["unstable_undetermined"])
+        # Stage 2: the describing function (bilateral: the report's model). auto needs it only at
+        # stable points (at unstable ones the Hopf bifurcation is subcritical: no cycle to find).
+        sel = np.flatnonzero(~lin_failed & (stable | (method != "auto")))
+        phys = np.full(n, -1)
         if sel.size:
             t1 = time.perf_counter()
-            summary = _transient(model_values, contact, friction_law, point_params, sel, options)
+            df = _core.describing_function(base, "bilateral", friction_law, names, values[sel], "consistent",
+                                           150.0, 3000.0, int(options.get("tidf_grid", 1000)), threads)
             wall[sel] += (time.perf_counter() - t1) / sel.size
-            regime, status, why, decided = _classify(summary, lin["stable"][sel], float(options.get("t_max", T_MAX)))
-            out["regime"][sel] = regime
-            out["status"][sel] = status
-            reason[sel] = why
-            out["decided_by"][sel] = decided
-            periodic = np.isin(regime, [REGIME["self_excited"], REGIME["contact_loss"], REGIME["stick_slip"]])
-            for key, src in (("z1_amplitude", "z1_amp"), ("z2_amplitude", "z2_amp"), ("phi1_amplitude", "phi1_amp"),
-                             ("fraction_off_disk", "fraction_off_disk")):  # fmt: skip
-                out[key][sel] = np.where(periodic, summary[src], np.nan)
-            out["cycle_omega"][sel] = np.where(periodic, summary["omega"], np.nan)
-            out["min_normal_force"][sel] = summary["min_normal_force"]
-            out["min_slip_velocity"][sel] = summary["min_slip_velocity"]
-            out["n_rhs"][sel] = summary["n_rhs"]
+            out["tidf_roots"][sel] = df["n_roots"]
+            iters = np.where(df["newton_iterations"] > 0, df["newton_iterations"], 0).sum(axis=1)
+            out["newton_iterations"][sel] += iters
+            for j, i in enumerate(sel):
+                k = np.flatnonzero(df["physical"][j] == 1)
+                if df["status"][j] != STATUS["success"]:
+                    to_transient[i] = method == "auto"
+                    reason[i] = f"describing function failed: {STATUS_NAMES[df['status'][j]]}"
+                    continue
+                if k.size:
+                    phys[i] = k[0]
+                    out["tidf_omega"][i] = df["omega"][j, k[0]]
+                    out["tidf_a1"][i] = df["A1"][j, k[0]]
+                    out["tidf_contact_opens"][i] = df["contact_opens"][j, k[0]]
+                if stable[i]:
+                    out["decided_by"][i] = DECIDED_BY["tidf"]
+                    if k.size and disturbance * SHOOT_MARGIN >= out["tidf_a1"][i] and method == "auto":
+                        phys[i] = -2 - k[0]  # mark for shooting: the disturbance is near the saddle
+                    elif df["search_outcome"][j] == "below_resolution":
+                        reason[i] = "near a Hopf point: the describing function is below resolution"
+                elif k.size and method in ("tidf", "shooting") and not out["tidf_contact_opens"][i]:
+                    out["regime"][i] = REGIME["self_excited"]
+                    out["decided_by"][i] = DECIDED_BY["tidf"]
+                    out["cycle_omega"][i] = out["tidf_omega"][i]
+                    out["z1_amplitude"][i] = out["tidf_a1"][i]
+                    out["z2_amplitude"][i] = df["A2"][j, k[0]]
+                    out["phi1_amplitude"][i] = df["phi1_amp"][j, k[0]]
+                    reason[i] = "cycle predicted by the describing function"
+                elif method in ("tidf", "shooting"):
+                    reason[i] = "sliding unstable; no describing-function cycle within the law's validity"
+            # Stage 3: shooting where the describing function's error matters.
+            shoot = [i for i in range(n) if phys[i] <= -2 or (method == "shooting" and phys[i] >= 0)]
+            for i in shoot:
+                j = int(np.searchsorted(sel, i))
+                k = -2 - phys[i] if phys[i] <= -2 else phys[i]
+                pv = dict(base, **{nm: float(values[i, c]) for c, nm in enumerate(names)})
+                root = np.array([df[v][j, k] for v in ("omega", "A0", "A1", "A2", "theta")])
+                t2 = time.perf_counter()
+                orb = _core.periodic_orbit(pv, "bilateral", friction_law, root=root, rtol=1e-10, tol=1e-8)
+                wall[i] += time.perf_counter() - t2
+                out["newton_iterations"][i] += orb["newton_iterations"]
+                out["n_rhs"][i] += orb["n_rhs"]
+                if orb["status"] != STATUS["success"]:
+                    if method == "auto":
+                        to_transient[i] = True
+                        reason[i] = f"shooting from the describing-function root failed: {STATUS_NAMES[orb['status']]}"
+                    continue
+                out["orbit_a1"][i] = orb["A1"]
+                out["orbit_stable"][i] = int(orb["stable"])
+                out["tidf_a1_error"][i] = out["tidf_a1"][i] / orb["A1"] - 1
+                if stable[i]:
+                    if disturbance < orb["A1"]:
+                        out["decided_by"][i] = DECIDED_BY["shooting"]
+                        reason[i] = ""
+                    elif method == "auto":
+                        to_transient[i] = True
+                        reason[i] = "the disturbance reaches the saddle cycle: integrated"
+
+    # Stage 4: transient integration where the cheaper models cannot decide.
+    if method == "auto":
+        to_transient |= ~lin_failed & ~stable
+    sel = np.flatnonzero(to_transient)
+    if sel.size:
+        y0s = np.tile(y0, (sel.size, 1))
+        if method == "auto":
+            unstable = ~stable[sel]
+            z_st = _static_penetration(full, sel)
+            zd = float(options.get("unstable_disturbance", 1.0))
+            if unstable.any():
+                y0s[unstable] = _mode_start(full, friction_law, sel[unstable], zd * np.abs(z_st[unstable]))
+        t1 = time.perf_counter()
+        summary = _transient(model_values, contact, friction_law, point_params, sel, options, y0s)
+        wall[sel] += (time.perf_counter() - t1) / sel.size
+        regime, status, why, decided = _classify(summary, stable[sel], float(options.get("t_max", T_MAX)))
+        out["regime"][sel] = regime
+        out["status"][sel] = status
+        reason[sel] = np.where(why != "", why, reason[sel].astype(str))
+        out["decided_by"][sel] = decided
+        periodic = np.isin(regime, [REGIME["self_excited"], REGIME["contact_loss"], REGIME["stick_slip"]])
+        for key, src in (("z1_amplitude", "z1_amp"), ("z2_amplitude", "z2_amp"), ("phi1_amplitude", "phi1_amp"),
+                         ("fraction_off_disk", "fraction_off_disk")):  # fmt: skip
+            out[key][sel] = np.where(periodic, summary[src], np.nan)
+        out["cycle_omega"][sel] = np.where(periodic, summary["omega"], np.nan)
+        out["min_normal_force"][sel] = summary["min_normal_force"]
+        out["min_slip_velocity"][sel] = summary["min_slip_velocity"]
+        out["n_rhs"][sel] += np.asarray(summary["n_rhs"], dtype=np.int64)
+
+    # Stage 5 (auto): bistability where a saddle cycle surrounds stable sliding. A unilateral run
+    # started outside the saddle (on the torsion mode, |z| = 1.5 A1 of the saddle) either returns to
+    # sliding or settles on a stable cycle that coexists with it.
+    if method == "auto" and options.get("check_bistability", True):
+        cand = np.flatnonzero(stable & (out["regime"] == REGIME["steady_sliding"]) & np.isfinite(out["tidf_a1"]))
+        out["bistable"][stable & ~lin_failed] = 0
+        if cand.size:
+            amp = np.where(np.isfinite(out["orbit_a1"][cand]), out["orbit_a1"][cand], out["tidf_a1"][cand])
+            y0b = _mode_start(full, friction_law, cand, 1.5 * amp)
+            t1 = time.perf_counter()
+            summ = _transient(model_values, "unilateral", friction_law, point_params, cand, options, y0b)
+            wall[cand] += (time.perf_counter() - t1) / cand.size
+            out["n_rhs"][cand] += np.asarray(summ["n_rhs"], dtype=np.int64)
+            cyc = np.array([OUTCOME_NAMES[o] == "periodic" for o in summ["outcome"]])
+            out["bistable"][cand] = cyc.astype(np.int8)
+            for j, i in enumerate(cand):
+                if cyc[j]:
+                    out["cycle_omega"][i] = summ["omega"][j]
+                    out["z1_amplitude"][i] = summ["z1_amp"][j]
+                    out["z2_amplitude"][i] = summ["z2_amp"][j]
+                    out["phi1_amplitude"][i] = summ["phi1_amp"][j]
+                    out["fraction_off_disk"][i] = summ["fraction_off_disk"][j]
+                    reason[i] = "bistable: a stable cycle coexists (reached from outside the saddle); amplitudes are its"
 
     # Wear (MODEL.md §8): only in the mild (steady-sliding) regime.
     mild = out["regime"] == REGIME["steady_sliding"]

@@ -414,6 +414,8 @@ def sweep(
     atol: float | Sequence[float] | None = None,
     periodic_tol: float = 1e-5,
     decay_amplitude: float | None = None,
+    check_bistability: bool = True,
+    unstable_disturbance: float = 1.0,
     command: str | None = None,
 ) -> xr.Dataset:
     """Map the slider's regime over normal load x arm length x sliding speed (x extra axes).
@@ -438,9 +440,12 @@ def sweep(
         ``{"mu": [0.2, 0.25, 0.3]}`` (units of ``tribosweep._model.PARAM_UNITS``).
     method : {"auto", "linear", "transient", "tidf", "shooting"}
         ``linear``: eigenvalues only (an unstable point is ``unstable_undetermined``);
-        ``transient``: run every point to its steady state from ``disturbance``; ``auto``: the
-        eigenvalues, then the transient where sliding is unstable. ``tidf`` and ``shooting`` are
-        not available yet (``NotImplementedError``).
+        ``tidf``: eigenvalues, then the describing function at every point; ``shooting``: also the
+        periodic orbit of every physical root; ``transient``: run every point to its steady state
+        from ``disturbance``; ``auto``: each point gets the cheapest model that decides it
+        (eigenvalues; the describing function at stable points; shooting where the disturbance
+        nears the saddle cycle; a transient where sliding is unstable or the others cannot
+        decide), see ``tribosweep._chunk``.
     output : path-like, optional
         netCDF file to write (through ``<output>.tmp``); finished chunks are kept in
         ``<output>.parts/`` until it is complete. Without it the Dataset is built in memory.
@@ -474,6 +479,12 @@ def sweep(
         Integration tolerances (as in :func:`tribosweep.simulate`).
     periodic_tol : float
         Relative repetition tolerance that declares a cycle.
+    check_bistability : bool
+        ``auto``: at stable points with a saddle cycle, run a unilateral transient from outside the
+        saddle to see whether a stable cycle coexists with sliding (``bistable``).
+    unstable_disturbance : float
+        ``auto``: transients of linearly unstable points start on the unstable mode with
+        ``|z| = unstable_disturbance |z_st|``.
     decay_amplitude : float, m, optional
         Amplitude below which a motion counts as decayed (default ``1e-3 |z_st|``).
     command : str, optional
@@ -544,6 +555,8 @@ def sweep(
         "atol": None if atol_arr is None else atol_arr.tolist(),
         "periodic_tol": _checks.positive("periodic_tol", periodic_tol),
         "decay_amplitude": None if decay_amplitude is None else _checks.positive("decay_amplitude", decay_amplitude),
+        "check_bistability": bool(check_bistability),
+        "unstable_disturbance": _checks.positive("unstable_disturbance", unstable_disturbance),
         "y0": _disturbance(disturbance).tolist(),
         "wear": {
             "normal_load": wear_reference.normal_load,
