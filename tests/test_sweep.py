@@ -525,3 +525,18 @@ def test_auto_agrees_with_transient_where_the_transient_settles():
     cheap = (lean.decided_by.values.ravel() != _chunk.DECIDED_BY["transient"]) & (lean.regime.values.ravel() != REGIME["unstable_undetermined"])
     assert np.all(lean.n_rhs.values.ravel()[cheap] == 0) and np.all(full.n_rhs.values.ravel()[cheap] > 10_000)
     assert lean.n_rhs.values.sum() < full.n_rhs.values.sum()
+
+
+@requires_driver
+def test_points_that_differ_only_in_speed_share_their_dynamics_exactly():
+    # Constant friction: V only shifts v_r. The sweep computes the dynamics once per (load, arm)
+    # and must give the same numbers as separate single-speed sweeps.
+    kw = dict(normal_load=[8.0, 84.46], method="auto", progress=False, check_bistability=False, t_max=20.0)
+    both = ts.sweep(sliding_speed=[0.3, 0.6], **kw)
+    for j, v in enumerate([0.3, 0.6]):
+        one = ts.sweep(sliding_speed=[v], **kw)
+        for name in ("regime", "cycle_omega", "z1_amplitude", "min_slip_velocity", "growth_rate", "n_rhs"):
+            np.testing.assert_array_equal(both[name].values[:, :, j], one[name].values[:, :, 0], err_msg=name)
+    # The cycle at 8 N slides at V - max(xd + s L phid): the shift is exactly the speed difference.
+    d = both.min_slip_velocity.values[0, 0, 1] - both.min_slip_velocity.values[0, 0, 0]
+    assert d == pytest.approx(0.3, abs=1e-12)

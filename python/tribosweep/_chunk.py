@@ -425,50 +425,13 @@ def _transient(model_values, contact, friction_law, point_params, sel, options, 
     )  # fmt: skip
 
 
-def compute_chunk(
-    model_values: dict,
-    contact: str,
-    friction_law: str,
-    point_params: dict[str, np.ndarray],
-    method: str,
-    options: dict,
-) -> dict[str, np.ndarray]:
-    """Compute one chunk of sweep points: pure, deterministic, picklable.
-
-    Parameters
-    ----------
-    model_values : dict of str to float
-        Base parameters (``SliderModel.values()``, SI units).
-    contact : {"bilateral", "unilateral"}
-        Contact model of the transient runs.
-    friction_law : {"constant", "coulomb"}
-        Friction law.
-    point_params : dict of str to 1-D numpy.ndarray
-        Per-point overrides of real SliderModel fields, all of length ``n``.
-    method : {"auto", "linear", "transient"}
-        Analysis method (see the module docstring).
-    options : dict
-        Plain data: ``t_max`` [s], ``integrator``, ``rtol``, ``atol``, ``periodic_tol``,
-        ``decay_amplitude`` [m], ``y0`` (initial disturbance, 6 values), ``threads``, and ``wear``
-        (``{"normal_load": N, "sliding_speed": m/s, "frequency_hz": Hz}`` of the reference point,
-        optional ``"calibration"``: ``WearCalibration.as_dict()``).
-
-    Returns
-    -------
-    dict of str to numpy.ndarray
-        The per-point variables of ``POINT_VARIABLES`` (and ``wear_rate`` when calibrated), each
-        of length ``n``.
-    """
-    if method not in IMPLEMENTED_METHODS:
-        raise NotImplementedError(f"method = {method!r} is not available: use one of {IMPLEMENTED_METHODS}")
-    from . import _wear  # _wear imports this module for its normal-mode frequency
-
+def _dynamics(model_values, contact, friction_law, point_params, method, options, *, n_points: int) -> dict:
+    """Regime and cycle of each point by the staged models (everything but wear)."""
+    n = n_points
     full = {k: np.asarray(v, dtype=np.float64) for k, v in model_values.items()}
-    n = len(next(iter(point_params.values())))
     for k, a in point_params.items():
         full[k] = np.asarray(a, dtype=np.float64)
-    wear = options.get("wear") or {}
-    out = empty_result(n, wear_rate=bool(wear.get("calibration")))
+    out = empty_result(n)
     reason = np.full(n, "", dtype=object)
     base = {k: float(v) for k, v in model_values.items()}
     names = sorted(point_params)
@@ -618,6 +581,87 @@ def compute_chunk(
                     out["fraction_off_disk"][i] = summ["fraction_off_disk"][j]
                     reason[i] = "bistable: a stable cycle coexists (reached from outside the saddle); amplitudes are its"
 
+    out["wall_time"] = wall
+    out["reason"] = reason.astype(str)
+    return out
+
+
+def compute_chunk(
+    model_values: dict,
+    contact: str,
+    friction_law: str,
+    point_params: dict[str, np.ndarray],
+    method: str,
+    options: dict,
+) -> dict[str, np.ndarray]:
+    """Compute one chunk of sweep points: pure, deterministic, picklable.
+
+    Parameters
+    ----------
+    model_values : dict of str to float
+        Base parameters (``SliderModel.values()``, SI units).
+    contact : {"bilateral", "unilateral"}
+        Contact model of the transient runs.
+    friction_law : {"constant", "coulomb"}
+        Friction law.
+    point_params : dict of str to 1-D numpy.ndarray
+        Per-point overrides of real SliderModel fields, all of length ``n``.
+    method : {"auto", "linear", "transient"}
+        Analysis method (see the module docstring).
+    options : dict
+        Plain data: ``t_max`` [s], ``integrator``, ``rtol``, ``atol``, ``periodic_tol``,
+        ``decay_amplitude`` [m], ``y0`` (initial disturbance, 6 values), ``threads``, and ``wear``
+        (``{"normal_load": N, "sliding_speed": m/s, "frequency_hz": Hz}`` of the reference point,
+        optional ``"calibration"``: ``WearCalibration.as_dict()``).
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        The per-point variables of ``POINT_VARIABLES`` (and ``wear_rate`` when calibrated), each
+        of length ``n``.
+    """
+    if method not in IMPLEMENTED_METHODS:
+        raise NotImplementedError(f"method = {method!r} is not available: use one of {IMPLEMENTED_METHODS}")
+    from . import _wear  # _wear imports this module for its normal-mode frequency
+
+    full = {k: np.asarray(v, dtype=np.float64) for k, v in model_values.items()}
+    n = len(next(iter(point_params.values())))
+    for k, a in point_params.items():
+        full[k] = np.asarray(a, dtype=np.float64)
+    wear = options.get("wear") or {}
+
+    # With the constant friction law the sliding speed enters neither the equations nor the
+    # static point: it only shifts the sliding velocity v_r = V - (xd + s L phid). Points that differ
+    # only in V share their dynamics, computed once (in a load x arm x speed sweep this divides the
+    # work by the number of speeds); min_slip_velocity is then shifted by V - V_rep and the
+    # stick-slip test redone.
+    keys = sorted(point_params)
+    shared = [k for k in keys if not (friction_law == "constant" and k == "sliding_speed")]
+    if len(shared) < len(keys) and n > 1:
+        rows = np.column_stack([np.asarray(point_params[k], dtype=np.float64) for k in shared]) if shared else np.zeros((n, 1))
+        _, first, inverse = np.unique(rows, axis=0, return_index=True, return_inverse=True)
+        inverse = inverse.ravel()
+        sub = {k: np.asarray(point_params[k], dtype=np.float64)[first] for k in keys}
+        uniq = _dynamics(model_values, contact, friction_law, sub, method, options, n_points=first.size)
+        out = {k: v[inverse] for k, v in uniq.items()}
+        v_rep = np.asarray(point_params["sliding_speed"], dtype=np.float64)[first][inverse]
+        dv = np.asarray(point_params["sliding_speed"], dtype=np.float64) - v_rep
+        out["min_slip_velocity"] = out["min_slip_velocity"] + dv
+        cyc = np.isin(out["regime"], [REGIME["self_excited"], REGIME["contact_loss"], REGIME["stick_slip"]])
+        off = np.nan_to_num(out["fraction_off_disk"]) > 0
+        out["regime"] = np.where(
+            cyc & ~(out["min_slip_velocity"] > 0), REGIME["stick_slip"],
+            np.where(cyc & off, REGIME["contact_loss"], np.where(cyc, REGIME["self_excited"], out["regime"])),
+        ).astype(np.uint8)  # fmt: skip
+        # Work done once is shared evenly among the points that share it.
+        share = np.bincount(inverse)[inverse]
+        out["wall_time"] = out["wall_time"] / share
+    else:
+        out = _dynamics(model_values, contact, friction_law, point_params, method, options, n_points=n)
+    out = {k: v.copy() for k, v in out.items()}
+    if wear.get("calibration"):
+        out.update({k: np.full(n, np.nan) for k in OPTIONAL_POINT_VARIABLES})
+
     # Wear (MODEL.md §8): only in the mild (steady-sliding) regime.
     mild = out["regime"] == REGIME["steady_sliding"]
     undetermined = out["regime"] == REGIME["failed"]
@@ -635,6 +679,4 @@ def compute_chunk(
                 calibration, full["normal_load"], full["sliding_speed"], out["normal_mode_frequency"]
             )
             out["wear_rate"] = np.where(mild, np.broadcast_to(absolute, (n,)), np.nan)
-    out["wall_time"] = wall
-    out["reason"] = reason.astype(str)
     return out
