@@ -143,6 +143,14 @@ def test_seed_report_table_is_computed(tmp_path):
     assert "| describing function, this reading | 647.559 | 0.958 | 21.524 | 5.175 | 251.13 |" in md
     assert "| shooting orbit, bilateral (unstable; contact open 26%) | 647.573 |" in md
     assert "24.904 N" in md
+    # The README shows the same table, computed by the code.
+    import pathlib
+
+    readme = (pathlib.Path(__file__).resolve().parents[1] / "README.md").read_text()
+    table = [line for line in md.splitlines() if line.startswith("| ")]
+    assert len(table) == 7
+    for line in table:
+        assert line in readme, f"README table row differs from the computed one: {line}"
 
 
 @pytest.mark.parametrize(
