@@ -408,117 +408,32 @@ where
         // ---- events on the accepted step ----
         let dense = st.dense(sys, mode, t, h, &y, &y_new);
         let mut g1 = [0.0; MAX_EVENTS];
-        let mut found: [Option<Found<N, S::Mode>>; MAX_EVENTS] = [None; MAX_EVENTS];
-        let mut n_found = 0;
-        let pend_before = pend;
-        let mut t_check = [f64::NEG_INFINITY; MAX_EVENTS];
+        let mut busy = false;
         if n_ev > 0 {
             sys.events(t_new, &y_new, mode, &mut g1);
-            let mut gbuf = [0.0; MAX_EVENTS];
-            let mut g_at = |i: usize, tt: f64| {
-                let yy = dense.eval(tt);
-                sys.events(tt, &yy, mode, &mut gbuf);
-                gbuf[i]
-            };
             for i in 0..n_ev {
-                let (ta, ga) = match pend[i] {
-                    None => (t, g0[i]),
-                    Some(ts) => {
-                        let tc = (ts + opts.event_guard).max(t + 1e-6 * (t_new - t));
-                        t_check[i] = tc;
-                        if tc >= t_new {
-                            continue;
-                        }
-                        let gc = g_at(i, tc);
-                        if gc == 0.0 || gc.is_nan() {
-                            if g1[i] != 0.0 {
-                                pend[i] = None;
-                            }
-                            continue;
-                        }
-                        pend[i] = None;
-                        (tc, gc)
-                    }
-                };
-                if crosses(ga, g1[i]) {
-                    let te = locate(|tt| g_at(i, tt), ta, ga, t_new, g1[i], opts.event_tol);
-                    found[n_found] = Some(Found { t: te, index: i, y: y_new, action: EventAction::Continue });
-                    n_found += 1;
-                }
-            }
-            // Time order (ties by index); at most MAX_EVENTS entries: insertion sort.
-            for a in 1..n_found {
-                let mut b = a;
-                while b > 0 && found[b - 1].map(|e| e.t) > found[b].map(|e| e.t) {
-                    found.swap(b - 1, b);
-                    b -= 1;
-                }
+                busy |= pend[i].is_some() || crosses(g0[i], g1[i]);
             }
         }
-
-        // Actions in time order, up to the first truncating one.
-        let mut n_proc = 0;
-        let mut trunc = false;
-        for slot in found.iter_mut().take(n_found) {
-            let e = slot.as_mut().expect("filled above");
-            if e.t < t_new {
-                e.y = dense.eval(e.t);
-            }
-            e.action = event_action(sys, e.t, &e.y, mode, e.index);
-            n_proc += 1;
-            if !matches!(e.action, EventAction::Continue) {
-                trunc = true;
-                break;
-            }
-        }
-        let (t1, y1) = if trunc {
-            let e = found[n_proc - 1].expect("filled above");
-            (e.t, e.y)
+        let ev = if busy {
+            step_events(sys, obs, opts, &mut stats, &dense, mode, (t, &y), (t_new, &y_new), n_ev, &g0, &g1, &mut pend)
         } else {
-            (t_new, y_new)
+            // The common step: no crossing, nothing pending.
+            let view = StepView { t0: t, t1: t_new, y0: &y, y1: &y_new, mode, dense: &dense };
+            let end = if obs.on_step(&view) == Control::Stop { Some(Outcome::StoppedByObserver) } else { None };
+            StepEnd { t1: t_new, y1: y_new, new_mode: mode, end, switched: None }
         };
-
-        let mut end = None;
-        let mut new_mode = mode;
-        let view = StepView { t0: t, t1, y0: &y, y1: &y1, mode, dense: &dense };
-        if obs.on_step(&view) == Control::Stop {
-            end = Some(Outcome::StoppedByObserver);
-        } else {
-            for e in found.iter().take(n_proc).flatten() {
-                stats.n_events += 1;
-                if stats.n_events > opts.max_events {
-                    end = Some(Outcome::EventChatter);
-                    break;
-                }
-                let after = match e.action {
-                    EventAction::Switch(m) => m,
-                    _ => mode,
-                };
-                let c = obs.on_event(e.index, e.t, &e.y, mode, after);
-                new_mode = after;
-                if matches!(e.action, EventAction::Stop) {
-                    end = Some(Outcome::StoppedByEvent);
-                }
-                if c == Control::Stop {
-                    end = Some(Outcome::StoppedByObserver);
-                }
-                if end.is_some() {
-                    break;
-                }
-            }
-        }
         stats.n_rhs += dense.extra_rhs();
         drop(dense);
-        if let Some(outcome) = end {
-            done!(t1, y1, new_mode, outcome);
+        if let Some(outcome) = ev.end {
+            done!(ev.t1, ev.y1, ev.new_mode, outcome);
         }
 
-        if trunc {
+        if let Some(sw) = ev.switched {
             // Restart at the event in the new mode: fresh derivative, fresh event values.
-            let e = found[n_proc - 1].expect("filled above");
-            t = t1;
-            y = y1;
-            mode = new_mode;
+            t = ev.t1;
+            y = ev.y1;
+            mode = ev.new_mode;
             f = sys.rhs(t, &y, mode);
             stats.n_rhs += 1;
             if !all_finite(&f) {
@@ -526,10 +441,10 @@ where
             }
             sys.events(t, &y, mode, &mut g0);
             for i in 0..n_ev {
-                pend[i] = match pend_before[i] {
+                pend[i] = match sw.pend_before[i] {
                     // Still inside its own guard window: stays pending from the same origin.
-                    Some(ts) if t <= t_check[i] => Some(ts),
-                    _ if i == e.index || g0[i] == 0.0 => Some(t),
+                    Some(ts) if t <= sw.t_check[i] => Some(ts),
+                    _ if i == sw.index || g0[i] == 0.0 => Some(t),
                     _ => None,
                 };
             }
@@ -551,6 +466,159 @@ where
         st.begin(sys, mode, t, &y, &f, &mut stats);
         h = h_next;
     }
+}
+
+/// How an accepted step ended, as the driver continues from it.
+struct StepEnd<const N: usize, M> {
+    /// End of the step as the observer saw it (an event time if truncated).
+    t1: f64,
+    y1: SVector<f64, N>,
+    /// Mode from here on.
+    new_mode: M,
+    /// The run ends here.
+    end: Option<Outcome>,
+    /// A `Switch` truncated the step: restart there.
+    switched: Option<Switched>,
+}
+
+/// What a restart after a `Switch` needs to set the pending events.
+struct Switched {
+    /// The event that switched.
+    index: usize,
+    /// Pending state of every event at the start of the truncated step.
+    pend_before: [Option<f64>; MAX_EVENTS],
+    /// Check times of the events pending in that step (`-inf` for the others).
+    t_check: [f64; MAX_EVENTS],
+}
+
+/// Locate, act on and report the events of an accepted step `[t, t_new]` in which some event
+/// function changed sign or was pending; calls the observer for the (possibly truncated) step and
+/// its events. Out of line: most steps have no event, and keeping this off the step loop keeps
+/// that loop small.
+#[inline(never)]
+#[allow(clippy::too_many_arguments)]
+fn step_events<const N: usize, S, O, D>(
+    sys: &S,
+    obs: &mut O,
+    opts: &Options<N>,
+    stats: &mut Stats,
+    dense: &D,
+    mode: S::Mode,
+    (t, y): (f64, &SVector<f64, N>),
+    (t_new, y_new): (f64, &SVector<f64, N>),
+    n_ev: usize,
+    g0: &[f64; MAX_EVENTS],
+    g1: &[f64; MAX_EVENTS],
+    pend: &mut [Option<f64>; MAX_EVENTS],
+) -> StepEnd<N, S::Mode>
+where
+    S: OdeSystem<N>,
+    O: Observer<N, S::Mode>,
+    D: StepDense<N>,
+{
+    let mut found: [Option<Found<N, S::Mode>>; MAX_EVENTS] = [None; MAX_EVENTS];
+    let mut n_found = 0;
+    let pend_before = *pend;
+    let mut t_check = [f64::NEG_INFINITY; MAX_EVENTS];
+    let mut gbuf = [0.0; MAX_EVENTS];
+    let mut g_at = |i: usize, tt: f64| {
+        let yy = dense.eval(tt);
+        sys.events(tt, &yy, mode, &mut gbuf);
+        gbuf[i]
+    };
+    for i in 0..n_ev {
+        let (ta, ga) = match pend[i] {
+            None => (t, g0[i]),
+            Some(ts) => {
+                let tc = (ts + opts.event_guard).max(t + 1e-6 * (t_new - t));
+                t_check[i] = tc;
+                if tc >= t_new {
+                    continue;
+                }
+                let gc = g_at(i, tc);
+                if gc == 0.0 || gc.is_nan() {
+                    if g1[i] != 0.0 {
+                        pend[i] = None;
+                    }
+                    continue;
+                }
+                pend[i] = None;
+                (tc, gc)
+            }
+        };
+        if crosses(ga, g1[i]) {
+            let te = locate(|tt| g_at(i, tt), ta, ga, t_new, g1[i], opts.event_tol);
+            found[n_found] = Some(Found { t: te, index: i, y: *y_new, action: EventAction::Continue });
+            n_found += 1;
+        }
+    }
+    // Time order (ties by index); at most MAX_EVENTS entries: insertion sort.
+    for a in 1..n_found {
+        let mut b = a;
+        while b > 0 && found[b - 1].map(|e| e.t) > found[b].map(|e| e.t) {
+            found.swap(b - 1, b);
+            b -= 1;
+        }
+    }
+
+    // Actions in time order, up to the first truncating one.
+    let mut n_proc = 0;
+    let mut trunc = false;
+    for slot in found.iter_mut().take(n_found) {
+        let e = slot.as_mut().expect("filled above");
+        if e.t < t_new {
+            e.y = dense.eval(e.t);
+        }
+        e.action = event_action(sys, e.t, &e.y, mode, e.index);
+        n_proc += 1;
+        if !matches!(e.action, EventAction::Continue) {
+            trunc = true;
+            break;
+        }
+    }
+    let (t1, y1) = if trunc {
+        let e = found[n_proc - 1].expect("filled above");
+        (e.t, e.y)
+    } else {
+        (t_new, *y_new)
+    };
+
+    let mut end = None;
+    let mut new_mode = mode;
+    let view = StepView { t0: t, t1, y0: y, y1: &y1, mode, dense };
+    if obs.on_step(&view) == Control::Stop {
+        end = Some(Outcome::StoppedByObserver);
+    } else {
+        for e in found.iter().take(n_proc).flatten() {
+            stats.n_events += 1;
+            if stats.n_events > opts.max_events {
+                end = Some(Outcome::EventChatter);
+                break;
+            }
+            let after = match e.action {
+                EventAction::Switch(m) => m,
+                _ => mode,
+            };
+            let c = obs.on_event(e.index, e.t, &e.y, mode, after);
+            new_mode = after;
+            if matches!(e.action, EventAction::Stop) {
+                end = Some(Outcome::StoppedByEvent);
+            }
+            if c == Control::Stop {
+                end = Some(Outcome::StoppedByObserver);
+            }
+            if end.is_some() {
+                break;
+            }
+        }
+    }
+    let switched = if trunc && end.is_none() {
+        let index = found[n_proc - 1].expect("filled above").index;
+        Some(Switched { index, pend_before, t_check })
+    } else {
+        None
+    };
+    StepEnd { t1, y1, new_mode, end, switched }
 }
 
 /// Small systems with known solutions, shared by the integrator tests.
