@@ -123,7 +123,8 @@ pub(crate) trait Stepper<const N: usize, S: OdeSystem<N>> {
 /// The last step lands exactly on `t_end`. Events, observer and outcomes as described in the
 /// module documentation; a failure is reported in [`Solution::outcome`], never by a panic.
 /// Integration backwards in time is not supported: `t_end < t0` returns at once with
-/// `Outcome::StepTooSmall`; `t_end == t0` returns `Finished` without a step.
+/// `Outcome::StepTooSmall`; `t_end == t0` returns `Finished` without a step. A non-positive
+/// `opts.h_max` means no limit; only the first [`super::MAX_EVENTS`] event functions are watched.
 pub fn integrate<const N: usize, S: OdeSystem<N>, O: Observer<N, S::Mode>>(
     sys: &S,
     method: Method,
