@@ -347,8 +347,9 @@ def _run_bench(args: argparse.Namespace) -> int:
     n_fail = sum(r["failed"] for r in rows)
     print(f"{len(rows)} rungs measured ({n_fail} failed) in {payload['meta']['seconds']:.0f} s")
     for q in speed_ratios(rows, MATCHED_ERRORS):
-        print(f"  {q['scene']:<16} error {q['error']:.0e}: {q['rust_label']} {q['ratio']:.3g}x faster than "
-              f"{q['baseline_label']}")  # fmt: skip
+        r = q["ratio"]
+        speed = f"{r:.3g}x faster than" if r >= 1 else f"{1 / r:.3g}x slower than"
+        print(f"  {q['scene']:<16} error {q['error']:.0e}: {q['rust_label']} {speed} {q['baseline_label']}")
     for name in ("summary", "csv", "json", "docs"):
         if name in payload["files"]:
             print(f"{name}: {payload['files'][name]}")
