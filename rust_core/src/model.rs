@@ -328,6 +328,8 @@ pub struct Slider {
     torque_gain: f64,
     /// mu(V) F_st sgn_eps(V): static friction force removed from the dynamic one [N]
     static_friction: f64,
+    /// 1/m, so the hot right-hand side multiplies instead of dividing.
+    inv_mass: f64,
 }
 
 /// Forces at one state: the pieces every consumer (RHS, observers, summaries) needs.
@@ -353,7 +355,15 @@ impl Slider {
         let z_st = p.static_penetration();
         let k_s = p.dynamic_contact_stiffness();
         let mu_k = p.mu_kinetic();
-        let mut s = Slider { p, z_st, k_s, mu_k, torque_gain: p.torsion_sign * p.moment_arm / p.inertia, static_friction: 0.0 };
+        let mut s = Slider {
+            p,
+            z_st,
+            k_s,
+            mu_k,
+            torque_gain: p.torsion_sign * p.moment_arm / p.inertia,
+            static_friction: 0.0,
+            inv_mass: 1.0 / p.mass,
+        };
         s.static_friction = s.mu_of(p.sliding_speed) * p.normal_load * s.sgn_eps(p.sliding_speed);
         Ok(s)
     }
@@ -416,7 +426,7 @@ impl Slider {
     }
 
     /// Forces at state `y` in contact mode `mode`.
-    #[inline]
+    #[inline(always)]
     pub fn forces(&self, y: &State, mode: ContactMode) -> Forces {
         let p = &self.p;
         let f_law = self.dynamic_law_force(y);
@@ -428,19 +438,26 @@ impl Slider {
         let v_r = self.slip_velocity(y);
         let friction = match p.friction_law {
             FrictionLaw::Constant => p.mu * f_z,
-            FrictionLaw::Coulomb => self.mu_of(v_r) * normal * self.sgn_eps(v_r) - self.static_friction,
+            FrictionLaw::Coulomb => self.coulomb_friction(v_r, normal),
         };
         Forces { normal, normal_law, friction, slip_velocity: v_r }
     }
 
+    /// Regularised Coulomb/Stribeck friction force; out of line so that the constant law's hot
+    /// path stays small (exp and tanh are not needed there).
+    #[inline(never)]
+    fn coulomb_friction(&self, v_r: f64, normal: f64) -> f64 {
+        self.mu_of(v_r) * normal * self.sgn_eps(v_r) - self.static_friction
+    }
+
     /// Right-hand side `dy/dt` in contact mode `mode` (MODEL.md §2).
-    #[inline]
+    #[inline(always)]
     pub fn rhs(&self, y: &State, mode: ContactMode) -> State {
         let p = &self.p;
         let f = self.forces(y, mode);
         let f_z = f.normal - p.normal_load;
         let (wz, wx, wt) = (p.omega_normal, p.omega_friction, p.omega_torsion);
-        let inv_m = 1.0 / p.mass;
+        let inv_m = self.inv_mass;
         State::new(
             y[1],
             f_z * inv_m - 2.0 * p.zeta_normal * wz * y[1] - wz * wz * y[0],
@@ -472,18 +489,13 @@ impl Slider {
                 };
                 let th = self.sgn_eps(v);
                 let eps = p.friction_regularization;
-                let dmu = match p.friction_law {
-                    FrictionLaw::Coulomb => {
-                        -(p.mu_static - self.mu_k) / p.stribeck_velocity
-                            * (-v.abs() / p.stribeck_velocity).exp()
-                            * v.signum()
-                    }
-                    FrictionLaw::Constant => 0.0,
-                };
+                let dmu = -(p.mu_static - self.mu_k) / p.stribeck_velocity
+                    * (-v.abs() / p.stribeck_velocity).exp()
+                    * v.signum();
                 let g = self.mu_of(v) * th;
                 let dg = dmu * th + self.mu_of(v) * (1.0 - th * th) / eps;
                 let mut d = dfz * g;
-                d[idx::XD] += normal * dg * -1.0;
+                d[idx::XD] -= normal * dg;
                 d[idx::PHID] += normal * dg * -(p.torsion_sign * p.moment_arm);
                 d
             }
@@ -522,7 +534,7 @@ pub mod event {
 impl OdeSystem<6> for Slider {
     type Mode = ContactMode;
 
-    #[inline]
+    #[inline(always)]
     fn rhs(&self, _t: f64, y: &State, mode: ContactMode) -> State {
         Slider::rhs(self, y, mode)
     }

@@ -582,6 +582,48 @@ fn describing_function<'py>(
     Ok(d)
 }
 
+/// Warm-started damped Newton solves of the describing-function equations for one parameter set,
+/// from each row of `guesses` (n, 5) = [w, A0, A1, A2, theta]. Returns roots, iterations, status,
+/// residual norms. (The benchmark's warm-start workload; sweeps use `describing_function`.)
+#[pyfunction]
+#[pyo3(signature = (values, friction_law, guesses, variant="consistent", threads=None))]
+fn tidf_solve<'py>(
+    py: Python<'py>,
+    values: HashMap<String, f64>,
+    friction_law: &str,
+    guesses: PyReadonlyArray2<'py, f64>,
+    variant: &str,
+    threads: Option<usize>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let p = params_from(&values, "bilateral", friction_law)?;
+    let s = Slider::new(p).map_err(CoreError::from)?;
+    let variant = variant_from(variant)?;
+    let g = guesses.as_array();
+    if g.ncols() != 5 {
+        return Err(CoreError(format!("guesses has {} columns: must be 5 ([w, A0, A1, A2, theta])", g.ncols())).into());
+    }
+    let rows: Vec<Unknowns> = (0..g.nrows()).map(|i| Unknowns::from_fn(|c, _| g[(i, c)])).collect();
+    let t = Tidf::new(&s, variant);
+    let opts = tidf::NewtonOptions::default();
+    let out: Vec<Option<tidf::NewtonResult>> = py.detach(|| par_map(&rows, threads, |x| Some(t.solve(x, &opts)), |_| None));
+    let n = out.len();
+    let mut x = Array2::<f64>::from_elem((n, 5), f64::NAN);
+    for (i, o) in out.iter().enumerate() {
+        if let Some(r) = o {
+            let c = tidf::canonical(&r.x);
+            for k in 0..5 {
+                x[(i, k)] = c[k];
+            }
+        }
+    }
+    let d = PyDict::new(py);
+    d.set_item("x", x.into_pyarray(py))?;
+    d.set_item("iterations", Array1::from_iter(out.iter().map(|o| o.map_or(0, |r| r.iterations))).into_pyarray(py))?;
+    d.set_item("status", Array1::from_iter(out.iter().map(|o| o.map_or(Status::Panic, |r| r.status).code())).into_pyarray(py))?;
+    d.set_item("residual", Array1::from_iter(out.iter().map(|o| o.map_or(f64::NAN, |r| r.residual_norm))).into_pyarray(py))?;
+    Ok(d)
+}
+
 fn orbit_dict<'py>(py: Python<'py>, o: &PeriodicOrbit) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     d.set_item("period", o.period)?;
@@ -682,5 +724,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(hopf_loads, m)?)?;
     m.add_function(wrap_pyfunction!(describing_function, m)?)?;
     m.add_function(wrap_pyfunction!(periodic_orbit, m)?)?;
+    m.add_function(wrap_pyfunction!(tidf_solve, m)?)?;
     Ok(())
 }
