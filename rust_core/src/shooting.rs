@@ -16,6 +16,12 @@
 //! by modulus; one of them is the trivial 1 of an autonomous system, and the orbit is stable when
 //! every other one has modulus below `1 - stability_tol`.
 //!
+//! **Hidden switches.** `ode::integrate` finds an event from the signs of its function at step
+//! ends, so a hop of the pin shorter than one step (the seed bouncing cycle has a 0.19 ms hop,
+//! about one DOP853 step at rtol 1e-8 to 1e-11) goes unseen and the run follows another orbit.
+//! Every step is therefore checked on 8 interior points of its dense output; a step that hides a
+//! switch is redone from its start with steps capped at a quarter of it (local refinement).
+//!
 //! The orbit is then sampled densely over one period (the 6-state integrated again, with the
 //! slider's own mode switching) for its harmonics, `z_max`, the fraction of the period with the
 //! contact open (`zc > 0`, from the located gap events) and the minimum normal force.
@@ -123,6 +129,42 @@ pub fn saltation(s: &Slider, y: &State, before: ContactMode, after: ContactMode,
     Jacobian::identity() + (fp - fm) * n.transpose() / n.dot(&fm)
 }
 
+/// A sign change of the gap or the law's normal force that the step-end test cannot see: the
+/// function leaves its sign and comes back inside one step (two crossings cancel in a sign-based
+/// locator). On the seed bouncing cycle a 0.19 ms hop is as long as one DOP853 step at rtol 1e-8 to
+/// 1e-11; missing it changes the dynamics (a different cycle). Checked on 8 interior points of the
+/// dense output; `gap_always` also flags gap excursions that switch nothing (the bilateral model,
+/// where they only matter for the open fraction). Returns the step length when one is found.
+fn missed_crossing<const N: usize>(s: &Slider, st: &StepView<'_, N, ContactMode>, gap_always: bool) -> Option<f64> {
+    const SUB: usize = 8;
+    let six = |y: &SVector<f64, N>| State::from_fn(|i, _| y[i]);
+    let g = |y: &State| [s.gap(y), s.p.normal_load + s.dynamic_law_force(y)];
+    let unilateral = s.p.contact == crate::model::ContactModel::Unilateral;
+    if !unilateral && !gap_always {
+        return None;
+    }
+    let (g0, g1) = (g(&six(st.y0)), g(&six(st.y1)));
+    let h = st.t1 - st.t0;
+    for k in 1..SUB {
+        let yk = six(&st.dense.eval(st.t0 + h * k as f64 / SUB as f64));
+        let gk = g(&yk);
+        for e in 0..2 {
+            let (a, b, c) = (g0[e] > 0.0, gk[e] > 0.0, g1[e] > 0.0);
+            if a != c || b == a {
+                continue;
+            }
+            let relevant = match e {
+                0 => unilateral || gap_always,
+                _ => unilateral && (st.mode == ContactMode::Contact || s.gap(&yk) <= 0.0),
+            };
+            if relevant {
+                return Some(h);
+            }
+        }
+    }
+    None
+}
+
 /// Stops a run at the first event that changes the mode.
 struct StopAtSwitch {
     hit: Option<(usize, ContactMode, ContactMode)>,
@@ -136,6 +178,133 @@ impl<const N: usize> Observer<N, ContactMode> for StopAtSwitch {
         } else {
             Control::Continue
         }
+    }
+}
+
+/// The slider starting in a given mode (a restart in the middle of a run keeps its mode).
+#[derive(Clone, Copy, Debug)]
+struct Forced<'a> {
+    slider: &'a Slider,
+    start: ContactMode,
+}
+
+impl OdeSystem<6> for Forced<'_> {
+    type Mode = ContactMode;
+
+    #[inline]
+    fn rhs(&self, _t: f64, y: &State, mode: ContactMode) -> State {
+        self.slider.rhs(y, mode)
+    }
+
+    fn initial_mode(&self, _t: f64, _y: &State) -> ContactMode {
+        self.start
+    }
+
+    fn n_events(&self) -> usize {
+        OdeSystem::<6>::n_events(self.slider)
+    }
+
+    #[inline]
+    fn events(&self, t: f64, y: &State, mode: ContactMode, g: &mut [f64; MAX_EVENTS]) {
+        OdeSystem::<6>::events(self.slider, t, y, mode, g);
+    }
+
+    fn on_event(&self, t: f64, y: &State, mode: ContactMode, index: usize) -> EventAction<ContactMode> {
+        OdeSystem::<6>::on_event(self.slider, t, y, mode, index)
+    }
+}
+
+/// Passes steps and events to `inner` unless a step hides a contact switch ([`missed_crossing`]);
+/// then it stops the run and keeps the step's start.
+struct Watched<'a, const N: usize, O> {
+    inner: &'a mut O,
+    slider: &'a Slider,
+    gap_always: bool,
+    missed: Option<(f64, f64, SVector<f64, N>, ContactMode)>,
+}
+
+impl<const N: usize, O: Observer<N, ContactMode>> Observer<N, ContactMode> for Watched<'_, N, O> {
+    fn on_step(&mut self, st: &StepView<'_, N, ContactMode>) -> Control {
+        if let Some(h) = missed_crossing(self.slider, st, self.gap_always) {
+            self.missed = Some((h, st.t0, *st.y0, st.mode));
+            return Control::Stop;
+        }
+        self.inner.on_step(st)
+    }
+
+    fn on_event(&mut self, index: usize, t: f64, y: &SVector<f64, N>, before: ContactMode, after: ContactMode) -> Control {
+        self.inner.on_event(index, t, y, before, after)
+    }
+}
+
+/// Step-size cap of a local refinement: steps at most `h` until time `until`.
+#[derive(Clone, Copy, Debug)]
+struct Cap {
+    until: f64,
+    h: f64,
+    refinements: u32,
+}
+
+impl Cap {
+    const NONE: Cap = Cap { until: f64::NEG_INFINITY, h: f64::INFINITY, refinements: 0 };
+    /// Most local refinements in one run.
+    const MAX: u32 = 200;
+}
+
+/// `ode::integrate` from `(t, y)` in mode `mode` to `t_end`, observed by `inner`, with local
+/// refinement: a step that hides a contact switch is thrown away and the run restarts at its start
+/// with steps capped at a quarter of it for two step lengths (repeatedly, if a smaller hop hides
+/// in a capped step). Returns when `inner` stops the run, at `t_end`, or on failure
+/// (`EventChatter` after [`Cap::MAX`] refinements).
+#[allow(clippy::too_many_arguments)]
+fn run_watched<const N: usize, S, O, F>(
+    make: F,
+    slider: &Slider,
+    method: Method,
+    mut t: f64,
+    mut y: SVector<f64, N>,
+    mut mode: ContactMode,
+    t_end: f64,
+    opts: &Options<N>,
+    gap_always: bool,
+    cap: &mut Cap,
+    inner: &mut O,
+    stats: &mut Stats,
+) -> crate::ode::Solution<N, ContactMode>
+where
+    S: OdeSystem<N, Mode = ContactMode>,
+    O: Observer<N, ContactMode>,
+    F: Fn(ContactMode) -> S,
+{
+    loop {
+        let (stop, o) = if t < cap.until {
+            (cap.until.min(t_end), Options { h_max: opts.h_max.min(cap.h), ..*opts })
+        } else {
+            (t_end, *opts)
+        };
+        let sys = make(mode);
+        let mut w = Watched { inner: &mut *inner, slider, gap_always, missed: None };
+        let sol = integrate(&sys, method, t, y, stop, &o, &mut w);
+        *stats += sol.stats;
+        if let Some((h, t0, y0, m0)) = w.missed {
+            cap.refinements += 1;
+            if cap.refinements > Cap::MAX {
+                return crate::ode::Solution { outcome: Outcome::EventChatter, ..sol };
+            }
+            t = t0;
+            y = y0;
+            mode = m0;
+            cap.until = t0 + 2.0 * h;
+            cap.h = h / 4.0;
+            continue;
+        }
+        if sol.outcome == Outcome::Finished && stop < t_end {
+            t = stop;
+            y = sol.y;
+            mode = sol.mode;
+            continue;
+        }
+        return sol;
     }
 }
 
@@ -229,6 +398,9 @@ pub struct PeriodicOrbit {
     pub min_law_force: f64,
     /// Mode switches per period.
     pub n_switches: u32,
+    /// Steps of the last monodromy integration that hid a contact switch (a hop shorter than a
+    /// step) and were redone with shorter steps (see the module docs).
+    pub refinements: u32,
     /// Scaled residual of the periodicity condition at the end.
     pub residual_norm: f64,
     /// Newton iterations.
@@ -263,9 +435,12 @@ pub fn guess_from_root(root: &Root) -> (State, f64) {
 }
 
 /// Periodic orbit near a describing-function root (see [`guess_from_root`] and [`shoot`]).
+///
+/// The root's period is used as it is (no first-return refinement: the describing function's
+/// frequency is a better guess than the return time of its approximate state).
 pub fn shoot_from_root(s: &Slider, root: &Root, opts: &ShootingOptions) -> PeriodicOrbit {
     let (y0, t) = guess_from_root(root);
-    shoot(s, &y0, t, opts)
+    shoot_impl(s, &y0, t, opts, false)
 }
 
 fn scales(s: &Slider) -> State {
@@ -290,24 +465,25 @@ struct Flow {
     phi: Jacobian,
     mode: ContactMode,
     n_switches: u32,
+    refinements: u32,
 }
 
 /// Integrate `y0` (mode `mode0`) with its variational equations over `[0, t_end]`, applying the
-/// saltation matrix at every switch.
+/// saltation matrix at every switch, with the local refinement of [`run_watched`] (unilateral
+/// model only: the bilateral flow has no switches to hide).
 fn flow(s: &Slider, y0: &State, mode0: ContactMode, t_end: f64, opts: &ShootingOptions, o42: &Options<42>, stats: &mut Stats) -> Result<Flow, Status> {
     let mut t = 0.0;
-    let mut y = *y0;
-    let mut phi = Jacobian::identity();
+    let mut y = join(y0, &Jacobian::identity());
     let mut mode = mode0;
     let mut n_switches = 0;
+    let mut cap = Cap::NONE;
     loop {
-        let sys = Variational { slider: s, start: mode };
         let mut obs = StopAtSwitch { hit: None };
-        let sol = integrate(&sys, opts.method, t, join(&y, &phi), t_end, o42, &mut obs);
-        *stats += sol.stats;
+        let make = |m| Variational { slider: s, start: m };
+        let sol = run_watched(make, s, opts.method, t, y, mode, t_end, o42, false, &mut cap, &mut obs, stats);
         let (ye, phie) = split(&sol.y);
         match sol.outcome {
-            Outcome::Finished => return Ok(Flow { y: ye, phi: phie, mode: sol.mode, n_switches }),
+            Outcome::Finished => return Ok(Flow { y: ye, phi: phie, mode: sol.mode, n_switches, refinements: cap.refinements }),
             Outcome::StoppedByObserver => {
                 let Some((index, before, after)) = obs.hit else { return Err(Status::NotConverged) };
                 n_switches += 1;
@@ -319,8 +495,7 @@ fn flow(s: &Slider, y0: &State, mode0: ContactMode, t_end: f64, opts: &ShootingO
                     return Err(Status::NonFinite);
                 }
                 t = sol.t;
-                y = ye;
-                phi = sm * phie;
+                y = join(&ye, &(sm * phie));
                 mode = after;
             }
             Outcome::StoppedByEvent => return Err(Status::Diverged),
@@ -335,13 +510,20 @@ const FREE: [usize; 5] = [idx::Z, idx::X, idx::XD, idx::PHI, idx::PHID];
 /// Periodic orbit through the neighbourhood of `y0` with period near `period` (MODEL.md §6).
 ///
 /// If `y0` has `zd != 0` it is first carried along the flow to the next maximum of `z` (the
-/// section `zd = 0`, `zd` decreasing), at most `2 period` ahead. Newton then solves
+/// section `zd = 0`, `zd` decreasing), at most `2 period` ahead. The period guess is then replaced
+/// by the first return to that section near it (the crossing within `[0.5, 1.5] period` closest
+/// to `y0`): a 1 % error in `T` leaves the end point far from `y0` in the fast velocities and can
+/// send Newton to another orbit or to steady sliding. Newton then solves
 /// `y(T; y0) = y0` with `zd(0) = 0` (see the module docs), damped by halving the step while the
 /// scaled residual grows.
 ///
 /// # Errors
 /// A failure is in `status` (see [`PeriodicOrbit::status`]), never a panic.
 pub fn shoot(s: &Slider, y0: &State, period: f64, opts: &ShootingOptions) -> PeriodicOrbit {
+    shoot_impl(s, y0, period, opts, true)
+}
+
+fn shoot_impl(s: &Slider, y0: &State, period: f64, opts: &ShootingOptions, refine_period: bool) -> PeriodicOrbit {
     let mut stats = Stats::default();
     let sz = scales(s);
     let mut y = *y0;
@@ -355,7 +537,7 @@ pub fn shoot(s: &Slider, y0: &State, period: f64, opts: &ShootingOptions) -> Per
         }
     }
     y[idx::ZD] = 0.0;
-    let mut t = period;
+    let mut t = if refine_period { first_return(s, &y, period, opts, &mut stats) } else { period };
     let mut iterations = 0;
     let eval = |y: &State, t: f64, rtol: f64, stats: &mut Stats| -> Result<(Flow, State, f64), Status> {
         let mode0 = s.mode_at(y);
@@ -365,11 +547,12 @@ pub fn shoot(s: &Slider, y0: &State, period: f64, opts: &ShootingOptions) -> Per
         Ok((fl, r, rn))
     };
     // Graded accuracy: while far from the orbit the flow is integrated only as accurately as the
-    // next Newton iterate can use (1e-2 of the residual expected after a quadratic step, at most
-    // 1e-6); convergence is only declared, and the monodromy matrix only kept, from an integration
-    // at `opts.rtol`.
-    let graded = |rn_prev: f64| (1e-2 * rn_prev * rn_prev).clamp(opts.rtol, 1e-6);
-    let mut rtol = opts.rtol.max(1e-8);
+    // next Newton iterate can use (1e-3 of the residual expected after a quadratic step, at most
+    // 1e-6; the first evaluation at 1e-7); convergence is only declared, and the monodromy matrix
+    // only kept, from an integration at `opts.rtol` (on the seed orbit: 4 integrations at 1e-7,
+    // 1e-6, 5e-10, 1e-11 instead of 4 at 1e-11).
+    let graded = |rn_prev: f64| (1e-3 * rn_prev * rn_prev).clamp(opts.rtol, 1e-6);
+    let mut rtol = opts.rtol.max(1e-7);
     let (mut fl, mut r, mut rn) = match eval(&y, t, rtol, &mut stats) {
         Ok(v) => v,
         Err(st) => return failed(y, t, st, stats),
@@ -380,7 +563,7 @@ pub fn shoot(s: &Slider, y0: &State, period: f64, opts: &ShootingOptions) -> Per
             status = Status::NonFinite;
             break;
         }
-        if rn <= opts.tol || (rtol > opts.rtol && graded(rn) <= opts.rtol) {
+        if rn <= opts.tol {
             if rtol > opts.rtol {
                 // Re-evaluate at full accuracy before deciding.
                 rtol = opts.rtol;
@@ -455,6 +638,12 @@ pub fn shoot(s: &Slider, y0: &State, period: f64, opts: &ShootingOptions) -> Per
     if orbit.status == Status::Success {
         orbit.status = status;
     }
+    // Steady sliding is a "periodic orbit" of every period: Newton can end there from a poor
+    // guess. That is no cycle.
+    let swing = orbit.z_max - orbit.z_min;
+    if orbit.status == Status::Success && (swing.is_nan() || swing <= 1e-6 * sz[idx::Z]) {
+        orbit.status = Status::NotConverged;
+    }
     orbit.stats = stats;
     orbit
 }
@@ -479,6 +668,7 @@ fn failed(y: State, t: f64, status: Status, stats: Stats) -> PeriodicOrbit {
         min_normal_force: nan,
         min_law_force: nan,
         n_switches: 0,
+        refinements: 0,
         residual_norm: nan,
         newton_iterations: 0,
         status,
@@ -486,17 +676,24 @@ fn failed(y: State, t: f64, status: Status, stats: Stats) -> PeriodicOrbit {
     }
 }
 
-/// Carries `y` along the flow to the next point with `zd = 0` and `zd` decreasing (a maximum of `z`).
-fn to_section(s: &Slider, y: &State, t_max: f64, opts: &ShootingOptions, stats: &mut Stats) -> Option<State> {
-    struct Section {
-        hit: Option<State>,
-    }
-    impl Observer<6, ContactMode> for Section {
-        fn on_step(&mut self, st: &StepView<'_, 6, ContactMode>) -> Control {
-            let (a, b) = (st.y0[idx::ZD], st.y1[idx::ZD]);
-            if a > 0.0 && b <= 0.0 {
-                // Bisection on the dense output (zd is monotone enough inside one step).
-                let (mut lo, mut hi) = (st.t0, st.t1);
+/// Crossings of the section `zd = 0` with `zd` decreasing (maxima of `z`), located on the dense
+/// output by bisection; the run stops after `max_hits` of them.
+struct Section {
+    hits: Vec<(f64, State)>,
+    max_hits: usize,
+}
+
+impl Observer<6, ContactMode> for Section {
+    fn on_step(&mut self, st: &StepView<'_, 6, ContactMode>) -> Control {
+        let (a, b) = (st.y0[idx::ZD], st.y1[idx::ZD]);
+        // Sub-sample the step so that two crossings inside one long step are not missed.
+        const SUB: usize = 4;
+        let mut prev = (st.t0, a);
+        for k in 1..=SUB {
+            let tk = if k == SUB { st.t1 } else { st.t0 + (st.t1 - st.t0) * k as f64 / SUB as f64 };
+            let vk = if k == SUB { b } else { st.dense.eval(tk)[idx::ZD] };
+            if prev.1 > 0.0 && vk <= 0.0 && prev.0 > 0.0 {
+                let (mut lo, mut hi) = (prev.0, tk);
                 for _ in 0..200 {
                     let mid = 0.5 * (lo + hi);
                     if mid <= lo || mid >= hi {
@@ -508,17 +705,41 @@ fn to_section(s: &Slider, y: &State, t_max: f64, opts: &ShootingOptions, stats: 
                         hi = mid;
                     }
                 }
-                self.hit = Some(st.dense.eval(hi));
-                return Control::Stop;
+                let y = if hi == st.t1 { *st.y1 } else { st.dense.eval(hi) };
+                self.hits.push((hi, y));
+                if self.hits.len() >= self.max_hits {
+                    return Control::Stop;
+                }
             }
-            Control::Continue
+            prev = (tk, vk);
         }
+        Control::Continue
     }
-    let o = crate::steady::options_for(s, &crate::steady::Tolerances { rtol: opts.rtol, atol: None });
-    let mut obs = Section { hit: None };
-    let sol = integrate(s, opts.method, 0.0, *y, t_max, &o, &mut obs);
-    *stats += sol.stats;
-    obs.hit
+}
+
+fn section_crossings(s: &Slider, y: &State, t_max: f64, max_hits: usize, opts: &ShootingOptions, stats: &mut Stats) -> Vec<(f64, State)> {
+    let o = crate::steady::options_for(s, &crate::steady::Tolerances { rtol: opts.rtol.max(1e-10), atol: None });
+    let mut obs = Section { hits: Vec::new(), max_hits };
+    let make = |m| Forced { slider: s, start: m };
+    let mut cap = Cap::NONE;
+    run_watched(make, s, opts.method, 0.0, *y, s.mode_at(y), t_max, &o, false, &mut cap, &mut obs, stats);
+    obs.hits
+}
+
+/// Carries `y` along the flow to the next point with `zd = 0` and `zd` decreasing (a maximum of `z`).
+fn to_section(s: &Slider, y: &State, t_max: f64, opts: &ShootingOptions, stats: &mut Stats) -> Option<State> {
+    section_crossings(s, y, t_max, 1, opts, stats).first().map(|h| h.1)
+}
+
+/// First return to the section near `t_guess`: the crossing with time in `[0.5, 1.5] t_guess`
+/// whose state is closest to `y0` (scaled); `t_guess` if there is none.
+fn first_return(s: &Slider, y0: &State, t_guess: f64, opts: &ShootingOptions, stats: &mut Stats) -> f64 {
+    let sz = scales(s);
+    let hits = section_crossings(s, y0, 1.5 * t_guess, 64, opts, stats);
+    hits.iter()
+        .filter(|(t, _)| *t >= 0.5 * t_guess)
+        .min_by(|a, b| (a.1 - y0).component_div(&sz).amax().total_cmp(&(b.1 - y0).component_div(&sz).amax()))
+        .map_or(t_guess, |h| h.0)
 }
 
 /// Dense samples and gap events over one period.
@@ -579,6 +800,7 @@ impl Observer<6, ContactMode> for Recorder {
 
 fn analyse(s: &Slider, y0: &State, t: f64, fl: &Flow, opts: &ShootingOptions, stats: &mut Stats) -> PeriodicOrbit {
     let m = opts.n_samples.max(16);
+    let o = crate::steady::options_for(s, &crate::steady::Tolerances { rtol: opts.rtol, atol: None });
     let mut rec = Recorder {
         t_eval: (0..m).map(|k| t * k as f64 / m as f64).collect(),
         z: Vec::with_capacity(m),
@@ -590,9 +812,10 @@ fn analyse(s: &Slider, y0: &State, t: f64, fl: &Flow, opts: &ShootingOptions, st
         switches: 0,
         slider: *s,
     };
-    let o = crate::steady::options_for(s, &crate::steady::Tolerances { rtol: opts.rtol, atol: None });
-    let sol = integrate(s, opts.method, 0.0, *y0, t, &o, &mut rec);
-    *stats += sol.stats;
+    // Every gap crossing counts here (the open fraction), also in the bilateral model.
+    let make = |m| Forced { slider: s, start: m };
+    let mut cap = Cap::NONE;
+    let sol = run_watched(make, s, opts.method, 0.0, *y0, s.mode_at(y0), t, &o, true, &mut cap, &mut rec, stats);
     let mut out = failed(*y0, t, sol.outcome.status(), *stats);
     if sol.outcome == Outcome::StoppedByEvent {
         out.status = Status::Diverged;
@@ -651,6 +874,7 @@ fn analyse(s: &Slider, y0: &State, t: f64, fl: &Flow, opts: &ShootingOptions, st
     out.open_fraction = acc / t;
     out.contact_opens = s.gap(y0) > 0.0 || !rec.gap_events.is_empty() || s.z_st + out.z_max > 0.0;
     out.n_switches = fl.n_switches;
+    out.refinements = fl.refinements;
     out
 }
 
@@ -765,6 +989,86 @@ mod tests {
         assert!((o.open_fraction - 0.26).abs() < 0.01, "open {}", o.open_fraction);
     }
 
+    /// Integrates `s` from `y` over `[0, t_end]` in chunks; a chunk in which a step hides a contact
+    /// switch ([`missed_crossing`]) is integrated again with the step size capped (the driver's
+    /// sign test at step ends misses a hop shorter than a step).
+    fn run_watched(s: &Slider, y: &State, t_end: f64, rtol: f64) -> (State, usize) {
+        struct Watch<'a> {
+            s: &'a Slider,
+            missed: Option<f64>,
+        }
+        impl Observer<6, ContactMode> for Watch<'_> {
+            fn on_step(&mut self, st: &StepView<'_, 6, ContactMode>) -> Control {
+                self.missed = missed_crossing(self.s, st, false);
+                if self.missed.is_some() {
+                    Control::Stop
+                } else {
+                    Control::Continue
+                }
+            }
+        }
+        let o = crate::steady::options_for(s, &crate::steady::Tolerances { rtol, atol: None });
+        let mut y = *y;
+        let mut retries = 0;
+        let chunk = 0.25;
+        let mut t = 0.0;
+        while t < t_end {
+            let t1 = (t + chunk).min(t_end);
+            let mut oc = o;
+            loop {
+                let mut w = Watch { s, missed: None };
+                let sol = integrate(s, Method::Dop853, t, y, t1, &oc, &mut w);
+                match w.missed {
+                    Some(h) => {
+                        oc.h_max = oc.h_max.min(h / 8.0);
+                        retries += 1;
+                    }
+                    None => {
+                        assert_eq!(sol.outcome, Outcome::Finished);
+                        y = sol.y;
+                        break;
+                    }
+                }
+            }
+            t = t1;
+        }
+        (y, retries)
+    }
+
+    /// MODEL.md §6 recipe: the unilateral model at mu = 0.30 from z = 0.1 um for 22 s, then at
+    /// mu = 0.215 for 6 s; the end state lies on the stable bouncing cycle.
+    fn bouncing_cycle_start() -> (Slider, State) {
+        let p = Params { contact: ContactModel::Unilateral, mu: 0.30, ..Params::seed() };
+        let hot = Slider::new(p).unwrap();
+        let (y1, r1) = run_watched(&hot, &State::new(0.1e-6, 0.0, 0.0, 0.0, 0.0, 0.0), 22.0, 1e-9);
+        let seed = Slider::new(Params { mu: 0.215, ..p }).unwrap();
+        let (y2, r2) = run_watched(&seed, &y1, 6.0, 1e-9);
+        eprintln!("recipe: {r1} + {r2} chunks integrated again for a hidden switch");
+        (seed, y2)
+    }
+
+    #[test]
+    fn seed_unilateral_bouncing_cycle_is_stable() {
+        let (s, y) = bouncing_cycle_start();
+        // Period guess: the torsion mode's (1.5 % off the cycle's).
+        let tors = crate::linear::linear_stability(&s).mode(crate::linear::ModeKind::Torsion).frequency;
+        let o = shoot(&s, &y, 2.0 * PI / tors, &ShootingOptions::default());
+        eprintln!(
+            "unilateral: T {:.9e} w {:.4} moduli {:?} stable {} A0 {:.4e} A1 {:.5e} A2 {:.4e} A3 {:.4e} theta {:.2} deg z_max {:.4e} open {:.4} minN {:.2} minLaw {:.2} switches {} res {:.1e} newton {} trivial err {:.1e}",
+            o.period, o.omega, o.moduli, o.stable, o.harmonics.a0, o.harmonics.a1, o.harmonics.a2, o.harmonics.a3,
+            o.harmonics.theta * 180.0 / PI, o.z_max, o.open_fraction, o.min_normal_force, o.min_law_force, o.n_switches, o.residual_norm, o.newton_iterations, o.trivial_error
+        );
+        assert_eq!(o.status, Status::Success);
+        // MODEL.md §6 / seed_values.json unilateral_bouncing_cycle_seed.
+        assert!((o.omega - 640.371).abs() < 0.01, "w = {}", o.omega);
+        assert!((o.harmonics.a1 - 23.646e-6).abs() < 0.01e-6, "A1 {}", o.harmonics.a1);
+        assert!((o.harmonics.a2 - 11.009e-6).abs() < 0.01e-6, "A2 {}", o.harmonics.a2);
+        assert!((o.open_fraction - 0.115).abs() < 0.001, "open {}", o.open_fraction);
+        assert!(o.stable);
+        assert!(o.contact_opens && o.min_normal_force == 0.0);
+        assert!(o.trivial_error < 1e-6);
+    }
+
     #[test]
     #[ignore = "timing; run with --ignored --nocapture in release"]
     fn timing() {
@@ -772,14 +1076,34 @@ mod tests {
         let root = seed_root(&s);
         let (y0, t) = guess_from_root(&root);
         let opts = ShootingOptions::default();
-        let n = 200;
-        let t0 = std::time::Instant::now();
+        let n = 100;
+        // Best of 5 batches: the machine is shared.
+        let mut best = f64::INFINITY;
         let mut it = 0;
-        for _ in 0..n {
-            it += std::hint::black_box(shoot(&s, &y0, t, &opts)).newton_iterations;
+        let mut rhs = 0;
+        for _ in 0..5 {
+            let t0 = std::time::Instant::now();
+            for _ in 0..n {
+                let o = std::hint::black_box(shoot_from_root(&s, &root, &opts));
+                it = o.newton_iterations;
+                rhs = o.stats.n_rhs;
+            }
+            best = best.min(t0.elapsed().as_secs_f64() / n as f64);
         }
-        let dt = t0.elapsed().as_secs_f64() / n as f64;
-        eprintln!("shooting from the DF root (bilateral seed): {:.0} us per solve, {:.1} Newton iterations", dt * 1e6, it as f64 / n as f64);
+        eprintln!("shooting from the DF root (bilateral seed): {:.0} us per solve (best of 5 x {n}), {it} Newton iterations, {rhs} rhs", best * 1e6);
+        let (_, y1) = bouncing_cycle_start();
+        let su = Slider::new(Params { contact: ContactModel::Unilateral, ..Params::seed() }).unwrap();
+        let mut best = f64::INFINITY;
+        for _ in 0..5 {
+            let t0 = std::time::Instant::now();
+            for _ in 0..20 {
+                let o = std::hint::black_box(shoot(&su, &y1, 9.8e-3, &opts));
+                it = o.newton_iterations;
+                rhs = o.stats.n_rhs;
+            }
+            best = best.min(t0.elapsed().as_secs_f64() / 20.0);
+        }
+        eprintln!("shooting the unilateral bouncing cycle from the recipe state: {:.0} us per solve, {it} Newton iterations, {rhs} rhs", best * 1e6);
         let o42 = options_42(&s, opts.rtol);
         let t0 = std::time::Instant::now();
         let mut st = Stats::default();
