@@ -38,7 +38,8 @@ test-python: install-test
 # Everything the tests need, then every test (Rust numerics, then the Python package), release-built.
 test: test-rust test-python
 
-lint:
+lint: $(BIN)/python
+	$(BIN)/python -m pip install -q ruff
 	cargo fmt --all -- --check
 	cargo clippy --release --workspace --all-targets -- -D warnings
 	$(BIN)/python -m ruff check python tests benches

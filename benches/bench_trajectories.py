@@ -22,7 +22,6 @@ import numpy as np
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 import baselines  # noqa: E402
-
 import tribosweep as ts  # noqa: E402
 
 
@@ -65,11 +64,11 @@ def main(argv=None) -> int:
     baselines.warmup()
     for rtol in (1e-6, 1e-9):
         for method in ("dopri5", "dop853", "rodas4"):
-            t, ds = best_of(lambda: rust(method, rtol))
+            t, ds = best_of(lambda method=method, rtol=rtol: rust(method, rtol))
             err = np.max(np.abs(ds.z_end.values - z_ref) / zscale)
             rows.append(dict(impl="rust", method=method, rtol=rtol, threads=1, per_s_core=args.n / t,
                              err=float(err), n_rhs=float(ds.n_rhs.mean()), failed=int((ds.status != 0).sum())))
-        t2, ds2 = best_of(lambda: rust("dopri5", rtol, threads=2))
+        t2, ds2 = best_of(lambda rtol=rtol: rust("dopri5", rtol, threads=2))
         rows.append(dict(impl="rust", method="dopri5", rtol=rtol, threads=2, per_s_core=args.n / t2 / 2,
                          err=rows[-3]["err"], n_rhs=float(ds2.n_rhs.mean()), failed=int((ds2.status != 0).sum())))
         assert np.array_equal(ds2.z_end.values, rust("dopri5", rtol).z_end.values), "1 vs 2 threads differ"

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -91,7 +92,7 @@ def test_bad_ensemble_arguments(params, kwargs, needle):
 
 def test_model_is_frozen_and_replace_revalidates():
     m = ts.SliderModel()
-    with pytest.raises(Exception):
+    with pytest.raises(dataclasses.FrozenInstanceError):
         m.mu = 0.3  # type: ignore[misc]
     assert m.replace(mu=0.3).mu == 0.3
     with pytest.raises(ValueError, match="mu"):

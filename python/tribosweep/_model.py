@@ -172,7 +172,7 @@ class SliderModel:
             out["mu_static"] = self.mu
         return out
 
-    def replace(self, **changes) -> "SliderModel":
+    def replace(self, **changes) -> SliderModel:
         """A copy with some fields changed (validated)."""
         return dataclasses.replace(self, **changes)
 

@@ -354,7 +354,7 @@ def _static_vars(plan: _Plan) -> dict:
 def _global_attrs(plan: _Plan, command: str, f_ref: float) -> dict:
     from . import __version__
 
-    now = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+    now = datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
     attrs = {
         "Conventions": "CF-1.11",
         "title": "tribosweep regime map of the 1985 pin-on-disk slider over normal load, arm length and sliding speed",

@@ -66,11 +66,7 @@ pub enum ContactMode {
 pub enum ParamError {
     /// `name` has value `value`, outside `range`.
     #[error("{name} = {value:?} is out of range: must be {range}")]
-    OutOfRange {
-        name: &'static str,
-        value: f64,
-        range: &'static str,
-    },
+    OutOfRange { name: &'static str, value: f64, range: &'static str },
     /// No parameter of that name.
     #[error("unknown parameter {0:?}; valid names: {1}")]
     Unknown(String, String),
@@ -265,18 +261,8 @@ impl Params {
         check("mu", self.mu, self.mu >= 0.0, NONNEG)?;
         check("normal_load", self.normal_load, self.normal_load > 0.0, POS)?;
         check("sliding_speed", self.sliding_speed, self.sliding_speed > 0.0, POS)?;
-        check(
-            "torsion_sign",
-            self.torsion_sign,
-            self.torsion_sign == 1.0 || self.torsion_sign == -1.0,
-            "-1 or +1",
-        )?;
-        check(
-            "friction_regularization",
-            self.friction_regularization,
-            self.friction_regularization > 0.0,
-            POS,
-        )?;
+        check("torsion_sign", self.torsion_sign, self.torsion_sign == 1.0 || self.torsion_sign == -1.0, "-1 or +1")?;
+        check("friction_regularization", self.friction_regularization, self.friction_regularization > 0.0, POS)?;
         check("mu_static", self.mu_static, self.mu_static >= 0.0, NONNEG)?;
         check("stribeck_velocity", self.stribeck_velocity, self.stribeck_velocity > 0.0, POS)?;
         check("escape_limit", self.escape_limit, self.escape_limit > 0.0, POS)?;
@@ -703,7 +689,12 @@ mod tests {
                     let col = (s.rhs(&yp, mode) - s.rhs(&ym, mode)) / (2.0 * h);
                     for r in 0..6 {
                         let tol = 1e-6 * (1.0 + j[(r, c)].abs());
-                        assert!((col[r] - j[(r, c)]).abs() < tol, "{law:?} {mode:?} J[{r},{c}] = {} vs fd {}", j[(r, c)], col[r]);
+                        assert!(
+                            (col[r] - j[(r, c)]).abs() < tol,
+                            "{law:?} {mode:?} J[{r},{c}] = {} vs fd {}",
+                            j[(r, c)],
+                            col[r]
+                        );
                     }
                 }
             }

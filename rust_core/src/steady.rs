@@ -155,7 +155,14 @@ pub fn run(s: &Slider, y0: &State, t_end: f64, method: Method, tol: &Tolerances)
 
 /// Integrate to `t_end` and sample the state at increasing `t_eval` (times past the end of a run
 /// that stopped early are filled with NaN).
-pub fn run_sampled(s: &Slider, y0: &State, t_end: f64, method: Method, tol: &Tolerances, t_eval: &[f64]) -> (RunResult, Vec<State>) {
+pub fn run_sampled(
+    s: &Slider,
+    y0: &State,
+    t_end: f64,
+    method: Method,
+    tol: &Tolerances,
+    t_eval: &[f64],
+) -> (RunResult, Vec<State>) {
     let (r, sampler) = run_observed(s, y0, t_end, method, tol, Sampler::new(t_eval));
     let mut out = sampler.out;
     out.resize(t_eval.len(), State::repeat(f64::NAN));
@@ -416,10 +423,8 @@ impl SectionWatcher {
                     // periods, so p = 4 matches while the true p = 2 misses by the residual.
                     // Reduce p to its smallest divisor whose states repeat to REDUCE_TOL; a true
                     // sub-multiple structure (major/minor maxima of z) differs by far more.
-                    let d = (1..p)
-                        .filter(|d| p % d == 0)
-                        .find(|&d| self.repeats(d, REDUCE_TOL.max(self.tol)))
-                        .unwrap_or(p);
+                    let d =
+                        (1..p).filter(|d| p % d == 0).find(|&d| self.repeats(d, REDUCE_TOL.max(self.tol))).unwrap_or(p);
                     self.found = Some((d, self.get(0).t - self.get(d).t));
                     return;
                 }
@@ -575,7 +580,11 @@ impl Observer<6, ContactMode> for PeriodObserver<'_> {
 /// Run `s` from `y0` until it decays, settles on a periodic state, escapes, or reaches `t_max`,
 /// and summarise the motion.
 pub fn run_to_steady(s: &Slider, y0: &State, opts: &SteadyOptions) -> Summary {
-    let obs = SteadyObserver { s, w: SectionWatcher::new(opts, s), decay_floor: 1e-6 * opts.decay_amplitude.unwrap_or(1e-3 * s.z_st.abs()) };
+    let obs = SteadyObserver {
+        s,
+        w: SectionWatcher::new(opts, s),
+        decay_floor: 1e-6 * opts.decay_amplitude.unwrap_or(1e-3 * s.z_st.abs()),
+    };
     let (r, obs) = run_observed(s, y0, opts.t_max, opts.method, &opts.tol, obs);
     let w = obs.w;
     let mut sum = Summary::empty(r.status, SteadyOutcome::Failed);

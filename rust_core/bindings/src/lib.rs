@@ -11,11 +11,11 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::collections::HashMap;
 use tribosweep_core::ensemble::par_map;
+use tribosweep_core::linear::{self, LinearStability};
 use tribosweep_core::model::{ContactModel, FrictionLaw, Params, Slider, State, PARAM_NAMES};
 use tribosweep_core::ode::{Method, Stats};
-use tribosweep_core::status::Status;
-use tribosweep_core::linear::{self, LinearStability};
 use tribosweep_core::shooting::{self, PeriodicOrbit, ShootingOptions};
+use tribosweep_core::status::Status;
 use tribosweep_core::steady::{self, RunResult, SteadyOptions, Summary, Tolerances};
 use tribosweep_core::tidf::{self, RootSearch, SearchOptions, Tidf, Unknowns, Variant};
 
@@ -74,9 +74,9 @@ fn tolerances(rtol: f64, atol: Option<PyReadonlyArray1<'_, f64>>) -> Result<Tole
         None => None,
         Some(a) => {
             let s = a.as_slice().map_err(|e| CoreError(format!("atol: {e}")))?;
-            let arr: [f64; 6] = s
-                .try_into()
-                .map_err(|_| CoreError(format!("atol has {} entries: must have 6 (one per state component)", s.len())))?;
+            let arr: [f64; 6] = s.try_into().map_err(|_| {
+                CoreError(format!("atol has {} entries: must have 6 (one per state component)", s.len()))
+            })?;
             Some(arr)
         }
     };
@@ -118,13 +118,7 @@ fn runs_into(d: &Bound<'_, PyDict>, runs: &[RunResult], reasons: &[String]) -> P
 }
 
 fn failed_run(status: Status) -> RunResult {
-    RunResult {
-        status,
-        t: f64::NAN,
-        y: State::repeat(f64::NAN),
-        extremes: Default::default(),
-        stats: Stats::default(),
-    }
+    RunResult { status, t: f64::NAN, y: State::repeat(f64::NAN), extremes: Default::default(), stats: Stats::default() }
 }
 
 /// Names of the real-valued model parameters.
@@ -350,7 +344,9 @@ fn ensemble<'py>(
             summaries_into(&d, &out)?;
         }
         _ => {
-            return Err(CoreError(format!("kind = {kind:?} is not valid: must be 'final', 'sampled' or 'steady'")).into())
+            return Err(
+                CoreError(format!("kind = {kind:?} is not valid: must be 'final', 'sampled' or 'steady'")).into()
+            )
         }
     }
     Ok(d)
@@ -383,7 +379,6 @@ fn summaries_into(d: &Bound<'_, PyDict>, out: &[(Summary, String)]) -> PyResult<
     let stats: Vec<Stats> = out.iter().map(|o| o.0.stats).collect();
     stats_into(d, &stats)
 }
-
 
 fn variant_from(name: &str) -> Result<Variant, CoreError> {
     match name {
@@ -420,7 +415,12 @@ fn linear_stability<'py>(
     let params = ensemble_params(&base, contact, friction_law, &names, &values.as_array())?;
     let n = params.len();
     let out: Vec<LinearStability> = py.detach(|| {
-        par_map(&params, threads, |p| linear::linear_stability(&Slider::new(*p).expect("validated")), |_| failed_linear())
+        par_map(
+            &params,
+            threads,
+            |p| linear::linear_stability(&Slider::new(*p).expect("validated")),
+            |_| failed_linear(),
+        )
     });
     let d = PyDict::new(py);
     let mut ev = numpy::ndarray::Array2::<numpy::Complex64>::zeros((n, 6));
@@ -511,7 +511,12 @@ fn describing_function<'py>(
         par_map(
             &params,
             threads,
-            |p| Some(Tidf::new(&Slider::new(*p).expect("validated"), variant).find_roots(&Slider::new(*p).expect("validated"), &opts)),
+            |p| {
+                Some(
+                    Tidf::new(&Slider::new(*p).expect("validated"), variant)
+                        .find_roots(&Slider::new(*p).expect("validated"), &opts),
+                )
+            },
             |_| None,
         )
     });
@@ -569,7 +574,10 @@ fn describing_function<'py>(
         }
     }
     d.set_item("newton_iterations", iters.into_pyarray(py))?;
-    d.set_item("n_roots", Array1::from_iter(out.iter().map(|o| o.as_ref().map_or(0, |s| s.roots.len() as i64))).into_pyarray(py))?;
+    d.set_item(
+        "n_roots",
+        Array1::from_iter(out.iter().map(|o| o.as_ref().map_or(0, |s| s.roots.len() as i64))).into_pyarray(py),
+    )?;
     d.set_item(
         "search_outcome",
         out.iter().map(|o| o.as_ref().map_or("failed", |s| s.outcome.name())).collect::<Vec<_>>(),
@@ -578,7 +586,10 @@ fn describing_function<'py>(
         "status",
         Array1::from_iter(out.iter().map(|o| o.as_ref().map_or(Status::Panic, |s| s.status).code())).into_pyarray(py),
     )?;
-    d.set_item("n_grid", Array1::from_iter(out.iter().map(|o| o.as_ref().map_or(0, |s| s.n_grid as i64))).into_pyarray(py))?;
+    d.set_item(
+        "n_grid",
+        Array1::from_iter(out.iter().map(|o| o.as_ref().map_or(0, |s| s.n_grid as i64))).into_pyarray(py),
+    )?;
     Ok(d)
 }
 
@@ -605,7 +616,8 @@ fn tidf_solve<'py>(
     let rows: Vec<Unknowns> = (0..g.nrows()).map(|i| Unknowns::from_fn(|c, _| g[(i, c)])).collect();
     let t = Tidf::new(&s, variant);
     let opts = tidf::NewtonOptions::default();
-    let out: Vec<Option<tidf::NewtonResult>> = py.detach(|| par_map(&rows, threads, |x| Some(t.solve(x, &opts)), |_| None));
+    let out: Vec<Option<tidf::NewtonResult>> =
+        py.detach(|| par_map(&rows, threads, |x| Some(t.solve(x, &opts)), |_| None));
     let n = out.len();
     let mut x = Array2::<f64>::from_elem((n, 5), f64::NAN);
     for (i, o) in out.iter().enumerate() {
@@ -619,8 +631,14 @@ fn tidf_solve<'py>(
     let d = PyDict::new(py);
     d.set_item("x", x.into_pyarray(py))?;
     d.set_item("iterations", Array1::from_iter(out.iter().map(|o| o.map_or(0, |r| r.iterations))).into_pyarray(py))?;
-    d.set_item("status", Array1::from_iter(out.iter().map(|o| o.map_or(Status::Panic, |r| r.status).code())).into_pyarray(py))?;
-    d.set_item("residual", Array1::from_iter(out.iter().map(|o| o.map_or(f64::NAN, |r| r.residual_norm))).into_pyarray(py))?;
+    d.set_item(
+        "status",
+        Array1::from_iter(out.iter().map(|o| o.map_or(Status::Panic, |r| r.status).code())).into_pyarray(py),
+    )?;
+    d.set_item(
+        "residual",
+        Array1::from_iter(out.iter().map(|o| o.map_or(f64::NAN, |r| r.residual_norm))).into_pyarray(py),
+    )?;
     Ok(d)
 }
 
@@ -685,7 +703,9 @@ fn periodic_orbit<'py>(
         (None, None, Some(r)) => {
             let r = r.as_slice()?;
             if r.len() != 5 {
-                return Err(CoreError(format!("root has {} entries: must be [omega, A0, A1, A2, theta]", r.len())).into());
+                return Err(
+                    CoreError(format!("root has {} entries: must be [omega, A0, A1, A2, theta]", r.len())).into()
+                );
             }
             let x = Unknowns::from_column_slice(r);
             py.detach(|| {
