@@ -12,6 +12,7 @@
 //!   the run. Sampling at output times, Poincare sections and running extrema live in observers.
 //! - The run ends with an [`Outcome`] and [`Stats`]; a failure is data, never a panic.
 
+pub mod batch;
 pub mod controller;
 pub mod dop853;
 pub mod dopri5;

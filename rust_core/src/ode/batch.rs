@@ -1,0 +1,769 @@
+//! Lane-batched Dormand–Prince 5(4) for the bilateral, constant-`mu` slider: the fast path of
+//! ensembles that only need the end state.
+//!
+//! [`run_bilateral_batch`] integrates many trajectories at once, [`W`] = 8 at a time in
+//! structure-of-arrays form (`[f64; 8]` per state component and per parameter), so that the
+//! stage arithmetic of eight trajectories runs in SIMD registers (plain loops over the lanes that
+//! LLVM vectorises; on x86-64 a copy compiled for AVX2/AVX-512 is picked at run time, std only).
+//! Each lane has its own time, step size, error estimate, controller history and accept/reject
+//! decision; when a lane's trajectory ends the lane is refilled at once with the next trajectory of
+//! the input, so no lane idles while others run long.
+//!
+//! # Semantics (those of `steady::run(s, y0, t_end, Method::Dopri5, tol)`, to integration accuracy)
+//! - Same tolerances (`atol` per component from [`characteristic_sizes`] when `tol.atol` is
+//!   `None`), same error norm (Hairer's RMS), same PI controller (`beta = 0.04`, safety 0.9,
+//!   factors in `[0.2, 10]`, no growth right after a rejection), same starting step (the scalar
+//!   [`initial_step`] on the same right-hand side, so the first step is bitwise the scalar one), same
+//!   landing rule on `t_end` (the last step is stretched by up to 1 %), same step floor
+//!   (`h_min_rel * max(|t|, 1)`) and step budget ([`Options::new`] defaults).
+//! - The right-hand side is the slider's in contact mode, with the dynamic law force used directly
+//!   instead of `(F_st + F_z) - F_st`, so states agree with the scalar path to rounding per step,
+//!   not bitwise; step counts agree to a few per cent (they are identical on most trajectories).
+//! - **Events are not located.** The bilateral constant-`mu` model never switches mode, so only the
+//!   escape event matters: when `|z| >= escape_limit` at the end of an accepted step the lane stops
+//!   there with `Status::Diverged` (the scalar path stops at the located crossing inside the step,
+//!   so `t`, `y` and `max_abs_z` of a diverged run differ; `max_abs_z >= escape_limit` holds).
+//!   `Stats::n_events` is 0 (the scalar path counts the located, non-acting gap, normal-force and
+//!   slip crossings too). A run that starts at `|z| >= escape_limit` stops after its first step.
+//! - [`Extremes`] are updated at the initial state and at every accepted step end (the scalar path
+//!   also sees the located event points, where `max_gap` and `min_slip_velocity` can differ by the
+//!   interpolation between a step end and the crossing; this path only sees step ends).
+//! - Failures: non-finite state or derivative (after cutting the step to the floor) ->
+//!   `NonFinite`, a step below the floor -> `StepTooSmall`, the step budget -> `MaxSteps`, as in
+//!   the scalar driver.
+//!
+//! # Determinism
+//! Every lane's arithmetic is the same sequence of IEEE operations on that lane's values only
+//! (masks only select; no reduction across lanes, no fused multiply-add), and lane set-up and
+//! teardown are scalar code on one trajectory. The result for a trajectory is therefore bitwise
+//! the same whatever trajectories share its batch, in whatever order, on whatever thread count
+//! (tested), and on any x86-64 code path (the AVX copies only widen the same operations).
+
+use super::controller::{initial_step, FAC_MAX, FAC_MIN, SAFETY};
+use super::{Options, Stats};
+use crate::model::{idx, ContactMode, ContactModel, FrictionLaw, Slider, State};
+use crate::status::Status;
+use crate::steady::{characteristic_sizes, options_for, Extremes, RunResult, Tolerances};
+
+/// Trajectories per batch (SIMD lanes).
+pub const W: usize = 8;
+type L = [f64; W];
+type V6 = [L; 6];
+
+// Dormand–Prince 5(4) coefficients (Hairer's dopri5.f), as in `dopri5.rs`.
+const A21: f64 = 1.0 / 5.0;
+const A31: f64 = 3.0 / 40.0;
+const A32: f64 = 9.0 / 40.0;
+const A41: f64 = 44.0 / 45.0;
+const A42: f64 = -56.0 / 15.0;
+const A43: f64 = 32.0 / 9.0;
+const A51: f64 = 19372.0 / 6561.0;
+const A52: f64 = -25360.0 / 2187.0;
+const A53: f64 = 64448.0 / 6561.0;
+const A54: f64 = -212.0 / 729.0;
+const A61: f64 = 9017.0 / 3168.0;
+const A62: f64 = -355.0 / 33.0;
+const A63: f64 = 46732.0 / 5247.0;
+const A64: f64 = 49.0 / 176.0;
+const A65: f64 = -5103.0 / 18656.0;
+const B1: f64 = 35.0 / 384.0;
+const B3: f64 = 500.0 / 1113.0;
+const B4: f64 = 125.0 / 192.0;
+const B5: f64 = -2187.0 / 6784.0;
+const B6: f64 = 11.0 / 84.0;
+const E1: f64 = 71.0 / 57600.0;
+const E3: f64 = -71.0 / 16695.0;
+const E4: f64 = 71.0 / 1920.0;
+const E5: f64 = -17253.0 / 339200.0;
+const E6: f64 = 22.0 / 525.0;
+const E7: f64 = -1.0 / 40.0;
+
+// The PI controller of `controller.rs` for DOPRI5 (k = 5, beta = 0.04).
+const BETA: f64 = 0.04;
+const ALPHA: f64 = 1.0 / 5.0 - 0.75 * BETA;
+const LN_SAFETY: f64 = -0.105_360_515_657_826_3;
+const LN_ERR_FLOOR: f64 = -9.210_340_371_976_184;
+
+/// Per-lane coefficients of the bilateral constant-`mu` right-hand side and the tolerances.
+#[derive(Clone, Copy)]
+struct Coef {
+    ks: L,
+    ka: L,
+    c: L,
+    kphi: L,
+    mu: L,
+    inv_m: L,
+    wz2: L,
+    dz: L,
+    wx2: L,
+    dx: L,
+    wt2: L,
+    dt: L,
+    /// s L / I
+    tg: L,
+    atol: V6,
+    /// F_st, z_st, V, s L, escape limit (bookkeeping only).
+    fst: L,
+    zst: L,
+    v: L,
+    sl: L,
+    esc: L,
+}
+
+/// The state of the eight lanes.
+struct Lanes {
+    c: Coef,
+    y: V6,
+    /// f(t, y): the FSAL stage.
+    f: V6,
+    t: L,
+    h: L,
+    ln_err_old: L,
+    rejected: [bool; W],
+    n_acc: [u64; W],
+    n_rej: [u64; W],
+    min_n: L,
+    max_gap: L,
+    min_vr: L,
+    max_z: L,
+    /// Input index of each lane's trajectory (`usize::MAX`: idle).
+    who: [usize; W],
+}
+
+#[inline(always)]
+fn splat(x: f64) -> L {
+    [x; W]
+}
+
+/// Right-hand side of the eight lanes, and the dynamic law force `F_z` of each.
+#[inline(always)]
+fn rhs(c: &Coef, y: &V6, out: &mut V6, fz: &mut L) {
+    for l in 0..W {
+        let (z, zd, x, xd, ph, phd) = (y[0][l], y[1][l], y[2][l], y[3][l], y[4][l], y[5][l]);
+        let f = -c.ks[l] * z + c.ka[l] * z * z - c.c[l] * zd + c.kphi[l] * ph;
+        let fx = c.mu[l] * f;
+        out[0][l] = zd;
+        out[1][l] = f * c.inv_m[l] - c.dz[l] * zd - c.wz2[l] * z;
+        out[2][l] = xd;
+        out[3][l] = fx * c.inv_m[l] - c.dx[l] * xd - c.wx2[l] * x;
+        out[4][l] = phd;
+        out[5][l] = c.tg[l] * fx - c.dt[l] * phd - c.wt2[l] * ph;
+        fz[l] = f;
+    }
+}
+
+/// Set lane `l`'s coefficients from slider `s`.
+fn set_coef(c: &mut Coef, l: usize, s: &Slider, atol: &[f64; 6]) {
+    let p = &s.p;
+    let (wz, wx, wt) = (p.omega_normal, p.omega_friction, p.omega_torsion);
+    c.ks[l] = s.k_s;
+    c.ka[l] = p.contact_quadratic;
+    c.c[l] = p.contact_damping;
+    c.kphi[l] = p.twist_coupling;
+    c.mu[l] = p.mu;
+    c.inv_m[l] = 1.0 / p.mass;
+    c.wz2[l] = wz * wz;
+    c.dz[l] = 2.0 * p.zeta_normal * wz;
+    c.wx2[l] = wx * wx;
+    c.dx[l] = 2.0 * p.zeta_friction * wx;
+    c.wt2[l] = wt * wt;
+    c.dt[l] = 2.0 * p.zeta_torsion * wt;
+    c.tg[l] = p.torsion_sign * p.moment_arm / p.inertia;
+    for i in 0..6 {
+        c.atol[i][l] = atol[i];
+    }
+    c.fst[l] = p.normal_load;
+    c.zst[l] = s.z_st;
+    c.v[l] = p.sliding_speed;
+    c.sl[l] = p.torsion_sign * p.moment_arm;
+    c.esc[l] = p.escape_limit;
+}
+
+/// Integrate each `sliders[i]` from `y0s[i]` at `t = 0` to `t_end` with Dormand–Prince 5(4),
+/// eight trajectories at a time; the result for each trajectory, in input order.
+///
+/// Precondition (the caller checks): every slider has `ContactModel::Bilateral` and
+/// `FrictionLaw::Constant`; `sliders.len() == y0s.len()`. Panics otherwise. See the module
+/// documentation for how the results relate to `steady::run(s, y0, t_end, Method::Dopri5, tol)`.
+pub fn run_bilateral_batch(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances) -> Vec<RunResult> {
+    assert_eq!(sliders.len(), y0s.len(), "run_bilateral_batch: one initial state per slider");
+    for s in sliders {
+        assert!(
+            s.p.contact == ContactModel::Bilateral && s.p.friction_law == FrictionLaw::Constant,
+            "run_bilateral_batch: only bilateral contact with constant friction"
+        );
+    }
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the CPU supports the features the function is compiled for.
+            return unsafe { run_avx512(sliders, y0s, t_end, tol) };
+        }
+        if std::is_x86_feature_detected!("avx2") {
+            // SAFETY: as above.
+            return unsafe { run_avx2(sliders, y0s, t_end, tol) };
+        }
+    }
+    run_impl(sliders, y0s, t_end, tol)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+unsafe fn run_avx512(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances) -> Vec<RunResult> {
+    run_impl(sliders, y0s, t_end, tol)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn run_avx2(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances) -> Vec<RunResult> {
+    run_impl(sliders, y0s, t_end, tol)
+}
+
+/// The portable path (also used by the tests to check that the SIMD copies agree bitwise).
+#[inline(always)]
+fn run_impl(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances) -> Vec<RunResult> {
+    let n = sliders.len();
+    let opts = Options::<6>::new(tol.rtol, 1.0);
+    let rtol = tol.rtol;
+    let max_steps = opts.max_steps;
+    let h_min_rel = opts.h_min_rel;
+    let mut out: Vec<Option<RunResult>> = vec![None; n];
+    let zero = [0.0; W];
+    let mut ln = Lanes {
+        c: Coef {
+            ks: zero,
+            ka: zero,
+            c: zero,
+            kphi: zero,
+            mu: zero,
+            inv_m: zero,
+            wz2: zero,
+            dz: zero,
+            wx2: zero,
+            dx: zero,
+            wt2: zero,
+            dt: zero,
+            tg: zero,
+            atol: [splat(1.0); 6],
+            fst: zero,
+            zst: zero,
+            v: zero,
+            sl: zero,
+            esc: splat(f64::INFINITY),
+        },
+        y: [zero; 6],
+        f: [zero; 6],
+        t: zero,
+        h: zero,
+        ln_err_old: splat(LN_ERR_FLOOR),
+        rejected: [false; W],
+        n_acc: [0; W],
+        n_rej: [0; W],
+        min_n: zero,
+        max_gap: zero,
+        min_vr: zero,
+        max_z: zero,
+        who: [usize::MAX; W],
+    };
+    let mut next = 0usize;
+    for l in 0..W {
+        refill(&mut ln, l, &mut next, sliders, y0s, t_end, tol, &mut out);
+    }
+
+    // Scratch of the step.
+    let mut k2 = [zero; 6];
+    let mut k3 = [zero; 6];
+    let mut k4 = [zero; 6];
+    let mut k5 = [zero; 6];
+    let mut k6 = [zero; 6];
+    let mut k7 = [zero; 6];
+    let mut ys = [zero; 6];
+    let mut yn = [zero; 6];
+    let mut fz = zero;
+
+    while ln.who.iter().any(|&w| w != usize::MAX) {
+        // ---- before the attempt: landing on t_end, the step floor, the step budget ----
+        let mut hh = zero;
+        let mut last = [false; W];
+        let mut floor = zero;
+        let mut bad = false;
+        for l in 0..W {
+            let h = ln.h[l];
+            let rem = t_end - ln.t[l];
+            let la = h >= rem || 1.01 * h >= rem;
+            last[l] = la;
+            hh[l] = if la { rem } else { h };
+            floor[l] = h_min_rel * ln.t[l].abs().max(1.0);
+            let too_small = (hh[l].is_nan() || hh[l] < floor[l]) && !la;
+            bad |= ln.who[l] != usize::MAX && (too_small || ln.n_acc[l] + ln.n_rej[l] >= max_steps);
+        }
+        if bad {
+            for l in 0..W {
+                if ln.who[l] == usize::MAX {
+                    continue;
+                }
+                let too_small = (hh[l].is_nan() || hh[l] < floor[l]) && !last[l];
+                let status = if too_small {
+                    if hh[l].is_finite() {
+                        Status::StepTooSmall
+                    } else {
+                        Status::NonFinite
+                    }
+                } else if ln.n_acc[l] + ln.n_rej[l] >= max_steps {
+                    Status::MaxSteps
+                } else {
+                    continue;
+                };
+                finish(&mut ln, l, status, &mut out);
+                refill(&mut ln, l, &mut next, sliders, y0s, t_end, tol, &mut out);
+            }
+            continue;
+        }
+
+        // ---- the step: six new right-hand sides per lane ----
+        let c = &ln.c;
+        let y = &ln.y;
+        let k1 = &ln.f;
+        for i in 0..6 {
+            for l in 0..W {
+                ys[i][l] = y[i][l] + hh[l] * (A21 * k1[i][l]);
+            }
+        }
+        rhs(c, &ys, &mut k2, &mut fz);
+        for i in 0..6 {
+            for l in 0..W {
+                ys[i][l] = y[i][l] + hh[l] * (A31 * k1[i][l] + A32 * k2[i][l]);
+            }
+        }
+        rhs(c, &ys, &mut k3, &mut fz);
+        for i in 0..6 {
+            for l in 0..W {
+                ys[i][l] = y[i][l] + hh[l] * (A41 * k1[i][l] + A42 * k2[i][l] + A43 * k3[i][l]);
+            }
+        }
+        rhs(c, &ys, &mut k4, &mut fz);
+        for i in 0..6 {
+            for l in 0..W {
+                ys[i][l] = y[i][l] + hh[l] * (A51 * k1[i][l] + A52 * k2[i][l] + A53 * k3[i][l] + A54 * k4[i][l]);
+            }
+        }
+        rhs(c, &ys, &mut k5, &mut fz);
+        for i in 0..6 {
+            for l in 0..W {
+                ys[i][l] = y[i][l]
+                    + hh[l] * (A61 * k1[i][l] + A62 * k2[i][l] + A63 * k3[i][l] + A64 * k4[i][l] + A65 * k5[i][l]);
+            }
+        }
+        rhs(c, &ys, &mut k6, &mut fz);
+        for i in 0..6 {
+            for l in 0..W {
+                yn[i][l] = y[i][l]
+                    + hh[l] * (B1 * k1[i][l] + B3 * k3[i][l] + B4 * k4[i][l] + B5 * k5[i][l] + B6 * k6[i][l]);
+            }
+        }
+        rhs(c, &yn, &mut k7, &mut fz);
+
+        // ---- error norm and finiteness ----
+        let mut acc = zero;
+        let mut fin = [true; W];
+        for i in 0..6 {
+            for l in 0..W {
+                let h = hh[l];
+                let e = (E1 * h) * k1[i][l]
+                    + (E3 * h) * k3[i][l]
+                    + (E4 * h) * k4[i][l]
+                    + (E5 * h) * k5[i][l]
+                    + (E6 * h) * k6[i][l]
+                    + (E7 * h) * k7[i][l];
+                let sk = c.atol[i][l] + rtol * y[i][l].abs().max(yn[i][l].abs());
+                let q = e / sk;
+                acc[l] += q * q;
+                fin[l] &= yn[i][l].is_finite() && k7[i][l].is_finite();
+            }
+        }
+
+        // ---- accept or reject, the controller, extremes, the end tests ----
+        let mut attention = false;
+        let mut ended = [false; W];
+        for l in 0..W {
+            let err = (acc[l] / 6.0).sqrt();
+            let ok = err <= 1.0 && fin[l];
+            let ln_err = err.ln();
+            // One exp per lane: the accept factor err^-alpha err_old^beta / safety, or the reject
+            // factor safety err^-alpha (as in `Controller::accept` / `Controller::reject`).
+            let arg = if ok { -(ALPHA * ln_err - BETA * ln.ln_err_old[l] - LN_SAFETY) } else { -ALPHA * ln_err };
+            let r = arg.exp();
+            if ok {
+                let mut ratio = if err <= 0.0 { FAC_MAX } else { r.clamp(FAC_MIN, FAC_MAX) };
+                ln.ln_err_old[l] = if err <= 0.0 { LN_ERR_FLOOR } else { ln_err.max(LN_ERR_FLOOR) };
+                if ln.rejected[l] {
+                    ratio = ratio.min(1.0);
+                }
+                ln.rejected[l] = false;
+                ln.n_acc[l] += 1;
+                ln.h[l] = hh[l] * ratio;
+                ln.t[l] = if last[l] { t_end } else { ln.t[l] + hh[l] };
+                for i in 0..6 {
+                    ln.y[i][l] = yn[i][l];
+                    ln.f[i][l] = k7[i][l];
+                }
+                let z = yn[idx::Z][l];
+                let normal = c.fst[l] + fz[l];
+                let gap = c.zst[l] + z;
+                let vr = c.v[l] - (yn[idx::XD][l] + c.sl[l] * yn[idx::PHID][l]);
+                ln.min_n[l] = ln.min_n[l].min(normal);
+                ln.max_gap[l] = ln.max_gap[l].max(gap);
+                ln.min_vr[l] = ln.min_vr[l].min(vr);
+                ln.max_z[l] = ln.max_z[l].max(z.abs());
+                let end = last[l] || z.abs() >= c.esc[l];
+                ended[l] = end;
+                attention |= end;
+            } else {
+                ln.rejected[l] = true;
+                ln.n_rej[l] += 1;
+                let ordinary = err.is_finite() && fin[l];
+                let h = hh[l] * if ordinary { (SAFETY * r).clamp(FAC_MIN, 1.0) } else { FAC_MIN };
+                ln.h[l] = h;
+                let end = h.is_nan() || h < floor[l];
+                ended[l] = end;
+                attention |= end;
+            }
+        }
+        if attention {
+            for l in 0..W {
+                if !ended[l] || ln.who[l] == usize::MAX {
+                    continue;
+                }
+                let status = if ln.rejected[l] {
+                    let ordinary = fin[l] && (acc[l] / 6.0).sqrt().is_finite();
+                    if ordinary {
+                        Status::StepTooSmall
+                    } else {
+                        Status::NonFinite
+                    }
+                } else if ln.y[idx::Z][l].abs() >= ln.c.esc[l] {
+                    Status::Diverged
+                } else {
+                    Status::Success
+                };
+                finish(&mut ln, l, status, &mut out);
+                refill(&mut ln, l, &mut next, sliders, y0s, t_end, tol, &mut out);
+            }
+        }
+    }
+    out.into_iter().map(|r| r.expect("every trajectory has a result")).collect()
+}
+
+#[inline]
+fn lane_state(v: &V6, l: usize) -> State {
+    State::from_fn(|i, _| v[i][l])
+}
+
+/// Write lane `l`'s result and mark it idle.
+#[cold]
+fn finish(ln: &mut Lanes, l: usize, status: Status, out: &mut [Option<RunResult>]) {
+    let i = ln.who[l];
+    let steps = ln.n_acc[l] + ln.n_rej[l];
+    out[i] = Some(RunResult {
+        status,
+        t: ln.t[l],
+        y: lane_state(&ln.y, l),
+        extremes: Extremes {
+            min_normal_force: ln.min_n[l],
+            max_gap: ln.max_gap[l],
+            min_slip_velocity: ln.min_vr[l],
+            max_abs_z: ln.max_z[l],
+        },
+        stats: Stats { n_rhs: 2 + 6 * steps, n_accept: ln.n_acc[l], n_reject: ln.n_rej[l], ..Stats::default() },
+    });
+    ln.who[l] = usize::MAX;
+}
+
+/// Load the next trajectory that needs a step into lane `l` (trajectories that end before their
+/// first step get their result here); leave the lane idle (harmless values) when none is left.
+#[cold]
+#[allow(clippy::too_many_arguments)]
+fn refill(
+    ln: &mut Lanes,
+    l: usize,
+    next: &mut usize,
+    sliders: &[Slider],
+    y0s: &[State],
+    t_end: f64,
+    tol: &Tolerances,
+    out: &mut [Option<RunResult>],
+) {
+    while *next < sliders.len() {
+        let i = *next;
+        *next += 1;
+        let s = &sliders[i];
+        let y0 = y0s[i];
+        let mut ext = Extremes::default();
+        let f = s.forces(&y0, ContactMode::Contact);
+        ext.min_normal_force = f.normal;
+        ext.max_gap = s.gap(&y0);
+        ext.min_slip_velocity = f.slip_velocity;
+        ext.max_abs_z = y0[idx::Z].abs();
+        let early = |status, n_rhs| RunResult {
+            status,
+            t: 0.0,
+            y: y0,
+            extremes: ext,
+            stats: Stats { n_rhs, ..Stats::default() },
+        };
+        if !t_end.is_finite() || !y0.iter().all(|v| v.is_finite()) {
+            out[i] = Some(early(Status::NonFinite, 0));
+            continue;
+        }
+        if t_end < 0.0 {
+            out[i] = Some(early(Status::StepTooSmall, 0));
+            continue;
+        }
+        if t_end == 0.0 {
+            out[i] = Some(early(Status::Success, 0));
+            continue;
+        }
+        let f0 = s.rhs(&y0, ContactMode::Contact);
+        if !f0.iter().all(|v| v.is_finite()) {
+            out[i] = Some(early(Status::NonFinite, 1));
+            continue;
+        }
+        let opts = options_for(s, tol);
+        let mut n_rhs = 1;
+        let h0 = initial_step(s, ContactMode::Contact, 0.0, &y0, &f0, t_end, 5, &opts.atol, tol.rtol, f64::INFINITY, &mut n_rhs);
+        let atol = tol.atol.unwrap_or(characteristic_sizes(s).map(|v| v * tol.rtol));
+        set_coef(&mut ln.c, l, s, &atol);
+        for k in 0..6 {
+            ln.y[k][l] = y0[k];
+            ln.f[k][l] = f0[k];
+        }
+        ln.t[l] = 0.0;
+        ln.h[l] = h0;
+        ln.ln_err_old[l] = LN_ERR_FLOOR;
+        ln.rejected[l] = false;
+        ln.n_acc[l] = 0;
+        ln.n_rej[l] = 0;
+        ln.min_n[l] = ext.min_normal_force;
+        ln.max_gap[l] = ext.max_gap;
+        ln.min_vr[l] = ext.min_slip_velocity;
+        ln.max_z[l] = ext.max_abs_z;
+        ln.who[l] = i;
+        return;
+    }
+    // Idle: a state at rest far from any end condition, so the lane computes harmless numbers.
+    for k in 0..6 {
+        ln.y[k][l] = 0.0;
+        ln.f[k][l] = 0.0;
+    }
+    ln.t[l] = 0.0;
+    ln.h[l] = 0.0;
+    ln.c.esc[l] = f64::INFINITY;
+    ln.who[l] = usize::MAX;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::Params;
+    use crate::ode::Method;
+    use crate::steady::run;
+
+    /// The benchmark ensemble of issue 2 (seed configuration, `mu` in [0.15, 0.30], load in
+    /// [17, 152] N, z0 = 1 um), from a fixed linear congruential generator.
+    fn ensemble(n: usize, seed: u64) -> (Vec<Slider>, Vec<State>) {
+        let mut x = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        let mut u = || {
+            x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (x >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut s = Vec::with_capacity(n);
+        for _ in 0..n {
+            let mu = 0.15 + 0.15 * u();
+            let normal_load = 17.0 + 135.0 * u();
+            s.push(Slider::new(Params { mu, normal_load, ..Params::seed() }).unwrap());
+        }
+        let y0 = vec![State::new(1e-6, 0.0, 0.0, 0.0, 0.0, 0.0); n];
+        (s, y0)
+    }
+
+    fn tol(rtol: f64) -> Tolerances {
+        Tolerances { rtol, atol: None }
+    }
+
+    fn same(a: &RunResult, b: &RunResult) -> bool {
+        let bits = |r: &RunResult| {
+            let mut v: Vec<u64> = r.y.iter().map(|x| x.to_bits()).collect();
+            v.push(r.t.to_bits());
+            let e = r.extremes;
+            v.extend([e.min_normal_force, e.max_gap, e.min_slip_velocity, e.max_abs_z].map(f64::to_bits));
+            v.extend([r.stats.n_rhs, r.stats.n_accept, r.stats.n_reject]);
+            v
+        };
+        a.status == b.status && bits(a) == bits(b)
+    }
+
+    #[test]
+    fn agrees_with_the_scalar_path() {
+        let (s, y0) = ensemble(50, 1);
+        let t_end = 0.5;
+        let refs: Vec<RunResult> = s.iter().zip(&y0).map(|(s, y)| run(s, y, t_end, Method::Dop853, &tol(1e-13))).collect();
+        for rtol in [1e-6, 1e-9] {
+            let b = run_bilateral_batch(&s, &y0, t_end, &tol(rtol));
+            let (mut worst, mut steps_b, mut steps_s) = (0.0f64, 0u64, 0u64);
+            for i in 0..s.len() {
+                let sc = run(&s[i], &y0[i], t_end, Method::Dopri5, &tol(rtol));
+                let r = &refs[i];
+                assert_eq!(r.status, Status::Success);
+                assert_eq!(sc.status, Status::Success);
+                assert_eq!(b[i].status, Status::Success, "{i}");
+                assert_eq!(b[i].t, t_end);
+                let scale = r.extremes.max_abs_z;
+                let e_s = (sc.y[0] - r.y[0]).abs();
+                let e_b = (b[i].y[0] - r.y[0]).abs();
+                assert!(e_b <= 10.0 * e_s + 1e-3 * rtol * scale, "rtol {rtol} #{i}: batch error {e_b:e}, scalar {e_s:e}");
+                worst = worst.max(e_b / scale);
+                for c in 0..6 {
+                    let size = characteristic_sizes(&s[i])[c];
+                    assert!((b[i].y[c] - sc.y[c]).abs() <= 1e3 * rtol * size.max(r.y[c].abs()), "rtol {rtol} #{i} y[{c}]");
+                }
+                let (nb, ns) = (b[i].stats.n_accept + b[i].stats.n_reject, sc.stats.n_accept + sc.stats.n_reject);
+                assert!((nb as f64 - ns as f64).abs() <= 0.03 * ns as f64 + 2.0, "#{i}: {nb} vs {ns} steps");
+                assert_eq!(b[i].stats.n_rhs, 2 + 6 * nb);
+                let (eb, es) = (b[i].extremes, sc.extremes);
+                assert!((eb.max_abs_z - es.max_abs_z).abs() <= 1e-3 * es.max_abs_z);
+                assert!((eb.min_normal_force - es.min_normal_force).abs() <= 1e-3 * s[i].p.normal_load);
+                assert!((eb.max_gap - es.max_gap).abs() <= 1e-3 * es.max_abs_z);
+                assert!((eb.min_slip_velocity - es.min_slip_velocity).abs() <= 1e-3 * s[i].p.sliding_speed);
+                steps_b += nb;
+                steps_s += ns;
+            }
+            println!("rtol {rtol:e}: max |z - z_ref|/max|z| = {worst:.2e}; steps batch {steps_b}, scalar {steps_s}");
+        }
+    }
+
+    #[test]
+    fn results_do_not_depend_on_the_batch() {
+        let (s, y0) = ensemble(37, 2);
+        let t = tol(1e-7);
+        let all = run_bilateral_batch(&s, &y0, 0.2, &t);
+        // Each alone.
+        for i in (0..s.len()).step_by(5) {
+            let one = run_bilateral_batch(&s[i..i + 1], &y0[i..i + 1], 0.2, &t);
+            assert!(same(&one[0], &all[i]), "#{i} alone");
+        }
+        // Permuted and in other groupings.
+        let perm: Vec<usize> = (0..s.len()).map(|k| (k * 11 + 3) % s.len()).collect();
+        let sp: Vec<Slider> = perm.iter().map(|&k| s[k]).collect();
+        let yp: Vec<State> = perm.iter().map(|&k| y0[k]).collect();
+        let rp = run_bilateral_batch(&sp, &yp, 0.2, &t);
+        for (j, &k) in perm.iter().enumerate() {
+            assert!(same(&rp[j], &all[k]), "permuted #{k}");
+        }
+        for chunk in [3, 8, 13] {
+            let mut k = 0;
+            for (cs, cy) in s.chunks(chunk).zip(y0.chunks(chunk)) {
+                for r in run_bilateral_batch(cs, cy, 0.2, &t) {
+                    assert!(same(&r, &all[k]), "chunk {chunk} #{k}");
+                    k += 1;
+                }
+            }
+        }
+        // The portable code path gives the same bits as the SIMD copy picked at run time.
+        let portable = run_impl(&s, &y0, 0.2, &t);
+        for i in 0..s.len() {
+            assert!(same(&portable[i], &all[i]), "portable #{i}");
+        }
+    }
+
+    #[test]
+    fn escape_stops_with_diverged() {
+        let s = Slider::new(Params { mu: 0.35, normal_load: 84.46, ..Params::seed() }).unwrap();
+        let y0 = State::new(1e-6, 0.0, 0.0, 0.0, 0.0, 0.0);
+        let (ens, ey) = ensemble(5, 3);
+        let mut sl = ens.clone();
+        let mut ys = ey.clone();
+        sl.insert(2, s);
+        ys.insert(2, y0);
+        let r = run_bilateral_batch(&sl, &ys, 20.0, &tol(1e-6));
+        let d = &r[2];
+        assert_eq!(d.status, Status::Diverged);
+        assert!(d.y[0].abs() >= s.p.escape_limit && d.extremes.max_abs_z >= s.p.escape_limit);
+        assert!(d.t < 20.0 && d.y.iter().all(|v| v.is_finite()));
+        let sc = run(&s, &y0, 20.0, Method::Dopri5, &tol(1e-6));
+        assert_eq!(sc.status, Status::Diverged);
+        // Stopped at the end of the step that crossed: within a step or so of the located time.
+        assert!((d.t - sc.t).abs() < 0.01 * sc.t, "{} vs {}", d.t, sc.t);
+        for (i, x) in r.iter().enumerate() {
+            assert!(x.y.iter().all(|v| v.is_finite()), "#{i}");
+            if i != 2 {
+                assert_eq!(x.status, Status::Success);
+                assert_eq!(x.t, 20.0);
+            }
+        }
+    }
+
+    #[test]
+    fn failures_and_trivial_runs() {
+        let (s, mut y0) = ensemble(4, 4);
+        y0[1][3] = f64::NAN;
+        let r = run_bilateral_batch(&s, &y0, 0.1, &tol(1e-6));
+        assert_eq!(r[1].status, Status::NonFinite);
+        assert!([0, 2, 3].iter().all(|&i| r[i].status == Status::Success && r[i].t == 0.1));
+        let r = run_bilateral_batch(&s[..1], &y0[..1], 0.0, &tol(1e-6));
+        assert_eq!((r[0].status, r[0].stats.n_rhs), (Status::Success, 0));
+        assert!(run_bilateral_batch(&[], &[], 1.0, &tol(1e-6)).is_empty());
+        // Past the escape limit the quadratic contact law blows up in finite time: both paths end
+        // with the same failure, never with NaN in the state.
+        let s = Slider::new(Params { mu: 0.35, escape_limit: 1e300, ..Params::seed() }).unwrap();
+        let y0 = State::new(1e-6, 0.0, 0.0, 0.0, 0.0, 0.0);
+        let r = run_bilateral_batch(&[s], &[y0], 20.0, &tol(1e-6));
+        let sc = run(&s, &y0, 20.0, Method::Dopri5, &tol(1e-6));
+        println!("{:?} {:?} {:?} | {:?} {:?} {:?}", r[0].status, r[0].t, r[0].stats, sc.status, sc.t, sc.stats);
+        assert_eq!(r[0].status, sc.status);
+        assert!(r[0].status != Status::Success && (r[0].t - sc.t).abs() < 1e-3 * sc.t);
+    }
+
+    /// Throughput against the scalar driver in the same process (single thread):
+    /// `cargo test --release -p tribosweep-core batch::tests::throughput -- --ignored --nocapture`.
+    #[test]
+    #[ignore]
+    fn throughput() {
+        use std::time::Instant;
+        let n = 1000;
+        let (s, y0) = ensemble(n, 7);
+        for rtol in [1e-6, 1e-9] {
+            let t = tol(rtol);
+            let best = |f: &dyn Fn() -> f64| (0..3).map(|_| f()).fold(f64::INFINITY, f64::min);
+            let tb = best(&|| {
+                let t0 = Instant::now();
+                let r = run_bilateral_batch(&s, &y0, 0.5, &t);
+                std::hint::black_box(&r);
+                t0.elapsed().as_secs_f64()
+            });
+            let tp = best(&|| {
+                let t0 = Instant::now();
+                let r = run_impl(&s, &y0, 0.5, &t);
+                std::hint::black_box(&r);
+                t0.elapsed().as_secs_f64()
+            });
+            let ts = best(&|| {
+                let t0 = Instant::now();
+                for i in 0..n {
+                    std::hint::black_box(run(&s[i], &y0[i], 0.5, Method::Dopri5, &t));
+                }
+                t0.elapsed().as_secs_f64()
+            });
+            let r = run_bilateral_batch(&s, &y0, 0.5, &t);
+            let steps: u64 = r.iter().map(|x| x.stats.n_accept + x.stats.n_reject).sum();
+            println!(
+                "rtol {rtol:e}: batch {:.0} traj/s, portable batch {:.0} traj/s, scalar {:.0} traj/s ({:.2}x); {:.0} steps/traj, {:.1} ns/step/traj",
+                n as f64 / tb,
+                n as f64 / tp,
+                n as f64 / ts,
+                ts / tb,
+                steps as f64 / n as f64,
+                tb / steps as f64 * 1e9
+            );
+        }
+    }
+}
