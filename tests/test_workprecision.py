@@ -191,3 +191,4 @@ def test_load_mu_map_marks_the_escape():
     st = ds.status.sel(integrator="dop853")
     assert STATUS_NAMES[int(st.sel(normal_load=20.0, mu=0.35))] == "diverged"
     assert int(st.sel(normal_load=84.46, mu=0.215)) == 0
+    assert fm._failing_cells(ds) == ["dop853: diverged at normal_load 20, mu 0.35"]

@@ -356,6 +356,18 @@ def _counts(ds: xr.Dataset) -> dict:
     return out
 
 
+def _failing_cells(ds: xr.Dataset) -> list[str]:
+    """``"<integrator>: <status> at dim=value, dim=value"`` for every cell with a non-zero status."""
+    out = []
+    st = ds.status
+    for idx in zip(*np.nonzero(st.values)):
+        where = {d: ds[d].values[i] for d, i in zip(st.dims, idx)}
+        name = STATUS_NAMES[int(st.values[idx])]
+        coords = ", ".join(f"{d} {v:.3g}" for d, v in where.items() if d != "integrator")
+        out.append(f"{where.get('integrator', '')}: {name} at {coords}")
+    return out
+
+
 def failure_maps(out_dir: os.PathLike, *, quick: bool = False, threads: int | None = None,
                  progress: bool = True) -> dict:  # fmt: skip
     """Compute the bench's failure maps, write ``failure_*.png`` and ``.nc`` into ``out_dir``.
@@ -410,6 +422,13 @@ def failure_maps(out_dir: os.PathLike, *, quick: bool = False, threads: int | No
         for m, c in summary[name].items():
             st = ", ".join(f"{k} {v}" for k, v in c["status"].items())
             md.append(f"| {m} | {st} | {c['median_n_rhs']:.3g} | {c['max_n_rhs']:.3g} |")
+        bad = _failing_cells(ds)
+        if bad:
+            md.append("")
+            md.append("Failing cells: " + "; ".join(bad[:12]) + ("; ..." if len(bad) > 12 else "") + ".")
+        if "diverged" in " ".join(bad):
+            md.append("`diverged` is the model leaving its validity (|z| past the 1 mm escape limit), not an "
+                      "integrator failure: e.g. the unilateral model at 20 N and mu 0.35 bounces to centimetres.")
         if "friction_regularization" in ds.dims:
             # From the most accurate run of each eps: the stiff-capable method at the tightest rtol.
             best = "rodas4" if "rodas4" in ds.integrator.values else str(ds.integrator.values[0])

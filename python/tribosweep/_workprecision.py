@@ -640,8 +640,9 @@ class BenchConfig:
         Rust integrators.
     baselines : sequence of str
         Any of ``"scipy"``, ``"numba"``, ``"diffrax"`` (each skipped with a note when unavailable).
-    repeat : int
-        Best-of repeats of each timed rung (Rust, numba, diffrax).
+    repeat : int, optional
+        Best-of repeats of each timed rung (Rust, numba: interleaved passes over the ladder; diffrax);
+        default 3 quick, 5 full.
     scipy_repeat : int, optional
         Best-of repeats of the scipy rungs (default 1 quick, 3 full: scipy rungs are long).
     scipy_n : int, optional
@@ -658,7 +659,7 @@ class BenchConfig:
     n_traj: int | None = None
     methods: Sequence[str] = RUST_METHODS
     baselines: Sequence[str] = ("scipy", "numba", "diffrax")
-    repeat: int = 3
+    repeat: int | None = None
     scipy_repeat: int | None = None
     scipy_n: int | None = None
     scipy_cap: float | None = None
@@ -672,6 +673,7 @@ class BenchConfig:
             ladder=tuple(float(r) for r in (self.ladder or (QUICK_LADDER if q else FULL_LADDER))),
             methods=tuple(self.methods),
             baselines=tuple(self.baselines),
+            repeat=self.repeat or (3 if q else 5),
             scipy_repeat=self.scipy_repeat or (1 if q else 3),
             scipy_n=self.scipy_n or (1 if q else 4),
             scipy_cap=self.scipy_cap or (SCIPY_CAP_QUICK if q else SCIPY_CAP_FULL),
@@ -733,12 +735,22 @@ def measure(config: BenchConfig, *, progress: bool = True) -> dict:
                  f"error {row['error']:.2e}, {row['n_rhs']:.0f} rhs{flag}", progress)  # fmt: skip
             return row
 
-        for method in cfg.methods:
-            for rtol in cfg.ladder:
-                add("rust", method, rtol, run_rust(scene, method, rtol, repeat=cfg.repeat))
+        # Rust and numba rungs are short: time them in interleaved passes over every (method, rtol) and keep
+        # each rung's fastest pass, so a burst of load from other processes hits different rungs in different
+        # passes instead of all repeats of one rung.
+        jobs = {("rust", m, r): (lambda m=m, r=r, sc=scene: run_rust(sc, m, r, repeat=1)) for m in cfg.methods
+                for r in cfg.ladder}  # fmt: skip
         if bl is not None and scene.is_bilateral_constant():
-            for rtol in cfg.ladder:
-                add("numba", "DP5", rtol, _numba_batch(bl, scene, rtol, cfg.repeat))
+            jobs.update({("numba", "DP5", r): (lambda r=r, sc=scene: _numba_batch(bl, sc, r, 1)) for r in cfg.ladder})
+        best: dict = {}
+        _log(f"  timing {len(jobs)} rungs (Rust, numba) in {cfg.repeat} interleaved passes", progress)
+        for _ in range(max(1, cfg.repeat)):
+            for key, job in jobs.items():
+                run = job()
+                if key not in best or run.seconds < best[key].seconds:
+                    best[key] = run
+        for (impl, method, rtol), run in best.items():
+            add(impl, method, rtol, run)
         if use_diffrax and scene.is_bilateral_constant():
             for rtol in cfg.ladder:
                 try:
@@ -976,7 +988,8 @@ def render_summary(payload: dict, *, images: dict[str, str] | None = None, extra
              + ", ".join(f"{k} {v}" for k, v in meta["versions"].items()) + ".")  # fmt: skip
     mode = "quick" if meta["quick"] else "full"
     L.append(f"Mode: **{mode}**; rtol ladder {', '.join(f'{r:.0e}' for r in meta['ladder'])}; "
-             f"every timed rung is the best of {meta['repeat']} (scipy: best of {meta['scipy_repeat']}, on "
+             f"every timed rung is the best of {meta['repeat']} interleaved passes (scipy: best of "
+             f"{meta['scipy_repeat']} back to back, on "
              f"{meta['scipy_n']} trajectories); one thread everywhere; total {meta['seconds']:.0f} s.")  # fmt: skip
     if meta.get("loadavg") and None not in meta["loadavg"]:
         a, b = meta["loadavg"]
@@ -1136,4 +1149,7 @@ def render_docs(payload: dict, *, command: str | None = None, extra: str = "") -
             "Regenerate with `tribosweep bench --quick --out bench_out --docs docs/benchmarks.md` "
             "(or without --quick for the full ladder). -->\n")  # fmt: skip
     extra = "\n".join(line for line in extra.splitlines() if not line.startswith("!["))
-    return head + render_summary(payload, images=None, extra=extra, command=command)
+    text = head + render_summary(payload, images=None, extra=extra, command=command)
+    while "\n\n\n" in text:
+        text = text.replace("\n\n\n", "\n\n")
+    return text
