@@ -324,8 +324,9 @@ pub struct RootSearch {
     pub torsion_frequency: f64,
     /// True when the linearised system is marginal (see [`SearchOptions::marginal_tol`]).
     pub near_marginal: bool,
-    /// Zeros of the reduced function that were discarded because `A1^2 < 0` (no real root).
-    pub n_complex_amplitude: usize,
+    /// Zeros of the reduced function that were discarded because `A1^2 < 0` (no real root; on
+    /// the unstable side of a Hopf point the torsion branch ends up here), sorted by `w`.
+    pub complex_amplitude: Vec<Unresolved>,
     /// Grid points sampled.
     pub n_grid: usize,
     /// `Success`, `InvalidInput` (bad box or `K_a = 0`: no describing function), or `NonFinite`.
@@ -657,7 +658,7 @@ impl Tidf {
             max_growth_rate: lin.max_growth_rate,
             torsion_frequency,
             near_marginal,
-            n_complex_amplitude: 0,
+            complex_amplitude: Vec::new(),
             n_grid: 0,
             status: Status::Success,
         };
@@ -698,7 +699,7 @@ impl Tidf {
                 continue;
             }
             if red.a1_squared < 0.0 {
-                out.n_complex_amplitude += 1;
+                out.complex_amplitude.push(Unresolved { omega: red.x[0], a1_squared: red.a1_squared });
                 continue;
             }
             let nr = self.solve(&red.x, &opts.newton);
@@ -942,14 +943,26 @@ mod tests {
     #[test]
     fn no_physical_root_where_sliding_is_unstable() {
         // mu = 0.215 at 15 N: below the Hopf load 24.904 N, sliding unstable (MODEL.md §4, §6).
+        // MODEL.md §6 says the describing function has no root at all there. Found: no root on
+        // the torsion branch (its zero has A1^2 < 0: complex amplitude), but the four far,
+        // non-physical roots (w 291-585 rad/s, A0 91-176 um) exist here as at the seed.
         let p = Params { normal_load: 15.0, ..Params::seed() };
         let r = find_roots(&p, Variant::Consistent, &SearchOptions::default()).unwrap();
         assert!(r.max_growth_rate > 0.0);
         for x in &r.roots {
             eprintln!("15 N root: w {:.3} A0 {:.3e} A1 {:.3e} physical {}", x.omega, x.a0, x.a1, x.physical);
         }
-        eprintln!("15 N: outcome {:?}, {} complex-amplitude zeros, unresolved {:?}", r.outcome, r.n_complex_amplitude, r.unresolved);
-        assert!(r.roots.iter().all(|x| !x.physical));
+        eprintln!("15 N: outcome {:?}, complex-amplitude zeros {:?}, unresolved {:?}", r.outcome, r.complex_amplitude, r.unresolved);
+        assert!(r.roots.iter().all(|x| !x.physical && (280.0..610.0).contains(&x.omega)));
+        assert!(r.unresolved.is_empty());
+        let branch: Vec<&Unresolved> =
+            r.complex_amplitude.iter().filter(|z| (z.omega - r.torsion_frequency).abs() < 0.05 * r.torsion_frequency).collect();
+        assert_eq!(branch.len(), 1, "{:?}", r.complex_amplitude);
+        // The same holds on a load grid below the Hopf load.
+        for load in [2.0, 5.0, 10.0, 20.0, 24.0] {
+            let r = find_roots(&Params { normal_load: load, ..Params::seed() }, Variant::Consistent, &SearchOptions::default()).unwrap();
+            assert!(r.max_growth_rate > 0.0 && r.roots.iter().all(|x| !x.physical), "load {load}");
+        }
     }
 
     #[test]
