@@ -39,6 +39,9 @@
 //! the same whatever trajectories share its batch, in whatever order, on whatever thread count
 //! (tested), and on any x86-64 code path (the AVX copies only widen the same operations).
 
+// Index loops over lanes and components are the point here: they are what LLVM vectorises.
+#![allow(clippy::needless_range_loop)]
+
 use super::controller::{initial_step, FAC_MAX, FAC_MIN, SAFETY};
 use super::{Options, Stats};
 use crate::model::{idx, ContactMode, ContactModel, FrictionLaw, Slider, State};
@@ -139,12 +142,30 @@ fn splat(x: f64) -> L {
 /// component loop keeps LLVM from vectorising across components (with gathers) instead.
 macro_rules! each6 {
     ($i:ident, $body:block) => {{
-        { let $i = 0usize; $body }
-        { let $i = 1usize; $body }
-        { let $i = 2usize; $body }
-        { let $i = 3usize; $body }
-        { let $i = 4usize; $body }
-        { let $i = 5usize; $body }
+        {
+            let $i = 0usize;
+            $body
+        }
+        {
+            let $i = 1usize;
+            $body
+        }
+        {
+            let $i = 2usize;
+            $body
+        }
+        {
+            let $i = 3usize;
+            $body
+        }
+        {
+            let $i = 4usize;
+            $body
+        }
+        {
+            let $i = 5usize;
+            $body
+        }
     }};
 }
 
@@ -370,8 +391,8 @@ fn run_impl(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances) -> 
         rhs(c, &ys, &mut k6, &mut fz);
         each6!(i, {
             for l in 0..W {
-                yn[i][l] = y[i][l]
-                    + hh[l] * (B1 * k1[i][l] + B3 * k3[i][l] + B4 * k4[i][l] + B5 * k5[i][l] + B6 * k6[i][l]);
+                yn[i][l] =
+                    y[i][l] + hh[l] * (B1 * k1[i][l] + B3 * k3[i][l] + B4 * k4[i][l] + B5 * k5[i][l] + B6 * k6[i][l]);
             }
         });
         rhs(c, &yn, &mut k7, &mut fz);
@@ -416,7 +437,8 @@ fn run_impl(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances) -> 
         for l in 0..W {
             // One exp per lane: the accept factor err^-alpha err_old^beta / safety, or the reject
             // factor err^-alpha (times safety), as in `Controller::accept` / `Controller::reject`.
-            arg[l] = if ok[l] { -(ALPHA * ln_err[l] - BETA * ln.ln_err_old[l] - LN_SAFETY) } else { -ALPHA * ln_err[l] };
+            arg[l] =
+                if ok[l] { -(ALPHA * ln_err[l] - BETA * ln.ln_err_old[l] - LN_SAFETY) } else { -ALPHA * ln_err[l] };
         }
         let r = exp_lanes(&arg);
         // Kept as several simple loops over the lanes: each vectorises on its own.
@@ -495,8 +517,9 @@ fn run_impl(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances) -> 
 #[inline(always)]
 fn exp_lanes(x: &L) -> L {
     const MAGIC: f64 = 6755399441055744.0; // 1.5 * 2^52: adding it rounds to an integer
-    const LN2_HI: f64 = 6.931_471_803_691_238_2e-1;
-    const LN2_LO: f64 = 1.908_214_929_270_587_7e-10;
+                                           // ln 2 split so that n * LN2_HI is exact (fdlibm's constants).
+    const LN2_HI: f64 = f64::from_bits(0x3fe6_2e42_fee0_0000);
+    const LN2_LO: f64 = f64::from_bits(0x3dea_39ef_3579_3c76);
     let mut out = [0.0; W];
     for l in 0..W {
         let x = x[l].clamp(-700.0, 700.0);
@@ -632,7 +655,19 @@ fn refill(
         }
         let opts = options_for(s, tol);
         let mut n_rhs = 1;
-        let h0 = initial_step(s, ContactMode::Contact, 0.0, &y0, &f0, t_end, 5, &opts.atol, tol.rtol, f64::INFINITY, &mut n_rhs);
+        let h0 = initial_step(
+            s,
+            ContactMode::Contact,
+            0.0,
+            &y0,
+            &f0,
+            t_end,
+            5,
+            &opts.atol,
+            tol.rtol,
+            f64::INFINITY,
+            &mut n_rhs,
+        );
         let atol = tol.atol.unwrap_or(characteristic_sizes(s).map(|v| v * tol.rtol));
         set_coef(&mut ln.c, l, s, &atol);
         for k in 0..6 {
@@ -732,7 +767,8 @@ mod tests {
     fn agrees_with_the_scalar_path() {
         let (s, y0) = ensemble(50, 1);
         let t_end = 0.5;
-        let refs: Vec<RunResult> = s.iter().zip(&y0).map(|(s, y)| run(s, y, t_end, Method::Dop853, &tol(1e-13))).collect();
+        let refs: Vec<RunResult> =
+            s.iter().zip(&y0).map(|(s, y)| run(s, y, t_end, Method::Dop853, &tol(1e-13))).collect();
         for rtol in [1e-6, 1e-9] {
             let b = run_bilateral_batch(&s, &y0, t_end, &tol(rtol));
             let (mut worst, mut steps_b, mut steps_s) = (0.0f64, 0u64, 0u64);
@@ -746,11 +782,17 @@ mod tests {
                 let scale = r.extremes.max_abs_z;
                 let e_s = (sc.y[0] - r.y[0]).abs();
                 let e_b = (b[i].y[0] - r.y[0]).abs();
-                assert!(e_b <= 10.0 * e_s + 1e-3 * rtol * scale, "rtol {rtol} #{i}: batch error {e_b:e}, scalar {e_s:e}");
+                assert!(
+                    e_b <= 10.0 * e_s + 1e-3 * rtol * scale,
+                    "rtol {rtol} #{i}: batch error {e_b:e}, scalar {e_s:e}"
+                );
                 worst = worst.max(e_b / scale);
                 for c in 0..6 {
                     let size = characteristic_sizes(&s[i])[c];
-                    assert!((b[i].y[c] - sc.y[c]).abs() <= 1e3 * rtol * size.max(r.y[c].abs()), "rtol {rtol} #{i} y[{c}]");
+                    assert!(
+                        (b[i].y[c] - sc.y[c]).abs() <= 1e3 * rtol * size.max(r.y[c].abs()),
+                        "rtol {rtol} #{i} y[{c}]"
+                    );
                 }
                 let (nb, ns) = (b[i].stats.n_accept + b[i].stats.n_reject, sc.stats.n_accept + sc.stats.n_reject);
                 assert!((nb as f64 - ns as f64).abs() <= 0.03 * ns as f64 + 2.0, "#{i}: {nb} vs {ns} steps");
