@@ -45,7 +45,10 @@ lint: $(BIN)/python
 	$(BIN)/python -m ruff check python tests benches
 
 bench: install-test
-	$(BIN)/python benches/run_all.py --out bench_out
+	$(BIN)/python benches/bench_trajectories.py --n 1000
+	$(BIN)/python benches/bench_frequency.py
+	$(BIN)/python benches/bench_sweep.py --points 100000 --memory-points 1000000
+	$(BIN)/python benches/work_precision.py --out bench_out
 
 bench-quick: install-test
 	$(BIN)/tribosweep bench --quick --out bench_out

@@ -368,13 +368,7 @@ pub fn hopf_loads(p: &Params, load_min: f64, load_max: f64, n_grid: usize) -> Re
     p.validate()?;
     let ratio = (load_max / load_min).ln();
     let grid: Vec<f64> = (0..n_grid)
-        .map(|i| {
-            if i + 1 == n_grid {
-                load_max
-            } else {
-                load_min * (ratio * i as f64 / (n_grid - 1) as f64).exp()
-            }
-        })
+        .map(|i| if i + 1 == n_grid { load_max } else { load_min * (ratio * i as f64 / (n_grid - 1) as f64).exp() })
         .collect();
     let mut vals = Vec::with_capacity(n_grid);
     for &f in &grid {
@@ -574,7 +568,10 @@ mod tests {
             let h = hopf_loads(&p, 1.0, 250.0, 60).unwrap();
             assert_eq!(h.len(), 1, "mu = {mu}: {h:?}");
             let h = h[0];
-            eprintln!("mu = {mu}: Hopf load {:.6} N ({:?}, {:.3} rad/s, {} evals)", h.normal_load, h.direction, h.frequency, h.evaluations);
+            eprintln!(
+                "mu = {mu}: Hopf load {:.6} N ({:?}, {:.3} rad/s, {} evals)",
+                h.normal_load, h.direction, h.frequency, h.evaluations
+            );
             assert!(close(h.normal_load, load, 1e-3), "mu = {mu}: {} vs {load}", h.normal_load);
             assert_eq!(h.status, Status::Success);
             assert!(h.bracket <= 2e-10 * h.normal_load);

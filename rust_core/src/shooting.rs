@@ -28,7 +28,9 @@
 
 use crate::linear::eigenvalues;
 use crate::model::{event, idx, ContactMode, Jacobian, Slider, State};
-use crate::ode::{integrate, Control, EventAction, Method, Observer, OdeSystem, Options, Outcome, Stats, StepView, MAX_EVENTS};
+use crate::ode::{
+    integrate, Control, EventAction, Method, Observer, OdeSystem, Options, Outcome, Stats, StepView, MAX_EVENTS,
+};
 use crate::status::Status;
 use crate::tidf::{two_harmonic_argmax, Root};
 use nalgebra::{Complex, SMatrix, SVector};
@@ -171,7 +173,14 @@ struct StopAtSwitch {
 }
 
 impl<const N: usize> Observer<N, ContactMode> for StopAtSwitch {
-    fn on_event(&mut self, index: usize, _t: f64, _y: &SVector<f64, N>, before: ContactMode, after: ContactMode) -> Control {
+    fn on_event(
+        &mut self,
+        index: usize,
+        _t: f64,
+        _y: &SVector<f64, N>,
+        before: ContactMode,
+        after: ContactMode,
+    ) -> Control {
         if before != after {
             self.hit = Some((index, before, after));
             Control::Stop
@@ -232,7 +241,14 @@ impl<const N: usize, O: Observer<N, ContactMode>> Observer<N, ContactMode> for W
         self.inner.on_step(st)
     }
 
-    fn on_event(&mut self, index: usize, t: f64, y: &SVector<f64, N>, before: ContactMode, after: ContactMode) -> Control {
+    fn on_event(
+        &mut self,
+        index: usize,
+        t: f64,
+        y: &SVector<f64, N>,
+        before: ContactMode,
+        after: ContactMode,
+    ) -> Control {
         self.inner.on_event(index, t, y, before, after)
     }
 }
@@ -471,7 +487,15 @@ struct Flow {
 /// Integrate `y0` (mode `mode0`) with its variational equations over `[0, t_end]`, applying the
 /// saltation matrix at every switch, with the local refinement of [`run_watched`] (unilateral
 /// model only: the bilateral flow has no switches to hide).
-fn flow(s: &Slider, y0: &State, mode0: ContactMode, t_end: f64, opts: &ShootingOptions, o42: &Options<42>, stats: &mut Stats) -> Result<Flow, Status> {
+fn flow(
+    s: &Slider,
+    y0: &State,
+    mode0: ContactMode,
+    t_end: f64,
+    opts: &ShootingOptions,
+    o42: &Options<42>,
+    stats: &mut Stats,
+) -> Result<Flow, Status> {
     let mut t = 0.0;
     let mut y = join(y0, &Jacobian::identity());
     let mut mode = mode0;
@@ -483,7 +507,9 @@ fn flow(s: &Slider, y0: &State, mode0: ContactMode, t_end: f64, opts: &ShootingO
         let sol = run_watched(make, s, opts.method, t, y, mode, t_end, o42, false, &mut cap, &mut obs, stats);
         let (ye, phie) = split(&sol.y);
         match sol.outcome {
-            Outcome::Finished => return Ok(Flow { y: ye, phi: phie, mode: sol.mode, n_switches, refinements: cap.refinements }),
+            Outcome::Finished => {
+                return Ok(Flow { y: ye, phi: phie, mode: sol.mode, n_switches, refinements: cap.refinements })
+            }
             Outcome::StoppedByObserver => {
                 let Some((index, before, after)) = obs.hit else { return Err(Status::NotConverged) };
                 n_switches += 1;
@@ -717,7 +743,14 @@ impl Observer<6, ContactMode> for Section {
     }
 }
 
-fn section_crossings(s: &Slider, y: &State, t_max: f64, max_hits: usize, opts: &ShootingOptions, stats: &mut Stats) -> Vec<(f64, State)> {
+fn section_crossings(
+    s: &Slider,
+    y: &State,
+    t_max: f64,
+    max_hits: usize,
+    opts: &ShootingOptions,
+    stats: &mut Stats,
+) -> Vec<(f64, State)> {
     let o = crate::steady::options_for(s, &crate::steady::Tolerances { rtol: opts.rtol.max(1e-10), atol: None });
     let mut obs = Section { hits: Vec::new(), max_hits };
     let make = |m| Forced { slider: s, start: m };
@@ -761,7 +794,13 @@ impl Observer<6, ContactMode> for Recorder {
             if t > st.t1 {
                 break;
             }
-            let v = if t <= st.t0 { *st.y0 } else if t == st.t1 { *st.y1 } else { st.dense.eval(t) };
+            let v = if t <= st.t0 {
+                *st.y0
+            } else if t == st.t1 {
+                *st.y1
+            } else {
+                st.dense.eval(t)
+            };
             self.z.push(v[idx::Z]);
             let f = self.slider.forces(&v, st.mode);
             self.min_n = self.min_n.min(f.normal);
@@ -885,7 +924,12 @@ mod tests {
     use crate::tidf::{SearchOptions, Tidf, Variant};
 
     fn seed_root(s: &Slider) -> Root {
-        Tidf::new(s, Variant::Consistent).find_roots(s, &SearchOptions::default()).roots.into_iter().find(|r| r.physical).unwrap()
+        Tidf::new(s, Variant::Consistent)
+            .find_roots(s, &SearchOptions::default())
+            .roots
+            .into_iter()
+            .find(|r| r.physical)
+            .unwrap()
     }
 
     fn rel(a: f64, b: f64) -> f64 {
@@ -1083,7 +1127,13 @@ mod tests {
 
             assert_eq!(o.status, Status::Success);
             let err = 1.0 - root.a1 / o.harmonics.a1;
-            eprintln!("mu 0.1, {load} N: DF A1 {:.4e}, orbit A1 {:.4e} ({:.1} % below), orbit stable {}", root.a1, o.harmonics.a1, 100.0 * err, o.stable);
+            eprintln!(
+                "mu 0.1, {load} N: DF A1 {:.4e}, orbit A1 {:.4e} ({:.1} % below), orbit stable {}",
+                root.a1,
+                o.harmonics.a1,
+                100.0 * err,
+                o.stable
+            );
             assert!((err - gap).abs() < 0.002, "{err}");
             assert!(!o.stable);
         }
@@ -1131,7 +1181,12 @@ mod tests {
             std::hint::black_box(flow(&s, &y0, ContactMode::Contact, t, &opts, &o42, &mut st).ok());
         }
         let dt = t0.elapsed().as_secs_f64() / n as f64;
-        eprintln!("one variational period: {:.0} us, {} rhs, {} steps", dt * 1e6, st.n_rhs / n as u64, st.n_accept / n as u64);
+        eprintln!(
+            "one variational period: {:.0} us, {} rhs, {} steps",
+            dt * 1e6,
+            st.n_rhs / n as u64,
+            st.n_accept / n as u64
+        );
         let o6 = crate::steady::options_for(&s, &crate::steady::Tolerances { rtol: opts.rtol, atol: None });
         let t0 = std::time::Instant::now();
         let mut st = Stats::default();
@@ -1139,7 +1194,12 @@ mod tests {
             st += std::hint::black_box(integrate(&s, opts.method, 0.0, y0, t, &o6, &mut crate::ode::NoObserver)).stats;
         }
         let dt = t0.elapsed().as_secs_f64() / n as f64;
-        eprintln!("one plain period: {:.0} us, {} rhs, {} steps", dt * 1e6, st.n_rhs / n as u64, st.n_accept / n as u64);
+        eprintln!(
+            "one plain period: {:.0} us, {} rhs, {} steps",
+            dt * 1e6,
+            st.n_rhs / n as u64,
+            st.n_accept / n as u64
+        );
         let sys = Variational { slider: &s, start: ContactMode::Contact };
         let mut ya = join(&y0, &Jacobian::identity());
         let t0 = std::time::Instant::now();

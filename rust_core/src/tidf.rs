@@ -446,13 +446,8 @@ impl Tidf {
         let mut j = TidfJacobian::zeros();
         if with_jac {
             let k = self.inv_ks;
-            let cols1 = [
-                dl1,
-                C64::new(-2.0 * ka, 0.0),
-                C64::new(0.0, 0.0),
-                ka * C64::new(s, -c),
-                ka * a2 * C64::new(c, s),
-            ];
+            let cols1 =
+                [dl1, C64::new(-2.0 * ka, 0.0), C64::new(0.0, 0.0), ka * C64::new(s, -c), ka * a2 * C64::new(c, s)];
             let sc = C64::new(s, c);
             let cols2 = [
                 dl2,
@@ -538,7 +533,11 @@ impl Tidf {
                     break true;
                 }
                 // Quadratic backtracking, kept within [0.1, 0.5] of the last lambda.
-                let lq = if phit.is_finite() { phi0 * lambda * lambda / (phit + phi0 * (2.0 * lambda - 1.0)) } else { 0.1 * lambda };
+                let lq = if phit.is_finite() {
+                    phi0 * lambda * lambda / (phit + phi0 * (2.0 * lambda - 1.0))
+                } else {
+                    0.1 * lambda
+                };
                 lambda = lq.clamp(0.1 * lambda, 0.5 * lambda);
                 if lambda < 1e-6 {
                     break false;
@@ -898,7 +897,14 @@ mod tests {
         let phys: Vec<&Root> = search.roots.iter().filter(|r| r.physical).collect();
         assert_eq!(phys.len(), 1);
         let r = phys[0];
-        eprintln!("dead load: w {:.6} A0 {:.4e} A1 {:.5e} A2 {:.4e} theta {:.3}", r.omega, r.a0, r.a1, r.a2, deg(r.theta));
+        eprintln!(
+            "dead load: w {:.6} A0 {:.4e} A1 {:.5e} A2 {:.4e} theta {:.3}",
+            r.omega,
+            r.a0,
+            r.a1,
+            r.a2,
+            deg(r.theta)
+        );
         assert!((r.omega - 647.563).abs() < 7e-4, "w = {}", r.omega);
         assert!((r.a0 - 0.978e-6).abs() < 0.6e-9, "A0 = {}", r.a0);
         assert!((r.a1 - 21.486e-6).abs() < 0.6e-9, "A1 = {}", r.a1);
@@ -909,15 +915,36 @@ mod tests {
     #[test]
     fn finer_grid_finds_the_same_roots() {
         let s = Slider::seed();
-        for p in [Params::seed(), Params { normal_load: 30.0, ..Params::seed() }, Params { mu: 0.1, normal_load: 200.0, ..Params::seed() }] {
+        for p in [
+            Params::seed(),
+            Params { normal_load: 30.0, ..Params::seed() },
+            Params { mu: 0.1, normal_load: 200.0, ..Params::seed() },
+        ] {
             let s2 = Slider::new(p).unwrap();
             let t = Tidf::new(&s2, Variant::Consistent);
             let base = t.find_roots(&s2, &SearchOptions::default());
             let fine = t.find_roots(&s2, &SearchOptions::default().refined(2.0));
             let finer = t.find_roots(&s2, &SearchOptions::default().refined(8.0));
-            eprintln!("load {} mu {}: {} roots ({} / {} / {} grid points)", p.normal_load, p.mu, base.roots.len(), base.n_grid, fine.n_grid, finer.n_grid);
+            eprintln!(
+                "load {} mu {}: {} roots ({} / {} / {} grid points)",
+                p.normal_load,
+                p.mu,
+                base.roots.len(),
+                base.n_grid,
+                fine.n_grid,
+                finer.n_grid
+            );
             for r in &base.roots {
-                eprintln!("  w {:.4} A0 {:.3e} A1 {:.3e} A2 {:.3e} theta {:.2} physical {} opens {}", r.omega, r.a0, r.a1, r.a2, deg(r.theta), r.physical, r.contact_opens);
+                eprintln!(
+                    "  w {:.4} A0 {:.3e} A1 {:.3e} A2 {:.3e} theta {:.2} physical {} opens {}",
+                    r.omega,
+                    r.a0,
+                    r.a1,
+                    r.a2,
+                    deg(r.theta),
+                    r.physical,
+                    r.contact_opens
+                );
             }
             for other in [&fine, &finer] {
                 assert_eq!(base.roots.len(), other.roots.len());
@@ -952,15 +979,26 @@ mod tests {
         for x in &r.roots {
             eprintln!("15 N root: w {:.3} A0 {:.3e} A1 {:.3e} physical {}", x.omega, x.a0, x.a1, x.physical);
         }
-        eprintln!("15 N: outcome {:?}, complex-amplitude zeros {:?}, unresolved {:?}", r.outcome, r.complex_amplitude, r.unresolved);
+        eprintln!(
+            "15 N: outcome {:?}, complex-amplitude zeros {:?}, unresolved {:?}",
+            r.outcome, r.complex_amplitude, r.unresolved
+        );
         assert!(r.roots.iter().all(|x| !x.physical && (280.0..610.0).contains(&x.omega)));
         assert!(r.unresolved.is_empty());
-        let branch: Vec<&Unresolved> =
-            r.complex_amplitude.iter().filter(|z| (z.omega - r.torsion_frequency).abs() < 0.05 * r.torsion_frequency).collect();
+        let branch: Vec<&Unresolved> = r
+            .complex_amplitude
+            .iter()
+            .filter(|z| (z.omega - r.torsion_frequency).abs() < 0.05 * r.torsion_frequency)
+            .collect();
         assert_eq!(branch.len(), 1, "{:?}", r.complex_amplitude);
         // The same holds on a load grid below the Hopf load.
         for load in [2.0, 5.0, 10.0, 20.0, 24.0] {
-            let r = find_roots(&Params { normal_load: load, ..Params::seed() }, Variant::Consistent, &SearchOptions::default()).unwrap();
+            let r = find_roots(
+                &Params { normal_load: load, ..Params::seed() },
+                Variant::Consistent,
+                &SearchOptions::default(),
+            )
+            .unwrap();
             assert!(r.max_growth_rate > 0.0 && r.roots.iter().all(|x| !x.physical), "load {load}");
         }
     }
@@ -971,18 +1009,31 @@ mod tests {
         let h = crate::linear::hopf_loads(&p0, 10.0, 50.0, 20).unwrap()[0];
         let p = Params { normal_load: h.normal_load, ..p0 };
         let r = find_roots(&p, Variant::Consistent, &SearchOptions::default()).unwrap();
-        eprintln!("at the Hopf load {}: unresolved {:?}, marginal {}, growth {:e}", h.normal_load, r.unresolved, r.near_marginal, r.max_growth_rate);
+        eprintln!(
+            "at the Hopf load {}: unresolved {:?}, marginal {}, growth {:e}",
+            h.normal_load, r.unresolved, r.near_marginal, r.max_growth_rate
+        );
         assert!(r.near_marginal);
         assert!(r.roots.iter().all(|x| !x.physical));
         assert_eq!(r.unresolved.len(), 1);
         assert!((r.unresolved[0].omega - r.torsion_frequency).abs() < 0.01 * r.torsion_frequency);
         // Just above it, the small root is resolved and physical (subcritical: it exists on the
         // stable side); just below, the zero has A1^2 < 0 (no root).
-        let above = find_roots(&Params { normal_load: h.normal_load * 1.01, ..p0 }, Variant::Consistent, &SearchOptions::default()).unwrap();
+        let above = find_roots(
+            &Params { normal_load: h.normal_load * 1.01, ..p0 },
+            Variant::Consistent,
+            &SearchOptions::default(),
+        )
+        .unwrap();
         let small: Vec<&Root> = above.roots.iter().filter(|x| x.physical).collect();
         assert_eq!(small.len(), 1);
         eprintln!("1 % above the Hopf load: A1 = {:e}", small[0].a1);
-        let below = find_roots(&Params { normal_load: h.normal_load * 0.99, ..p0 }, Variant::Consistent, &SearchOptions::default()).unwrap();
+        let below = find_roots(
+            &Params { normal_load: h.normal_load * 0.99, ..p0 },
+            Variant::Consistent,
+            &SearchOptions::default(),
+        )
+        .unwrap();
         assert!(below.roots.iter().all(|x| !x.physical) && below.unresolved.is_empty());
     }
 
@@ -997,7 +1048,8 @@ mod tests {
         let x = canonical(&r.x);
         assert!(rel(x[0], root.omega) < 1e-13 && rel(x[2], root.a1) < 1e-10, "{x} vs {:?}", root.x);
         // A hopeless guess fails as data.
-        let bad = t.solve(&Unknowns::new(2900.0, 1e-3, 1e-9, 1e-3, 0.0), &NewtonOptions { max_iter: 5, ..Default::default() });
+        let bad = t
+            .solve(&Unknowns::new(2900.0, 1e-3, 1e-9, 1e-3, 0.0), &NewtonOptions { max_iter: 5, ..Default::default() });
         assert_ne!(bad.status, Status::Success);
     }
 
@@ -1068,7 +1120,10 @@ mod tests {
                     }
                     found += 1;
                     assert!(
-                        search.roots.iter().any(|q| rel(q.omega, x[0]) < 1e-9 && (q.a1 - x[2]).abs() < 1e-9 * s.z_st.abs()),
+                        search
+                            .roots
+                            .iter()
+                            .any(|q| rel(q.omega, x[0]) < 1e-9 && (q.a1 - x[2]).abs() < 1e-9 * s.z_st.abs()),
                         "load {}: 2-D grid root {x} not in the 1-D set",
                         p.normal_load
                     );
@@ -1093,7 +1148,8 @@ mod tests {
         let dt = t0.elapsed().as_secs_f64() / n as f64;
         eprintln!("all-roots search: {:.1} us per point ({} roots)", dt * 1e6, k / n);
         let root = t.find_roots(&s, &opts).roots.into_iter().find(|r| r.physical).unwrap();
-        let guess = Unknowns::new(root.omega * 1.001, root.a0 * 1.05, root.a1 * 0.98, root.a2 * 1.02, root.theta + 0.01);
+        let guess =
+            Unknowns::new(root.omega * 1.001, root.a0 * 1.05, root.a1 * 0.98, root.a2 * 1.02, root.theta + 0.01);
         let m = 200_000;
         let t0 = std::time::Instant::now();
         let mut it = 0;
@@ -1102,6 +1158,11 @@ mod tests {
             it += std::hint::black_box(t.solve(std::hint::black_box(&g), &NewtonOptions::default())).iterations;
         }
         let dt = t0.elapsed().as_secs_f64() / m as f64;
-        eprintln!("warm-start Newton: {:.2} us per solve, {:.0} solves/s, {:.1} iterations", dt * 1e6, 1.0 / dt, it as f64 / m as f64);
+        eprintln!(
+            "warm-start Newton: {:.2} us per solve, {:.0} solves/s, {:.1} iterations",
+            dt * 1e6,
+            1.0 / dt,
+            it as f64 / m as f64
+        );
     }
 }

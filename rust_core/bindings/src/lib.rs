@@ -289,6 +289,52 @@ fn ensemble<'py>(
                 return Err(CoreError("kind = 'sampled' needs t_eval".into()).into());
             }
             let te = t_eval.unwrap_or_default();
+            let p0 = items.first().map(|it| it.0);
+            let batchable = te.is_empty()
+                && method == Method::Dopri5
+                && p0.is_some_and(|p| p.contact == ContactModel::Bilateral && p.friction_law == FrictionLaw::Constant);
+            if batchable {
+                // The lane-batched Dormand-Prince path (ode::batch): same method and tolerances, 8
+                // trajectories per SIMD batch. Each trajectory's result does not depend on which
+                // others share its batch (tested in ode::batch), so any grouping is deterministic for
+                // any thread count; a panic marks its whole group.
+                // Groups big enough to keep the 8 lanes busy (the last long runs of a small group
+                // leave lanes idle), small enough to spread over the threads.
+                let nthreads = threads.unwrap_or_else(tribosweep_core::ensemble::default_threads).max(1);
+                let group = (items.len() / (4 * nthreads)).clamp(64, 1024);
+                let groups: Vec<&[(Params, State)]> = items.chunks(group).collect();
+                let out: Vec<Vec<(RunResult, String)>> = py.detach(|| {
+                    par_map(
+                        &groups,
+                        threads,
+                        |g| {
+                            let sliders: Vec<Slider> =
+                                g.iter().map(|(p, _)| Slider::new(*p).expect("validated")).collect();
+                            let y0s: Vec<State> = g.iter().map(|(_, y)| *y).collect();
+                            tribosweep_core::ode::batch::run_bilateral_batch(&sliders, &y0s, t_end, &tol)
+                                .into_iter()
+                                .enumerate()
+                                .map(|(k, r)| {
+                                    // The batch stops a diverging lane at a step end; the scalar
+                                    // path locates the escape. Diverged runs are rare: redo them.
+                                    if r.status == Status::Diverged {
+                                        (steady::run(&sliders[k], &y0s[k], t_end, method, &tol), String::new())
+                                    } else {
+                                        (r, String::new())
+                                    }
+                                })
+                                .collect()
+                        },
+                        |msg| vec![(failed_run(Status::Panic), format!("panic: {msg}")); group],
+                    )
+                });
+                let flat: Vec<(RunResult, String)> =
+                    out.into_iter().zip(&groups).flat_map(|(v, g)| v.into_iter().take(g.len())).collect();
+                let runs: Vec<RunResult> = flat.iter().map(|o| o.0).collect();
+                let reasons: Vec<String> = flat.iter().map(|o| o.1.clone()).collect();
+                runs_into(&d, &runs, &reasons)?;
+                return Ok(d);
+            }
             let out: Vec<(RunResult, Vec<State>, String)> = py.detach(|| {
                 par_map(
                     &items,
@@ -483,6 +529,9 @@ fn hopf_loads<'py>(
     Ok(out)
 }
 
+/// A named real quantity of a describing-function root.
+type RootField = fn(&tidf::Root) -> f64;
+
 fn search_options(w_min: f64, w_max: f64, n_base: usize) -> SearchOptions {
     SearchOptions { w_min, w_max, n_base, ..SearchOptions::default() }
 }
@@ -523,7 +572,7 @@ fn describing_function<'py>(
     let n = out.len();
     let r = out.iter().map(|o| o.as_ref().map_or(0, |s| s.roots.len())).max().unwrap_or(0).max(1);
     let d = PyDict::new(py);
-    let fields: [(&str, fn(&tidf::Root) -> f64); 16] = [
+    let fields: [(&str, RootField); 16] = [
         ("omega", |x| x.omega),
         ("A0", |x| x.a0),
         ("A1", |x| x.a1),

@@ -350,12 +350,26 @@ impl<const N: usize, S: OdeSystem<N>> Stepper<N, S> for Dop853<N> {
         let s5 = error_norm(&err5, y, &y_new, atol, rtol).powi(2) * n;
         let s3 = error_norm(&err3, y, &y_new, atol, rtol).powi(2) * n;
         let den = s5 + 0.01 * s3;
-        let err = if den > 0.0 { h.abs() * s5 / (den * n).sqrt() } else if den == 0.0 { 0.0 } else { f64::NAN };
+        let err = if den > 0.0 {
+            h.abs() * s5 / (den * n).sqrt()
+        } else if den == 0.0 {
+            0.0
+        } else {
+            f64::NAN
+        };
         (y_new, err)
     }
 
     #[inline]
-    fn finish(&mut self, sys: &S, mode: S::Mode, t: f64, h: f64, y_new: &SVector<f64, N>, stats: &mut Stats) -> SVector<f64, N> {
+    fn finish(
+        &mut self,
+        sys: &S,
+        mode: S::Mode,
+        t: f64,
+        h: f64,
+        y_new: &SVector<f64, N>,
+        stats: &mut Stats,
+    ) -> SVector<f64, N> {
         // Not FSAL in the strict sense: f(t + h, y_new) is a 13th evaluation, made only once the
         // step is accepted; it is stage 1 of the next step and a node of the interpolant.
         let f = sys.rhs(t + h, y_new, mode);
@@ -389,7 +403,13 @@ mod tests {
     fn order_eight_on_lotka_volterra() {
         // DOP853 reaches rounding fast: few steps over a long interval (t = 20, about 3 cycles),
         // step counts in ratios of sqrt(2). Measured: errors 5e-7 .. 4e-13, order about 8.2.
-        let p = observed_order(&LotkaVolterra, Method::Dop853, SVector::<f64, 2>::new(1.0, 3.0), 20.0, &[40, 56, 80, 113, 160, 226]);
+        let p = observed_order(
+            &LotkaVolterra,
+            Method::Dop853,
+            SVector::<f64, 2>::new(1.0, 3.0),
+            20.0,
+            &[40, 56, 80, 113, 160, 226],
+        );
         assert!((p - 8.0).abs() < 0.3, "observed order {p}");
     }
 

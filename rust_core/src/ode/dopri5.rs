@@ -126,7 +126,15 @@ impl<const N: usize, S: OdeSystem<N>> Stepper<N, S> for Dopri5<N> {
     }
 
     #[inline]
-    fn finish(&mut self, _sys: &S, _mode: S::Mode, _t: f64, _h: f64, _y_new: &SVector<f64, N>, _stats: &mut Stats) -> SVector<f64, N> {
+    fn finish(
+        &mut self,
+        _sys: &S,
+        _mode: S::Mode,
+        _t: f64,
+        _h: f64,
+        _y_new: &SVector<f64, N>,
+        _stats: &mut Stats,
+    ) -> SVector<f64, N> {
         // First same as last: the 7th stage is f(t + h, y_new).
         self.k[6]
     }
@@ -155,7 +163,8 @@ mod tests {
     #[test]
     fn order_five_on_forced_duffing() {
         // Measured: errors 2.1e-8 .. 6.4e-13 for n = 200 .. 1600, order 4.98.
-        let p = observed_order(&DUFFING, Method::Dopri5, SVector::<f64, 2>::new(1.0, 0.0), 10.0, &[200, 400, 800, 1600]);
+        let p =
+            observed_order(&DUFFING, Method::Dopri5, SVector::<f64, 2>::new(1.0, 0.0), 10.0, &[200, 400, 800, 1600]);
         assert!((p - 5.0).abs() < 0.3, "observed order {p}");
     }
 
@@ -163,7 +172,13 @@ mod tests {
     fn order_five_on_two_body_problem() {
         // Kepler, e = 0.5, one orbit. Measured: errors 6.1e-7 .. 1.3e-11, order 5.18 (approached
         // from above; at n = 3200 the error, 3e-13, is near the reference's rounding).
-        let p = observed_order(&Kepler, Method::Dopri5, Kepler::y0(0.5), 2.0 * std::f64::consts::PI, &[200, 400, 800, 1600]);
+        let p = observed_order(
+            &Kepler,
+            Method::Dopri5,
+            Kepler::y0(0.5),
+            2.0 * std::f64::consts::PI,
+            &[200, 400, 800, 1600],
+        );
         assert!((p - 5.0).abs() < 0.3, "observed order {p}");
     }
 

@@ -85,7 +85,16 @@ pub(crate) trait Stepper<const N: usize, S: OdeSystem<N>> {
 
     /// A step is about to start at `(t, y)` with `f = f(t, y)` (first attempt from this point).
     #[inline]
-    fn begin(&mut self, _sys: &S, _mode: S::Mode, _t: f64, _y: &SVector<f64, N>, _f: &SVector<f64, N>, _stats: &mut Stats) {}
+    fn begin(
+        &mut self,
+        _sys: &S,
+        _mode: S::Mode,
+        _t: f64,
+        _y: &SVector<f64, N>,
+        _f: &SVector<f64, N>,
+        _stats: &mut Stats,
+    ) {
+    }
 
     /// Attempt a step of size `h`: the new state and the error norm (`<= 1` accepts; NaN or
     /// infinite when the step failed).
@@ -104,7 +113,15 @@ pub(crate) trait Stepper<const N: usize, S: OdeSystem<N>> {
     ) -> (SVector<f64, N>, f64);
 
     /// The attempted step is accepted: `f(t + h, y_new)` (FSAL stage or a new evaluation).
-    fn finish(&mut self, sys: &S, mode: S::Mode, t: f64, h: f64, y_new: &SVector<f64, N>, stats: &mut Stats) -> SVector<f64, N>;
+    fn finish(
+        &mut self,
+        sys: &S,
+        mode: S::Mode,
+        t: f64,
+        h: f64,
+        y_new: &SVector<f64, N>,
+        stats: &mut Stats,
+    ) -> SVector<f64, N>;
 
     /// The interpolant of the accepted step `[t, t + h]` from `y0` to `y1`.
     fn dense<'a>(
@@ -397,8 +414,16 @@ where
                 continue;
             }
         };
-        stats.n_accept += 1;
         let t_new = if last { t_end } else { t + h };
+        if n_ev > 0 && opts.interior_checks > 0 {
+            if let Some(t_in) = hidden_crossing(sys, &st, mode, (t, &y), (h, t_new, &y_new), n_ev, &g0, &pend, opts) {
+                // A crossing and its return inside this step: redo it ending inside the excursion.
+                stats.n_reject += 1;
+                h = t_in - t;
+                continue;
+            }
+        }
+        stats.n_accept += 1;
         let mut ratio = ctl.accept(h, err);
         if rejected {
             ratio = ratio.min(1.0);
@@ -490,6 +515,39 @@ struct Switched {
     pend_before: [Option<f64>; MAX_EVENTS],
     /// Check times of the events pending in that step (`-inf` for the others).
     t_check: [f64; MAX_EVENTS],
+}
+
+/// First interior point (of `opts.interior_checks` evenly spaced ones) of a step where an event
+/// function that is not pending differs in sign from the step start while the step end does not:
+/// a crossing and its return hidden inside the step.
+#[inline(never)]
+#[allow(clippy::too_many_arguments)]
+fn hidden_crossing<const N: usize, S: OdeSystem<N>, St: Stepper<N, S>>(
+    sys: &S,
+    st: &St,
+    mode: S::Mode,
+    (t, y): (f64, &SVector<f64, N>),
+    (h, t_new, y_end): (f64, f64, &SVector<f64, N>),
+    n_ev: usize,
+    g0: &[f64; MAX_EVENTS],
+    pend: &[Option<f64>; MAX_EVENTS],
+    opts: &Options<N>,
+) -> Option<f64> {
+    let dense = st.dense(sys, mode, t, h, y, y_end);
+    let mut g1 = [0.0; MAX_EVENTS];
+    sys.events(t_new, y_end, mode, &mut g1);
+    let k = opts.interior_checks as usize;
+    let mut gk = [0.0; MAX_EVENTS];
+    for j in 1..=k {
+        let tj = t + (t_new - t) * j as f64 / (k + 1) as f64;
+        sys.events(tj, &dense.eval(tj), mode, &mut gk);
+        for i in 0..n_ev {
+            if pend[i].is_none() && crosses(g0[i], gk[i]) && !crosses(g0[i], g1[i]) {
+                return Some(tj);
+            }
+        }
+    }
+    None
 }
 
 /// Locate, act on and report the events of an accepted step `[t, t_new]` in which some event
@@ -674,7 +732,8 @@ pub(crate) mod test_systems {
             let r2 = y[0] * y[0] + y[1] * y[1];
             let r3 = r2 * r2.sqrt();
             let r5 = r3 * r2;
-            let (a, b, c) = (3.0 * y[0] * y[0] / r5 - 1.0 / r3, 3.0 * y[0] * y[1] / r5, 3.0 * y[1] * y[1] / r5 - 1.0 / r3);
+            let (a, b, c) =
+                (3.0 * y[0] * y[0] / r5 - 1.0 / r3, 3.0 * y[0] * y[1] / r5, 3.0 * y[1] * y[1] / r5 - 1.0 / r3);
             SMatrix::<f64, 4, 4>::new(0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, a, b, 0.0, 0.0, b, c, 0.0, 0.0)
         }
         fn initial_mode(&self, _t: f64, _y: &SVector<f64, 4>) {}
@@ -695,7 +754,10 @@ pub(crate) mod test_systems {
         type Mode = ();
         fn rhs(&self, t: f64, y: &SVector<f64, 2>, _m: ()) -> SVector<f64, 2> {
             let x = y[0];
-            SVector::<f64, 2>::new(y[1], -self.d * y[1] - self.k1 * x - self.k3 * x * x * x + self.g * (self.w * t).cos())
+            SVector::<f64, 2>::new(
+                y[1],
+                -self.d * y[1] - self.k1 * x - self.k3 * x * x * x + self.g * (self.w * t).cos(),
+            )
         }
         fn jacobian(&self, _t: f64, y: &SVector<f64, 2>, _m: ()) -> SMatrix<f64, 2, 2> {
             SMatrix::<f64, 2, 2>::new(0.0, 1.0, -self.k1 - 3.0 * self.k3 * y[0] * y[0], -self.d)
@@ -847,12 +909,7 @@ pub(crate) mod test_systems {
             SVector::<f64, 2>::new(y[1], ((1.0 - y[0] * y[0]) * y[1] - y[0]) / self.eps)
         }
         fn jacobian(&self, _t: f64, y: &SVector<f64, 2>, _m: ()) -> SMatrix<f64, 2, 2> {
-            SMatrix::<f64, 2, 2>::new(
-                0.0,
-                1.0,
-                (-2.0 * y[0] * y[1] - 1.0) / self.eps,
-                (1.0 - y[0] * y[0]) / self.eps,
-            )
+            SMatrix::<f64, 2, 2>::new(0.0, 1.0, (-2.0 * y[0] * y[1] - 1.0) / self.eps, (1.0 - y[0] * y[0]) / self.eps)
         }
         fn initial_mode(&self, _t: f64, _y: &SVector<f64, 2>) {}
     }
@@ -867,8 +924,10 @@ pub(crate) mod test_systems {
         ns: &[usize],
     ) -> f64 {
         use crate::ode::{driver::integrate_fixed, integrate, Method, NoObserver, Options};
-        let reference = integrate(sys, Method::Dop853, 0.0, y0, t_end, &Options::<N>::new(1e-15, 1e-18), &mut NoObserver).y;
-        let errs: Vec<f64> = ns.iter().map(|&n| (integrate_fixed(sys, method, 0.0, y0, t_end, n) - reference).amax()).collect();
+        let reference =
+            integrate(sys, Method::Dop853, 0.0, y0, t_end, &Options::<N>::new(1e-15, 1e-18), &mut NoObserver).y;
+        let errs: Vec<f64> =
+            ns.iter().map(|&n| (integrate_fixed(sys, method, 0.0, y0, t_end, n) - reference).amax()).collect();
         let p = slope(ns, &errs);
         println!("{method:?}: n {ns:?} errors {} -> order {p:.3}", sci(&errs));
         p
@@ -891,7 +950,8 @@ pub(crate) mod test_systems {
         let (y1, _) = st.try_step(sys, mode, 0.0, &y0, &f0, h, &atol, 0.0, &mut stats);
         st.finish(sys, mode, 0.0, h, &y1, &mut stats);
         let mid = st.dense(sys, mode, 0.0, h, &y0, &y1).eval(0.5 * h);
-        let reference = integrate(sys, Method::Dop853, 0.0, y0, 0.5 * h, &Options::<N>::new(1e-15, 1e-18), &mut NoObserver).y;
+        let reference =
+            integrate(sys, Method::Dop853, 0.0, y0, 0.5 * h, &Options::<N>::new(1e-15, 1e-18), &mut NoObserver).y;
         (mid - reference).amax()
     }
 
@@ -976,7 +1036,8 @@ mod tests {
         let sys = Damped { w: 2.0 * PI, zeta: 0.05 };
         let y0 = SVector::<f64, 2>::new(1.0, 0.0);
         for m in Method::ALL {
-            let run = |rtol: f64| integrate(&sys, m, 0.0, y0, 5.0, &Options::<2>::new(rtol, rtol * 1e-3), &mut NoObserver);
+            let run =
+                |rtol: f64| integrate(&sys, m, 0.0, y0, 5.0, &Options::<2>::new(rtol, rtol * 1e-3), &mut NoObserver);
             let (a, b) = (run(1e-5), run(1e-9));
             let (ea, eb) = ((a.y - sys.exact(5.0)).amax(), (b.y - sys.exact(5.0)).amax());
             assert!(eb < ea * 1e-2, "{m:?}: {ea:e} -> {eb:e}");
@@ -1182,7 +1243,8 @@ mod tests {
     fn non_autonomous_rodas_matches_dop853() {
         // The forced Duffing oscillator exercises Rodas4's df/dt term.
         let y0 = SVector::<f64, 2>::new(1.0, 0.0);
-        let reference = integrate(&DUFFING, Method::Dop853, 0.0, y0, 10.0, &Options::<2>::new(1e-13, 1e-15), &mut NoObserver);
+        let reference =
+            integrate(&DUFFING, Method::Dop853, 0.0, y0, 10.0, &Options::<2>::new(1e-13, 1e-15), &mut NoObserver);
         for m in Method::ALL {
             let sol = integrate(&DUFFING, m, 0.0, y0, 10.0, &Options::<2>::new(1e-10, 1e-12), &mut NoObserver);
             let err = (sol.y - reference.y).amax();
@@ -1290,7 +1352,10 @@ mod slider_tests {
         for m in Method::ALL {
             let mut w = Watch::default();
             let sol = integrate(&s, m, 0.0, y0, 2.0, &Options::<6>::new(1e-8, 1e-14), &mut w);
-            println!("{m:?} unilateral mu=0.30, 2 s: {:?} at t={} z_max={:.3e} events {:?} switches {} {:?}", sol.outcome, sol.t, w.z_max, w.events, w.switches, sol.stats);
+            println!(
+                "{m:?} unilateral mu=0.30, 2 s: {:?} at t={} z_max={:.3e} events {:?} switches {} {:?}",
+                sol.outcome, sol.t, w.z_max, w.events, w.switches, sol.stats
+            );
             assert!(matches!(sol.outcome, Outcome::Finished | Outcome::StoppedByEvent), "{m:?}: {:?}", sol.outcome);
             assert!(sol.stats.n_accept < 200_000, "{m:?}: {:?}", sol.stats);
         }
@@ -1304,7 +1369,10 @@ mod slider_tests {
         let y0 = State::new(30e-6, 0.0, 0.0, 0.0, 0.0, 0.0);
         let mut w = Watch::default();
         let reference = integrate(&s, Method::Dop853, 0.0, y0, 0.1, &Options::<6>::new(1e-13, 1e-18), &mut w);
-        println!("reference: {:?} switches {} events {:?} {:?}", reference.outcome, w.switches, w.events, reference.stats);
+        println!(
+            "reference: {:?} switches {} events {:?} {:?}",
+            reference.outcome, w.switches, w.events, reference.stats
+        );
         assert_eq!(reference.outcome, Outcome::Finished);
         assert!(w.switches >= 4, "the contact should open and close: {}", w.switches);
         for m in Method::ALL {
@@ -1407,5 +1475,49 @@ mod slider_tests {
             integrate(&ne, Method::Dopri5, 0.0, std::hint::black_box(y0), 0.5, &opts, &mut NoObserver);
         }
         println!("Dopri5 without events: {:.1} us per trajectory", t0.elapsed().as_secs_f64() / reps as f64 * 1e6);
+    }
+}
+
+#[cfg(test)]
+mod hidden_crossing_tests {
+    use crate::ode::{integrate, EventAction, Method, NoObserver, OdeSystem, Options, MAX_EVENTS};
+    use nalgebra::SVector;
+
+    /// Harmonic oscillator x = cos t with the event x = 0.99: each peak pokes above the level for
+    /// 2 acos(0.99) = 0.283 s, shorter than the steps a loose tolerance takes (about 0.5 s) but
+    /// longer than the spacing of three interior checks: the situation of a short hop off the disk.
+    struct Peak;
+    impl OdeSystem<2> for Peak {
+        type Mode = ();
+        fn rhs(&self, _t: f64, y: &SVector<f64, 2>, _m: ()) -> SVector<f64, 2> {
+            SVector::<f64, 2>::new(y[1], -y[0])
+        }
+        fn initial_mode(&self, _t: f64, _y: &SVector<f64, 2>) {}
+        fn n_events(&self) -> usize {
+            1
+        }
+        fn events(&self, _t: f64, y: &SVector<f64, 2>, _m: (), g: &mut [f64; MAX_EVENTS]) {
+            g[0] = y[0] - 0.99;
+        }
+        fn on_event(&self, _t: f64, _y: &SVector<f64, 2>, _m: (), _i: usize) -> EventAction<()> {
+            EventAction::Continue
+        }
+    }
+
+    #[test]
+    fn interior_checks_find_excursions_inside_one_step() {
+        // Start at t = 0.1, above the level (cos 0.1 > 0.99): one crossing down at acos(0.99), then
+        // the peaks at 2 pi k, k = 1..=5, each entered and left: 11 crossings in (0.1, 33).
+        let y0 = SVector::<f64, 2>::new(0.1f64.cos(), -0.1f64.sin());
+        for method in [Method::Dopri5, Method::Dop853] {
+            let mut o = Options::<2>::new(1e-4, 1e-6);
+            let ends_only = integrate(&Peak, method, 0.1, y0, 33.0, &o, &mut NoObserver);
+            // DOP853 steps about 1.3 s here: 7 checks space 0.16 s, inside the 0.28 s excursion.
+            o.interior_checks = 7;
+            let inside = integrate(&Peak, method, 0.1, y0, 33.0, &o, &mut NoObserver);
+            assert_eq!(inside.stats.n_events, 11, "{method:?}: {:?}", inside.stats);
+            // Without the interior checks the loose steps jump over some of the excursions.
+            assert!(ends_only.stats.n_events < 11, "{method:?}: the test does not exercise hidden crossings");
+        }
     }
 }

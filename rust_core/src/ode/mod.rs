@@ -147,6 +147,11 @@ pub struct Options<const N: usize> {
     pub event_guard: f64,
     /// Most events in one run before it ends with `EventChatter`.
     pub max_events: u64,
+    /// Event functions are also checked at this many evenly spaced interior points of each step's
+    /// dense output; a sign change inside a step that the step's ends do not show (a crossing and
+    /// its return within one step: a short hop off the disk) makes the driver redo the step ending
+    /// at that interior point, so the excursion is located instead of stepped over. 0: ends only.
+    pub interior_checks: u32,
 }
 
 impl<const N: usize> Options<N> {
@@ -162,6 +167,7 @@ impl<const N: usize> Options<N> {
             event_tol: 1e-13,
             event_guard: 1e-12,
             max_events: 10_000_000,
+            interior_checks: 0,
         }
     }
 }
@@ -312,7 +318,13 @@ impl<const N: usize, M> Observer<N, M> for Sampler<'_, N> {
                 break;
             }
             // Times before the first step's start are clamped to it (t0 of the run).
-            let v = if t <= s.t0 { *s.y0 } else if t == s.t1 { *s.y1 } else { s.dense.eval(t) };
+            let v = if t <= s.t0 {
+                *s.y0
+            } else if t == s.t1 {
+                *s.y1
+            } else {
+                s.dense.eval(t)
+            };
             self.out.push(v);
         }
         Control::Continue

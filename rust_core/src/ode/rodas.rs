@@ -241,7 +241,15 @@ impl<const N: usize, S: OdeSystem<N>> Stepper<N, S> for Rodas4<N> {
     }
 
     #[inline]
-    fn finish(&mut self, sys: &S, mode: S::Mode, t: f64, h: f64, y_new: &SVector<f64, N>, stats: &mut Stats) -> SVector<f64, N> {
+    fn finish(
+        &mut self,
+        sys: &S,
+        mode: S::Mode,
+        t: f64,
+        h: f64,
+        y_new: &SVector<f64, N>,
+        stats: &mut Stats,
+    ) -> SVector<f64, N> {
         stats.n_rhs += 1;
         sys.rhs(t + h, y_new, mode)
     }
@@ -271,7 +279,8 @@ mod tests {
     fn order_four_on_forced_duffing() {
         // Non-autonomous (exercises the df/dt term) with an analytic Jacobian.
         // Measured: errors 1.5e-8 .. 3.4e-12 for n = 200 .. 1600, order 4.03.
-        let p = observed_order(&DUFFING, Method::Rodas4, SVector::<f64, 2>::new(1.0, 0.0), 10.0, &[200, 400, 800, 1600]);
+        let p =
+            observed_order(&DUFFING, Method::Rodas4, SVector::<f64, 2>::new(1.0, 0.0), 10.0, &[200, 400, 800, 1600]);
         assert!((p - 4.0).abs() < 0.3, "observed order {p}");
     }
 
