@@ -109,3 +109,12 @@ def param_arrays(params: dict[str, Sequence[float]], names: Sequence[str]) -> tu
         keys.append(k)
         cols.append(a)
     return keys, np.column_stack(cols)
+
+
+def budget(name: str, value) -> int | None:
+    """None or an integer >= 1 (a step or event budget)."""
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+        raise ValueError(f"{name} = {value!r} is out of range: must be an integer >= 1 or None")
+    return int(value)

@@ -86,6 +86,8 @@ def simulate(
     rtol: float = 1e-8,
     atol: float | Sequence[float] | None = None,
     t_eval: Sequence[float] | None = None,
+    max_steps: int | None = None,
+    max_events: int | None = None,
 ) -> xr.Dataset:
     """Integrate one trajectory of ``model`` from ``t = 0`` to ``t_end``.
 
@@ -108,6 +110,10 @@ def simulate(
         size (``|z_st|`` for z and x, ``|z_st|/L`` for phi, those times ``omega_torsion`` for rates).
     t_eval : array_like, s, optional
         Increasing output times in ``[0, t_end]``; default: every accepted step.
+    max_steps : int, optional
+        Step budget (accepted + rejected; default 10^7): beyond it the run ends with status ``max_steps``.
+    max_events : int, optional
+        Event budget (default 10^7): beyond it the run ends with status ``event_chatter``.
 
     Returns
     -------
@@ -125,7 +131,10 @@ def simulate(
     """
     t_end, method, rtol, atol, t_eval = _check_common(model, t_end, method, rtol, atol, t_eval)
     y0 = _checks.state("y0", DEFAULT_Y0 if y0 is None else y0)
-    out = _core.simulate(model.values(), model.contact, model.friction_law, y0, t_end, method, rtol, atol, t_eval)
+    max_steps = _checks.budget("max_steps", max_steps)
+    max_events = _checks.budget("max_events", max_events)
+    out = _core.simulate(model.values(), model.contact, model.friction_law, y0, t_end, method, rtol, atol, t_eval,
+                         max_steps, max_events)
     data = {
         name: (("time",), out["y"][:, i], {"units": units, "long_name": text})
         for i, (name, units, text) in enumerate(STATE_VARS)
@@ -153,6 +162,8 @@ def ensemble(
     steady: bool = False,
     periodic_tol: float = 1e-5,
     decay_amplitude: float | None = None,
+    max_steps: int | None = None,
+    max_events: int | None = None,
 ) -> xr.Dataset:
     """Integrate many parameter sets of ``model`` in parallel (GIL released, Rust threads).
 
@@ -183,6 +194,8 @@ def ensemble(
         Relative repetition tolerance of the Poincare-section state that declares a cycle.
     decay_amplitude : float, m, optional
         Amplitude below which a shrinking motion counts as decayed (default ``1e-3 |z_st|``).
+    max_steps, max_events : int, optional
+        Per-trajectory step and event budgets, as in :func:`simulate`.
 
     Returns
     -------
@@ -197,12 +210,14 @@ def ensemble(
     periodic_tol = _checks.positive("periodic_tol", periodic_tol)
     if decay_amplitude is not None:
         decay_amplitude = _checks.positive("decay_amplitude", decay_amplitude)
+    max_steps = _checks.budget("max_steps", max_steps)
+    max_events = _checks.budget("max_events", max_events)
     kind = "steady" if steady else ("sampled" if t_eval is not None else "final")
     if steady and t_eval is not None:
         raise ValueError("t_eval cannot be combined with steady=True: a steady run returns a summary")
     out = _core.ensemble(
         model.values(), model.contact, model.friction_law, names, values, np.atleast_2d(y0), t_end, method, rtol,
-        atol, t_eval, threads, kind, periodic_tol, decay_amplitude,
+        atol, t_eval, threads, kind, periodic_tol, decay_amplitude, 512, max_steps, max_events,
     )
     dims = ("trajectory",)
     coords = {"trajectory": ("trajectory", np.arange(n))}

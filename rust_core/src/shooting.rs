@@ -751,7 +751,7 @@ fn section_crossings(
     opts: &ShootingOptions,
     stats: &mut Stats,
 ) -> Vec<(f64, State)> {
-    let o = crate::steady::options_for(s, &crate::steady::Tolerances { rtol: opts.rtol.max(1e-10), atol: None });
+    let o = crate::steady::options_for(s, &crate::steady::Tolerances::new(opts.rtol.max(1e-10)));
     let mut obs = Section { hits: Vec::new(), max_hits };
     let make = |m| Forced { slider: s, start: m };
     let mut cap = Cap::NONE;
@@ -839,7 +839,7 @@ impl Observer<6, ContactMode> for Recorder {
 
 fn analyse(s: &Slider, y0: &State, t: f64, fl: &Flow, opts: &ShootingOptions, stats: &mut Stats) -> PeriodicOrbit {
     let m = opts.n_samples.max(16);
-    let o = crate::steady::options_for(s, &crate::steady::Tolerances { rtol: opts.rtol, atol: None });
+    let o = crate::steady::options_for(s, &crate::steady::Tolerances::new(opts.rtol));
     let mut rec = Recorder {
         t_eval: (0..m).map(|k| t * k as f64 / m as f64).collect(),
         z: Vec::with_capacity(m),
@@ -1051,7 +1051,7 @@ mod tests {
                 }
             }
         }
-        let o = crate::steady::options_for(s, &crate::steady::Tolerances { rtol, atol: None });
+        let o = crate::steady::options_for(s, &crate::steady::Tolerances::new(rtol));
         let mut y = *y;
         let mut retries = 0;
         let chunk = 0.25;
@@ -1187,7 +1187,7 @@ mod tests {
             st.n_rhs / n as u64,
             st.n_accept / n as u64
         );
-        let o6 = crate::steady::options_for(&s, &crate::steady::Tolerances { rtol: opts.rtol, atol: None });
+        let o6 = crate::steady::options_for(&s, &crate::steady::Tolerances::new(opts.rtol));
         let t0 = std::time::Instant::now();
         let mut st = Stats::default();
         for _ in 0..n {

@@ -25,13 +25,30 @@ use nalgebra::SVector;
 /// Largest period multiplicity (section crossings per period) looked for.
 pub const MAX_MULTIPLICITY: usize = 8;
 
-/// Tolerances of a plain integration, with per-component absolute tolerances scaled to the slider.
+/// Tolerances and limits of a plain integration, with per-component absolute tolerances scaled to
+/// the slider.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Tolerances {
     /// Relative tolerance (> 0).
     pub rtol: f64,
     /// Absolute tolerance per component; `None`: `rtol` times [`characteristic_sizes`].
     pub atol: Option<[f64; 6]>,
+    /// Step budget (accepted + rejected); `None`: [`Options::new`]'s default.
+    pub max_steps: Option<u64>,
+    /// Event budget before `EventChatter`; `None`: [`Options::new`]'s default.
+    pub max_events: Option<u64>,
+}
+
+impl Tolerances {
+    /// `rtol` with default absolute tolerances and limits.
+    pub fn new(rtol: f64) -> Self {
+        Tolerances { rtol, atol: None, max_steps: None, max_events: None }
+    }
+
+    /// True when a limit differs from the defaults.
+    pub fn has_limits(&self) -> bool {
+        self.max_steps.is_some() || self.max_events.is_some()
+    }
 }
 
 /// Characteristic size of each state component [m, m/s, m, m/s, rad, rad/s]: `|z_st|` for `z` and
@@ -51,6 +68,12 @@ pub fn options_for(s: &Slider, tol: &Tolerances) -> Options<6> {
     let atol = tol.atol.unwrap_or(sizes.map(|v| v * tol.rtol));
     let mut o = Options::<6>::new(tol.rtol, 1.0);
     o.atol = SVector::<f64, 6>::from(atol);
+    if let Some(n) = tol.max_steps {
+        o.max_steps = n;
+    }
+    if let Some(n) = tol.max_events {
+        o.max_events = n;
+    }
     if s.p.contact == ContactModel::Unilateral {
         // A hop off the disk can be shorter than one step (0.19 ms on the seed's bouncing cycle,
         // about one step at rtol 1e-8): check the contact functions inside every step too.
@@ -249,7 +272,7 @@ impl Default for SteadyOptions {
         SteadyOptions {
             t_max: 10.0,
             method: Method::Dopri5,
-            tol: Tolerances { rtol: 1e-8, atol: None },
+            tol: Tolerances::new(1e-8),
             periodic_tol: 1e-5,
             decay_amplitude: None,
             decay_window: 8,

@@ -69,7 +69,12 @@ fn params_from(values: &HashMap<String, f64>, contact: &str, friction_law: &str)
     Ok(p)
 }
 
-fn tolerances(rtol: f64, atol: Option<PyReadonlyArray1<'_, f64>>) -> Result<Tolerances, CoreError> {
+fn tolerances(
+    rtol: f64,
+    atol: Option<PyReadonlyArray1<'_, f64>>,
+    max_steps: Option<u64>,
+    max_events: Option<u64>,
+) -> Result<Tolerances, CoreError> {
     let atol = match atol {
         None => None,
         Some(a) => {
@@ -80,7 +85,7 @@ fn tolerances(rtol: f64, atol: Option<PyReadonlyArray1<'_, f64>>) -> Result<Tole
             Some(arr)
         }
     };
-    Ok(Tolerances { rtol, atol })
+    Ok(Tolerances { rtol, atol, max_steps, max_events })
 }
 
 fn stats_into(d: &Bound<'_, PyDict>, stats: &[Stats]) -> PyResult<()> {
@@ -163,7 +168,7 @@ fn static_point(values: HashMap<String, f64>) -> PyResult<(f64, f64)> {
 /// One trajectory. Returns a dict: `t` (n,), `y` (n, 6), and the run's status, counters, extremes.
 /// With `t_eval` the states are sampled there; otherwise every accepted step end is returned.
 #[pyfunction]
-#[pyo3(signature = (values, contact, friction_law, y0, t_end, method, rtol, atol=None, t_eval=None))]
+#[pyo3(signature = (values, contact, friction_law, y0, t_end, method, rtol, atol=None, t_eval=None, max_steps=None, max_events=None))]
 #[allow(clippy::too_many_arguments)]
 fn simulate<'py>(
     py: Python<'py>,
@@ -176,10 +181,12 @@ fn simulate<'py>(
     rtol: f64,
     atol: Option<PyReadonlyArray1<'py, f64>>,
     t_eval: Option<PyReadonlyArray1<'py, f64>>,
+    max_steps: Option<u64>,
+    max_events: Option<u64>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let p = params_from(&values, contact, friction_law)?;
     let method = method_from(method)?;
-    let tol = tolerances(rtol, atol)?;
+    let tol = tolerances(rtol, atol, max_steps, max_events)?;
     let y0 = State::from_column_slice(y0.as_slice()?);
     let t_eval: Option<Vec<f64>> = t_eval.map(|a| a.as_slice().map(|s| s.to_vec())).transpose()?;
     let slider = Slider::new(p).map_err(CoreError::from)?;
@@ -254,7 +261,7 @@ fn y0_rows(y0: &numpy::ndarray::ArrayView2<'_, f64>, n: usize) -> Result<Vec<Sta
 /// Many trajectories in parallel (GIL released). `kind` is "final" (end state), "sampled"
 /// (states at `t_eval`) or "steady" (run to steady state and summarise; `t_end` is then `t_max`).
 #[pyfunction]
-#[pyo3(signature = (base, contact, friction_law, names, values, y0, t_end, method, rtol, atol=None, t_eval=None, threads=None, kind="final", periodic_tol=1e-5, decay_amplitude=None, n_fourier=512))]
+#[pyo3(signature = (base, contact, friction_law, names, values, y0, t_end, method, rtol, atol=None, t_eval=None, threads=None, kind="final", periodic_tol=1e-5, decay_amplitude=None, n_fourier=512, max_steps=None, max_events=None))]
 #[allow(clippy::too_many_arguments)]
 fn ensemble<'py>(
     py: Python<'py>,
@@ -274,12 +281,14 @@ fn ensemble<'py>(
     periodic_tol: f64,
     decay_amplitude: Option<f64>,
     n_fourier: usize,
+    max_steps: Option<u64>,
+    max_events: Option<u64>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let params = ensemble_params(&base, contact, friction_law, &names, &values.as_array())?;
     let n = params.len();
     let y0s = y0_rows(&y0.as_array(), n)?;
     let method = method_from(method)?;
-    let tol = tolerances(rtol, atol)?;
+    let tol = tolerances(rtol, atol, max_steps, max_events)?;
     let t_eval: Option<Vec<f64>> = t_eval.map(|a| a.as_slice().map(|s| s.to_vec())).transpose()?;
     let items: Vec<(Params, State)> = params.into_iter().zip(y0s).collect();
     let d = PyDict::new(py);
@@ -291,6 +300,7 @@ fn ensemble<'py>(
             let te = t_eval.unwrap_or_default();
             let p0 = items.first().map(|it| it.0);
             let batchable = te.is_empty()
+                && !tol.has_limits()
                 && method == Method::Dopri5
                 && p0.is_some_and(|p| p.contact == ContactModel::Bilateral && p.friction_law == FrictionLaw::Constant);
             if batchable {

@@ -724,7 +724,7 @@ mod tests {
     }
 
     fn tol(rtol: f64) -> Tolerances {
-        Tolerances { rtol, atol: None }
+        Tolerances::new(rtol)
     }
 
     fn same(a: &RunResult, b: &RunResult) -> bool {
