@@ -24,6 +24,8 @@ def simulate(
     rtol: float,
     atol: npt.NDArray[np.float64] | None = None,
     t_eval: npt.NDArray[np.float64] | None = None,
+    max_steps: int | None = None,
+    max_events: int | None = None,
 ) -> dict[str, Any]: ...
 def ensemble(
     base: dict[str, float],
@@ -42,4 +44,48 @@ def ensemble(
     periodic_tol: float = 1e-5,
     decay_amplitude: float | None = None,
     n_fourier: int = 512,
+    max_steps: int | None = None,
+    max_events: int | None = None,
+) -> dict[str, Any]: ...
+def linear_stability(
+    base: dict[str, float],
+    contact: str,
+    friction_law: str,
+    names: list[str],
+    values: npt.NDArray[np.float64],
+    threads: int | None = None,
+) -> dict[str, Any]: ...
+def hopf_loads(
+    values: dict[str, float], friction_law: str, load_min: float, load_max: float, n_grid: int
+) -> list[dict[str, Any]]: ...
+def describing_function(
+    base: dict[str, float],
+    contact: str,
+    friction_law: str,
+    names: list[str],
+    values: npt.NDArray[np.float64],
+    variant: str = "consistent",
+    w_min: float = 150.0,
+    w_max: float = 3000.0,
+    n_base: int = 1000,
+    threads: int | None = None,
+) -> dict[str, Any]: ...
+def periodic_orbit(
+    values: dict[str, float],
+    contact: str,
+    friction_law: str,
+    y0: npt.NDArray[np.float64] | None = None,
+    period: float | None = None,
+    root: npt.NDArray[np.float64] | None = None,
+    variant: str = "consistent",
+    rtol: float = 1e-11,
+    max_iter: int = 30,
+    tol: float = 1e-9,
+) -> dict[str, Any]: ...
+def tidf_solve(
+    values: dict[str, float],
+    friction_law: str,
+    guesses: npt.NDArray[np.float64],
+    variant: str = "consistent",
+    threads: int | None = None,
 ) -> dict[str, Any]: ...
