@@ -440,4 +440,13 @@ def failure_maps(out_dir: os.PathLike, *, quick: bool = False, threads: int | No
             md.append(f"Minimum sliding velocity per eps ({best}, rtol {float(sub.rtol):.0e}; m/s, <= 0 means "
                       f"sticking): {sticks}.")  # fmt: skip
         md.append("")
+    # The describing function's own failure maps (validity against shooting orbits, Newton basin).
+    from ._df_failure import tidf_failure_maps
+
+    if progress:
+        print("  describing-function maps: validity over load x arm, Newton basin", file=sys.stderr, flush=True)
+    dfm = tidf_failure_maps(out, quick=quick, threads=threads)
+    files.update(dfm["files"])
+    summary.update(dfm["counts"])
+    md.append(dfm["markdown"])
     return {"files": files, "summary": summary, "markdown": "\n".join(md)}
