@@ -37,3 +37,17 @@ def test_maps_are_written(tmp_path):
         assert (tmp_path / f"{name}.png").stat().st_size > 1000
         assert (tmp_path / f"{name}.nc").exists()
     assert sum(r["counts"]["failure_tidf_validity"].values()) == 18
+
+
+def test_model_cost_numbers(tmp_path):
+    from tribosweep._model_cost import model_cost
+
+    r = model_cost(tmp_path, quick=True)
+    d = r["numbers"]
+    assert d["points"] == 12 and d["orbits"] >= 5
+    # The describing function is cheaper than integrating and within 10 % of the orbits (MODEL.md §6).
+    assert d["tidf_ms_per_point"] < d["transient_ms_per_point"]
+    assert d["tidf_a1_error_max"] < 0.10
+    # auto decides every settled point as the transient does.
+    assert d["regime_agreement"] == 1.0 and d["settled_points"] >= 8
+    assert (tmp_path / "model_cost.png").stat().st_size > 1000

@@ -1130,6 +1130,14 @@ def run_work_precision(out_dir: os.PathLike, config: BenchConfig | None = None, 
         payload["failure_maps_markdown"] = fm["markdown"]
         files.update(fm["files"])
         extra = fm["markdown"]
+    if failure_maps:
+        from ._model_cost import model_cost
+
+        _log("model cost (describing function, shooting, transient, auto)", progress)
+        mc = model_cost(out, quick=payload["meta"]["quick"])
+        payload["model_cost"] = mc["numbers"]
+        files.update(mc["files"])
+        extra = (extra + "\n\n" + mc["markdown"]).strip()
     payload["files"] = {k: str(v) for k, v in files.items()}
     payload["command"] = command
     with open(files["json"], "w") as f:
