@@ -125,6 +125,19 @@ def regime_map(ds: xr.Dataset, *, x: str | None = None, y: str | None = None, fa
         z = sub.transpose(y, x).values
         present.update(np.unique(z).tolist())
         ax.pcolormesh(_edges(ds[x].values), _edges(ds[y].values), z, cmap=cmap, norm=norm, shading="flat")
+        if "bistable" in ds:
+            # Stable sliding coexisting with a stable cycle: hatched, since the regime then depends on
+            # the initial disturbance (MODEL.md §6: the seed point is such a case).
+            b = ds.bistable.isel({d: 0 for d in rest})
+            b = (b if fi is None else b.isel({facet: fi})).transpose(y, x).values == 1
+            if b.any():
+                from matplotlib.patches import Rectangle
+
+                present.add("bistable")
+                xe, ye = _edges(ds[x].values), _edges(ds[y].values)
+                for j, i in zip(*np.nonzero(b)):
+                    ax.add_patch(Rectangle((xe[i], ye[j]), xe[i + 1] - xe[i], ye[j + 1] - ye[j], fill=False,
+                                           hatch="//", edgecolor="k", lw=0.0))
         ax.set_xlabel(_label(ds, x))
         if fi is not None:
             ax.set_title(f"{facet} = {ds[facet].values[fi]:g} {ds[facet].attrs.get('units', '')}".strip(), fontsize=9)
@@ -135,6 +148,8 @@ def regime_map(ds: xr.Dataset, *, x: str | None = None, y: str | None = None, fa
     axes[0].set_ylabel(_label(ds, y))
     handles = [Patch(facecolor=REGIME_COLORS[r], edgecolor="k", lw=0.3, label=r.replace("_", " "))
                for i, r in enumerate(REGIME_NAMES) if i in present]  # fmt: skip
+    if "bistable" in present:
+        handles.append(Patch(facecolor="none", edgecolor="k", hatch="//", lw=0.3, label="bistable (a stable cycle coexists)"))
     fig.legend(handles=handles, loc="outside right center", fontsize=8, frameon=False)
     title = f"regime ({ds.attrs.get('method', '?')})"
     if fixed:
