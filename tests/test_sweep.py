@@ -543,3 +543,15 @@ def test_points_that_differ_only_in_speed_share_their_dynamics_exactly():
     # The cycle at 8 N slides at V - max(xd + s L phid): the shift is exactly the speed difference.
     d = both.min_slip_velocity.values[0, 0, 1] - both.min_slip_velocity.values[0, 0, 0]
     assert d == pytest.approx(0.3, abs=1e-12)
+
+
+def test_regime_map_marks_bistable_points():
+    from tribosweep.plot import regime_map
+
+    ds = ts.sweep(normal_load=[10.0, 30.0, 60.0], arm_length=[0.05, 0.1], method="linear", progress=False)
+    labels = lambda fig: [t.get_text() for leg in fig.legends for t in leg.get_texts()]  # noqa: E731
+    assert not any("bistable" in s for s in labels(regime_map(ds)))
+    ds["bistable"][1, 0, 0] = 1
+    fig = regime_map(ds)
+    assert any("bistable" in s for s in labels(fig))
+    assert any(p.get_hatch() == "//" for p in fig.axes[0].patches)
