@@ -571,10 +571,8 @@ fn describing_function<'py>(
             &params,
             threads,
             |p| {
-                Some(
-                    Tidf::new(&Slider::new(*p).expect("validated"), variant)
-                        .find_roots(&Slider::new(*p).expect("validated"), &opts),
-                )
+                let s = Slider::new(*p).expect("validated");
+                Some(Tidf::new(&s, variant).find_roots(&s, &opts))
             },
             |_| None,
         )
