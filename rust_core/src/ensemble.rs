@@ -5,7 +5,6 @@
 //! (tested). A panic inside one point is caught and becomes that point's `Status::Panic`, so one
 //! bad point cannot take a sweep down. Thread pools are cached per thread count.
 
-use crate::status::Status;
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -70,12 +69,6 @@ where
         return items.iter().map(run_one).collect();
     }
     pool(threads).install(|| items.par_iter().with_min_len(1).map(run_one).collect())
-}
-
-/// A result that carries a status (what [`par_map`] callers usually return).
-pub trait HasStatus {
-    /// The point's status.
-    fn status(&self) -> Status;
 }
 
 #[cfg(test)]

@@ -487,13 +487,12 @@ impl SectionWatcher {
     }
 }
 
-struct SteadyObserver<'a> {
-    s: &'a Slider,
+struct SteadyObserver {
     w: SectionWatcher,
     decay_floor: f64,
 }
 
-impl Observer<6, ContactMode> for SteadyObserver<'_> {
+impl Observer<6, ContactMode> for SteadyObserver {
     fn on_step(&mut self, st: &StepView<'_, 6, ContactMode>) -> Control {
         let (zd0, zd1) = (st.y0[idx::ZD], st.y1[idx::ZD]);
         self.w.peak_since = self.w.peak_since.max(st.y1[idx::Z].abs());
@@ -514,7 +513,6 @@ impl Observer<6, ContactMode> for SteadyObserver<'_> {
             self.w.decayed = true;
             return Control::Stop;
         }
-        let _ = self.s;
         Control::Continue
     }
 }
@@ -550,7 +548,6 @@ fn locate(st: &StepView<'_, 6, ContactMode>, g: impl Fn(&State) -> f64, tol: f64
             side = 1;
         }
     }
-    let _ = ga;
     (b, yb)
 }
 
@@ -609,7 +606,6 @@ impl Observer<6, ContactMode> for PeriodObserver<'_> {
 /// and summarise the motion.
 pub fn run_to_steady(s: &Slider, y0: &State, opts: &SteadyOptions) -> Summary {
     let obs = SteadyObserver {
-        s,
         w: SectionWatcher::new(opts, s),
         decay_floor: 1e-6 * opts.decay_amplitude.unwrap_or(1e-3 * s.z_st.abs()),
     };
@@ -639,7 +635,7 @@ pub fn run_to_steady(s: &Slider, y0: &State, opts: &SteadyOptions) -> Summary {
         sum.multiplicity = p as u32;
         sum.omega = std::f64::consts::TAU / period;
         let c = *w.get(0);
-        fourier_period(s, &c.y, c.t, period, opts, &mut sum);
+        fourier_period(s, &c.y, period, opts, &mut sum);
     } else if w.decayed {
         sum.outcome = SteadyOutcome::Decayed;
     } else {
@@ -650,7 +646,7 @@ pub fn run_to_steady(s: &Slider, y0: &State, opts: &SteadyOptions) -> Summary {
 }
 
 /// Re-integrate one period from the section state and fill the harmonic part of `sum`.
-fn fourier_period(s: &Slider, y0: &State, t0: f64, period: f64, opts: &SteadyOptions, sum: &mut Summary) {
+fn fourier_period(s: &Slider, y0: &State, period: f64, opts: &SteadyOptions, sum: &mut Summary) {
     let n = opts.n_fourier.max(16);
     let t_eval: Vec<f64> = (0..n).map(|j| j as f64 * period / n as f64).collect();
     let mode0 = s.mode_at(y0);
@@ -665,7 +661,6 @@ fn fourier_period(s: &Slider, y0: &State, t0: f64, period: f64, opts: &SteadyOpt
     let o = options_for(s, &opts.tol);
     let sol = integrate(s, opts.method, 0.0, *y0, period, &o, &mut obs);
     sum.stats += sol.stats;
-    let _ = t0;
     if sol.outcome != Outcome::Finished || obs.sampler.out.len() != n {
         sum.status = sol.outcome.status();
         if sum.status.is_ok() {
