@@ -9,7 +9,7 @@ from __future__ import annotations
 from . import _core
 from ._apparatus import ARM_EXPONENTS, apparatus_model, arm_frequencies
 from ._chunk import REGIME_NAMES
-from ._flags import OUTCOME_NAMES, STATUS, STATUS_NAMES
+from ._flags import INSTABILITY_NAMES, OUTCOME_NAMES, STATUS, STATUS_NAMES
 from ._frequency import describing_function, hopf_load, linear_stability, periodic_orbit
 from ._model import PARAM_NAMES, SliderModel
 from ._simulate import DEFAULT_Y0, ensemble, simulate
@@ -21,6 +21,7 @@ __version__: str = _core.__version__
 __all__ = [
     "ARM_EXPONENTS",
     "DEFAULT_Y0",
+    "INSTABILITY_NAMES",
     "OUTCOME_NAMES",
     "PARAM_NAMES",
     "REGIME_NAMES",

@@ -12,6 +12,8 @@ STATUS_NAMES: tuple[str, ...] = tuple(_core.status_names())
 STATUS: dict[str, int] = {name: i for i, name in enumerate(STATUS_NAMES)}
 #: Outcome names of a run to steady state, in code order.
 OUTCOME_NAMES: tuple[str, ...] = tuple(_core.steady_outcome_names())
+#: How a periodic orbit is unstable (its largest non-trivial Floquet multiplier), in code order.
+INSTABILITY_NAMES: tuple[str, ...] = tuple(_core.instability_names())
 
 
 def flag_attrs(names: tuple[str, ...] | list[str], long_name: str) -> dict:

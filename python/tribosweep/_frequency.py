@@ -8,10 +8,15 @@ import numpy as np
 import xarray as xr
 
 from . import _checks, _core
-from ._flags import STATUS_NAMES, flag_attrs
+from ._flags import INSTABILITY_NAMES, STATUS_NAMES, flag_attrs
 from ._model import SliderModel
 
 _DEG = 180.0 / np.pi
+#: A real Floquet multiplier below ``-1 + FLIP_TOL`` flags a periodic orbit at or past a period
+#: doubling (``period_doubling``): within 0.05 of -1 the doubled orbit's shooting matrix
+#: ``M^2 - I`` has a singular value below about 0.1 and the period-1 orbit is one small
+#: parameter step from losing its stability.
+FLIP_TOL = 0.05
 
 
 def _model(model) -> SliderModel:
@@ -210,7 +215,8 @@ def periodic_orbit(
     -------
     xarray.Dataset
         ``period`` [s], ``omega``, ``floquet_multipliers`` (complex, by modulus descending) and their
-        ``floquet_moduli``, ``stable``, harmonics of z (``A0, A1, A2, A3, theta``), ``z_max``,
+        ``floquet_moduli``, ``stable``, ``instability`` (stable, fold, flip, torus), ``flip_multiplier`` and
+        ``period_doubling`` (a real multiplier below ``-1 + FLIP_TOL``), harmonics of z (``A0, A1, A2, A3, theta``), ``z_max``,
         ``contact_opens``, ``open_fraction``, ``min_normal_force``, ``status``, cost.
     """
     model = _model(model)
@@ -255,6 +261,16 @@ def periodic_orbit(
     data["floquet_moduli"] = (("floquet",), np.array(out["moduli"]), {"units": "1", "long_name": "moduli of the Floquet multipliers"})
     data["state0"] = (("state",), np.array(out["state0"]), {"long_name": "state at t = 0 (zd = 0)"})
     data["stable"] = ((), bool(out["stable"]), {"long_name": "every non-trivial multiplier inside the unit circle"})
+    data["instability"] = ((), np.uint8(out["instability"]),
+                           flag_attrs(INSTABILITY_NAMES, "how the orbit is unstable (its largest non-trivial multiplier)"))
+    data["flip_multiplier"] = ((), out["flip_multiplier"], {
+        "units": "1", "long_name": "most negative real non-trivial Floquet multiplier (NaN if none)",
+        "comment": "near -1 the orbit is close to a period doubling; below -1 it is unstable and the attractor "
+                   "nearby has twice the period (see period_doubling)"})
+    data["period_doubling"] = ((), bool(np.isfinite(out["flip_multiplier"]) and out["flip_multiplier"] < -1.0 + FLIP_TOL), {
+        "long_name": f"a real multiplier below -1 + {FLIP_TOL}: at or past a period doubling",
+        "comment": "the period-1 orbit is (or is about to be) unstable by a flip; a solve for the doubled orbit is "
+                   "ill-conditioned here. Confirm the attractor with a transient."})
     data["contact_opens"] = ((), bool(out["contact_opens"]), {"long_name": "the pin leaves the disk on the orbit"})
     data["status"] = ((), np.uint8(out["status"]), flag_attrs(STATUS_NAMES, "status of the shooting solve"))
     for k in ("newton_iterations", "n_rhs", "n_accept", "n_reject", "n_switches"):

@@ -189,7 +189,8 @@ def ensemble(
     steady : bool
         Run each trajectory to its steady state (decay, periodic cycle, escape, or ``t_end``) and
         return its summary: ``outcome``, ``omega``, harmonics of z, phi, x, minimum normal force,
-        fraction of the period off the disk, minimum sliding velocity.
+        fraction of the period off the disk, minimum sliding velocity, and the state where the run
+        ended (``z_end, ...``: on the cycle's section for a periodic outcome, a start for shooting).
     periodic_tol : float
         Relative repetition tolerance of the Poincare-section state that declares a cycle.
     decay_amplitude : float, m, optional
@@ -250,6 +251,9 @@ def ensemble(
         for k, (units, text) in summary_units.items():
             data[k] = (dims, out[k], {"units": units, "long_name": text})
         data["multiplicity"] = (dims, out["multiplicity"], {"units": "1", "long_name": "section crossings per period"})
+        for i, (name, units, text) in enumerate(STATE_VARS):
+            data[f"{name}_end"] = (dims, out["y_end"][:, i], {
+                "units": units, "long_name": f"{text} where the run ended (on the section zd = 0 if periodic)"})
     else:
         data = _run_vars(out, dims)
         for i, (name, units, text) in enumerate(STATE_VARS):

@@ -396,6 +396,14 @@ pub struct PeriodicOrbit {
     pub trivial_error: f64,
     /// True when every non-trivial multiplier has modulus below `1 - stability_tol`.
     pub stable: bool,
+    /// How the orbit is unstable, judged by its largest non-trivial multiplier (`Stable` when
+    /// `stable`).
+    pub instability: Instability,
+    /// The most negative real non-trivial multiplier (NaN if none is real and negative). Near
+    /// `-1` the orbit is close to a period doubling: past it (`< -1`) the attractor nearby has
+    /// twice the period, and a shooting solve for that doubled orbit is singular at the crossing
+    /// (`rho^2 = 1`).
+    pub flip_multiplier: f64,
     /// Harmonics of `z`.
     pub harmonics: Harmonics,
     /// Largest dynamic `z` over the period [m].
@@ -651,6 +659,25 @@ fn shoot_impl(s: &Slider, y0: &State, period: f64, opts: &ShootingOptions, refin
             lambda *= 0.5;
         }
         if !accepted {
+            if rtol > opts.rtol {
+                // The residual was judged at a graded (lower) accuracy: from a start already close
+                // to the orbit (a transient's section state) the accurate residual can be above the
+                // coarse one, so no step beats it. Judge again at full accuracy and retry.
+                rtol = opts.rtol;
+                match eval(&y, t, rtol, &mut stats) {
+                    Ok(v) => (fl, r, rn) = v,
+                    Err(st) => {
+                        status = st;
+                        break;
+                    }
+                }
+                continue;
+            }
+            // At full accuracy no step reduces the residual: it is at the integration's noise
+            // floor. Within the small-step acceptance (100 tol) that is convergence.
+            if rn <= opts.tol * 100.0 {
+                status = Status::Success;
+            }
             break;
         }
         if small_step && rtol <= opts.rtol {
@@ -674,6 +701,55 @@ fn shoot_impl(s: &Slider, y0: &State, period: f64, opts: &ShootingOptions, refin
     orbit
 }
 
+/// How a periodic orbit is unstable: the kind of its largest non-trivial Floquet multiplier.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Instability {
+    /// Every non-trivial multiplier inside the unit circle.
+    Stable,
+    /// A real multiplier above 1 (a saddle cycle; it meets a stable cycle at a fold).
+    Fold,
+    /// A real multiplier below -1 (past a period doubling).
+    Flip,
+    /// A complex pair outside the unit circle (past a Neimark-Sacker bifurcation: a torus).
+    Torus,
+    /// Multipliers not computed.
+    Unknown,
+}
+
+impl Instability {
+    /// Code in the order of `INSTABILITY_NAMES`.
+    pub fn code(self) -> u8 {
+        self as u8
+    }
+}
+
+/// Names of `Instability`, in code order.
+pub const INSTABILITY_NAMES: [&str; 5] = ["stable", "fold", "flip", "torus", "unknown"];
+
+/// A multiplier counts as real when its imaginary part is below this times `max(1, |rho|)`.
+const REAL_TOL: f64 = 1e-8;
+
+/// `(instability, flip_multiplier)` of sorted multipliers `ev` (modulus descending) with the
+/// trivial one at `trivial`.
+fn classify(ev: &[C64; 6], trivial: usize, stable: bool) -> (Instability, f64) {
+    let is_real = |c: &C64| c.im.abs() <= REAL_TOL * c.norm().max(1.0);
+    let flip = (0..6)
+        .filter(|&k| k != trivial && is_real(&ev[k]) && ev[k].re < 0.0)
+        .map(|k| ev[k].re)
+        .fold(f64::NAN, f64::min);
+    let kind = if stable {
+        Instability::Stable
+    } else {
+        match (0..6).find(|&k| k != trivial) {
+            Some(k) if is_real(&ev[k]) && ev[k].re > 0.0 => Instability::Fold,
+            Some(k) if is_real(&ev[k]) => Instability::Flip,
+            Some(_) => Instability::Torus,
+            None => Instability::Unknown,
+        }
+    };
+    (kind, flip)
+}
+
 fn failed(y: State, t: f64, status: Status, stats: Stats) -> PeriodicOrbit {
     let nan = f64::NAN;
     PeriodicOrbit {
@@ -686,6 +762,8 @@ fn failed(y: State, t: f64, status: Status, stats: Stats) -> PeriodicOrbit {
         trivial: 0,
         trivial_error: nan,
         stable: false,
+        instability: Instability::Unknown,
+        flip_multiplier: nan,
         harmonics: Harmonics { a0: nan, a1: nan, a2: nan, a3: nan, theta: nan },
         z_max: nan,
         z_min: nan,
@@ -870,6 +948,7 @@ fn analyse(s: &Slider, y0: &State, t: f64, fl: &Flow, opts: &ShootingOptions, st
         out.trivial = trivial;
         out.trivial_error = (ev[trivial] - 1.0).norm();
         out.stable = (0..6).filter(|&k| k != trivial).all(|k| out.moduli[k] < 1.0 - opts.stability_tol);
+        (out.instability, out.flip_multiplier) = classify(&ev, trivial, out.stable);
     } else {
         out.status = Status::NonFinite;
     }
@@ -1025,6 +1104,9 @@ mod tests {
             assert!((m - e).abs() < 1e-4, "{:?}", o.moduli);
         }
         assert!(!o.stable);
+        // The subcritical Hopf's saddle cycle: one real multiplier just above 1.
+        assert_eq!(o.instability, Instability::Fold);
+        assert!(o.flip_multiplier.is_nan());
         assert!(o.trivial_error < 1e-6);
         assert!((o.harmonics.a1 - 22.27e-6).abs() < 0.01e-6, "A1 {}", o.harmonics.a1);
         assert!((o.harmonics.a2 - 5.26e-6).abs() < 0.01e-6, "A2 {}", o.harmonics.a2);
@@ -1109,8 +1191,73 @@ mod tests {
         assert!((o.harmonics.a2 - 11.009e-6).abs() < 0.01e-6, "A2 {}", o.harmonics.a2);
         assert!((o.open_fraction - 0.115).abs() < 0.001, "open {}", o.open_fraction);
         assert!(o.stable);
+        assert_eq!(o.instability, Instability::Stable);
         assert!(o.contact_opens && o.min_normal_force == 0.0);
         assert!(o.trivial_error < 1e-6);
+    }
+
+    #[test]
+    fn instability_is_the_kind_of_the_largest_nontrivial_multiplier() {
+        let c = C64::new;
+        // Sorted by modulus, descending, as `analyse` leaves them; the trivial one is 1.
+        let judge = |ev: [C64; 6]| {
+            let trivial = (0..6).min_by(|&a, &b| (ev[a] - 1.0).norm().total_cmp(&(ev[b] - 1.0).norm())).unwrap();
+            let stable = (0..6).filter(|&k| k != trivial).all(|k| ev[k].norm() < 1.0 - 1e-6);
+            classify(&ev, trivial, stable)
+        };
+        let tail = [c(0.3, 0.0), c(0.1, 0.0)];
+        let (k, f) = judge([c(1.0, 0.0), c(-0.5, 0.2), c(-0.5, -0.2), c(-0.4, 0.0), tail[0], tail[1]]);
+        assert_eq!((k, f), (Instability::Stable, -0.4));
+        let (k, f) = judge([c(1.2, 0.0), c(1.0, 0.0), c(0.5, 0.0), c(0.4, 0.0), tail[0], tail[1]]);
+        assert!(k == Instability::Fold && f.is_nan());
+        let (k, f) = judge([c(-1.3, 0.0), c(1.0, 0.0), c(-0.9, 0.0), c(0.4, 0.0), tail[0], tail[1]]);
+        assert_eq!((k, f), (Instability::Flip, -1.3));
+        let (k, f) = judge([c(-0.2, 1.1), c(-0.2, -1.1), c(1.0, 0.0), c(0.4, 0.0), tail[0], tail[1]]);
+        assert!(k == Instability::Torus && f.is_nan());
+        // A real multiplier's rounding-level imaginary part does not make it complex.
+        let (k, f) = judge([c(-1.1, 1e-12), c(1.0, 0.0), c(0.5, 0.0), c(0.4, 0.0), tail[0], tail[1]]);
+        assert_eq!((k, f), (Instability::Flip, -1.1));
+    }
+
+    #[test]
+    fn period_doubling_is_flagged_by_the_flip_multiplier() {
+        // Unilateral, 80 N: the bouncing cycle's real multiplier crosses -1 near mu = 0.4206 and a
+        // stable cycle of twice the period takes over. Shooting the period-1 orbit still converges
+        // past the crossing (M - I is regular at rho = -1); only the multipliers tell.
+        use crate::steady::{run_to_steady, SteadyOptions, SteadyOutcome, Tolerances};
+        let at =
+            |mu| Slider::new(Params { contact: ContactModel::Unilateral, normal_load: 80.0, mu, ..Params::seed() });
+        let steady = |s: &Slider| {
+            let y0 = State::new(s.z_st.abs(), 0.0, 0.0, 0.0, 0.0, 0.0);
+            let so =
+                SteadyOptions { t_max: 40.0, tol: Tolerances::new(1e-9), periodic_tol: 1e-6, ..Default::default() };
+            let sum = run_to_steady(s, &y0, &so);
+            assert_eq!(sum.outcome, SteadyOutcome::Periodic, "{:?}", sum.status);
+            assert!(sum.y_end[idx::ZD].abs() < 1e-9, "y_end is on the section: {}", sum.y_end);
+            sum
+        };
+        let opts = ShootingOptions::default();
+        let before = at(0.415).unwrap();
+        let sum = steady(&before);
+        let o1 = shoot(&before, &sum.y_end, sum.period, &opts);
+        assert_eq!(o1.status, Status::Success);
+        assert!((o1.period / sum.period - 1.0).abs() < 1e-5, "{} vs {}", o1.period, sum.period);
+        assert!(o1.stable && o1.instability == Instability::Stable);
+        assert!(o1.flip_multiplier.is_nan() || o1.flip_multiplier > -0.95, "{:?}", o1.multipliers);
+        // Continue the branch past the crossing.
+        let past = at(0.4225).unwrap();
+        let o2 = shoot(&past, &o1.state0, o1.period, &opts);
+        eprintln!("period-1 at 0.4225: T {:.6e} multipliers {:?}", o2.period, o2.multipliers);
+        assert_eq!(o2.status, Status::Success);
+        assert!(!o2.stable && o2.instability == Instability::Flip, "{:?}", o2.multipliers);
+        assert!(o2.flip_multiplier < -1.05 && o2.flip_multiplier > -1.2, "{}", o2.flip_multiplier);
+        // The attractor there has twice the period; shooting with that period finds it stable.
+        let sum2 = steady(&past);
+        assert!((sum2.period / o2.period - 2.0).abs() < 0.01, "{} vs {}", sum2.period, o2.period);
+        let o3 = shoot(&past, &sum2.y_end, sum2.period, &opts);
+        assert_eq!(o3.status, Status::Success);
+        assert!((o3.period / sum2.period - 1.0).abs() < 1e-5, "{} vs {}", o3.period, sum2.period);
+        assert!(o3.stable, "{:?}", o3.moduli);
     }
 
     #[test]

@@ -298,6 +298,9 @@ pub struct Summary {
     pub period: f64,
     /// Section crossings per period (periodic only, else 0).
     pub multiplicity: u32,
+    /// Where the run ended: for a periodic outcome the section state (`zd = 0`) on the cycle, a
+    /// start for shooting; otherwise the state at `t_end`.
+    pub y_end: State,
     /// DC of z [m].
     pub z0: f64,
     /// Amplitudes of the first three harmonics of z [m].
@@ -333,6 +336,7 @@ impl Summary {
             omega: f64::NAN,
             period: f64::NAN,
             multiplicity: 0,
+            y_end: State::repeat(f64::NAN),
             z0: f64::NAN,
             z_amp: [f64::NAN; 3],
             z_phase: [f64::NAN; 3],
@@ -613,6 +617,7 @@ pub fn run_to_steady(s: &Slider, y0: &State, opts: &SteadyOptions) -> Summary {
     let w = obs.w;
     let mut sum = Summary::empty(r.status, SteadyOutcome::Failed);
     sum.t_end = r.t;
+    sum.y_end = r.y;
     sum.extremes = r.extremes;
     sum.stats = r.stats;
     sum.min_normal_force = r.extremes.min_normal_force;
@@ -635,6 +640,7 @@ pub fn run_to_steady(s: &Slider, y0: &State, opts: &SteadyOptions) -> Summary {
         sum.multiplicity = p as u32;
         sum.omega = std::f64::consts::TAU / period;
         let c = *w.get(0);
+        sum.y_end = c.y;
         fourier_period(s, &c.y, period, opts, &mut sum);
     } else if w.decayed {
         sum.outcome = SteadyOutcome::Decayed;

@@ -418,6 +418,13 @@ fn summaries_into(d: &Bound<'_, PyDict>, out: &[(Summary, String)]) -> PyResult<
     d.set_item("omega", f(&|s| s.omega))?;
     d.set_item("period", f(&|s| s.period))?;
     d.set_item("multiplicity", Array1::from_iter(out.iter().map(|o| o.0.multiplicity)).into_pyarray(py))?;
+    let mut y = Array2::<f64>::zeros((out.len(), 6));
+    for (i, o) in out.iter().enumerate() {
+        for c in 0..6 {
+            y[(i, c)] = o.0.y_end[c];
+        }
+    }
+    d.set_item("y_end", y.into_pyarray(py))?;
     d.set_item("z0", f(&|s| s.z0))?;
     for k in 0..3 {
         d.set_item(format!("z{}_amp", k + 1), f(&|s| s.z_amp[k]))?;
@@ -709,6 +716,8 @@ fn orbit_dict<'py>(py: Python<'py>, o: &PeriodicOrbit) -> PyResult<Bound<'py, Py
     d.set_item("moduli", o.moduli.to_vec())?;
     d.set_item("trivial_error", o.trivial_error)?;
     d.set_item("stable", o.stable)?;
+    d.set_item("instability", o.instability.code())?;
+    d.set_item("flip_multiplier", o.flip_multiplier)?;
     d.set_item("A0", o.harmonics.a0)?;
     d.set_item("A1", o.harmonics.a1)?;
     d.set_item("A2", o.harmonics.a2)?;
@@ -777,6 +786,12 @@ fn periodic_orbit<'py>(
     orbit_dict(py, &orbit)
 }
 
+/// How a periodic orbit is unstable (`PeriodicOrbit::instability`), in code order.
+#[pyfunction]
+fn instability_names() -> Vec<&'static str> {
+    tribosweep_core::shooting::INSTABILITY_NAMES.to_vec()
+}
+
 /// Outcome names of a run to steady state, in code order.
 #[pyfunction]
 fn steady_outcome_names() -> Vec<&'static str> {
@@ -793,6 +808,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(status_names, m)?)?;
     m.add_function(wrap_pyfunction!(method_names, m)?)?;
     m.add_function(wrap_pyfunction!(steady_outcome_names, m)?)?;
+    m.add_function(wrap_pyfunction!(instability_names, m)?)?;
     m.add_function(wrap_pyfunction!(validate_params, m)?)?;
     m.add_function(wrap_pyfunction!(static_point, m)?)?;
     m.add_function(wrap_pyfunction!(simulate, m)?)?;
