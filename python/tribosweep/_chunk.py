@@ -117,6 +117,8 @@ POINT_VARIABLES: dict[str, tuple[str, str | None, str]] = {
     "linear_frequency": ("f8", "rad s-1", "angular frequency of the least stable linear mode"),
     "normal_mode_frequency": ("f8", "Hz", "frequency Im(lambda_normal)/2 pi of the linearised normal mode"),
     "cycle_omega": ("f8", "rad s-1", "angular frequency of the steady cycle (NaN if none)"),
+    "cycle_period_ratio": ("f8", "1", "period of the cycle in periods of the least stable linear mode: about 1 "
+                                      "for the ordinary cycle, about 2 past a period doubling"),
     "z1_amplitude": ("f8", "m", "amplitude of the first harmonic of z on the cycle"),
     "z2_amplitude": ("f8", "m", "amplitude of the second harmonic of z on the cycle"),
     "phi1_amplitude": ("f8", "rad", "amplitude of the first harmonic of the twist phi on the cycle"),
@@ -581,6 +583,8 @@ def _dynamics(model_values, contact, friction_law, point_params, method, options
                     out["fraction_off_disk"][i] = summ["fraction_off_disk"][j]
                     reason[i] = "bistable: a stable cycle coexists (reached from outside the saddle); amplitudes are its"
 
+    with np.errstate(invalid="ignore", divide="ignore"):
+        out["cycle_period_ratio"] = out["linear_frequency"] / out["cycle_omega"]
     out["wall_time"] = wall
     out["reason"] = reason.astype(str)
     return out

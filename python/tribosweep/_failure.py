@@ -449,4 +449,14 @@ def failure_maps(out_dir: os.PathLike, *, quick: bool = False, threads: int | No
     files.update(dfm["files"])
     summary.update(dfm["counts"])
     md.append(dfm["markdown"])
+    # Shooting near a period doubling (unilateral contact, high friction).
+    from ._pd_failure import pd_failure_maps
+
+    if progress:
+        print("  shooting near a period doubling: load x mu map, bifurcation diagram", file=sys.stderr, flush=True)
+    pdm = pd_failure_maps(out, quick=quick, threads=threads)
+    files.update(pdm["files"])
+    summary.update(pdm["counts"])
+    summary["period_doubling"] = pdm["numbers"]
+    md.append(pdm["markdown"])
     return {"files": files, "summary": summary, "markdown": "\n".join(md)}
