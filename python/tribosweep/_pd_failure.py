@@ -265,6 +265,6 @@ def pd_failure_maps(out_dir: os.PathLike, *, quick: bool = False, threads: int |
           "shooting with that cycle's own period finds it stable (`attractor_orbit_stable`).", "",
           f"At {bd.attrs['normal_load']:g} N the period-1 branch's real multiplier crosses -1 at mu = {mu_pd:.4f}; "
           f"past it Newton still converges (M - I is regular at rho = -1) to an orbit the slider does not follow. "
-          f"{n_double} map points settle on a period-2 cycle. The run-time check is `period_doubling` "
+          f"Map points on a period-2 cycle: {n_double}. The run-time check is `period_doubling` "
           f"(a real multiplier below -1 + {FLIP_TOL}) and `instability = flip` on every shooting result.", ""]
     return {"files": files, "counts": counts, "numbers": numbers, "markdown": "\n".join(md)}
