@@ -166,3 +166,34 @@ def test_seed_report_table_is_computed(tmp_path):
 def test_bad_frequency_arguments(call, needle):
     with pytest.raises(ValueError, match=needle):
         call()
+
+
+def test_batched_orbits_equal_single_solves_for_any_thread_count():
+    m = ts.SliderModel(contact="bilateral")
+    mus = np.array([0.19, 0.215, 0.24])
+    df = _core.describing_function(m.values(), "bilateral", "constant", ["mu"], mus[:, None])
+    k = np.argmax(df["physical"], axis=1)
+    roots = np.column_stack([df[v][np.arange(mus.size), k] for v in ("omega", "A0", "A1", "A2", "theta")])
+    single = [_core.periodic_orbit(m.replace(mu=float(mu)).values(), "bilateral", "constant", root=r)
+              for mu, r in zip(mus, roots)]  # fmt: skip
+    for threads in (1, 2, 3):
+        b = _core.periodic_orbits(m.values(), "bilateral", "constant", ["mu"], mus[:, None], roots=roots,
+                                  threads=threads)  # fmt: skip
+        for i, s in enumerate(single):
+            assert b["status"][i] == s["status"] == 0
+            for k in ("period", "A1", "flip_multiplier", "residual"):
+                assert b[k][i] == s[k] or (np.isnan(b[k][i]) and np.isnan(s[k])), k
+            assert list(b["moduli"][i]) == list(s["moduli"])
+            assert b["instability"][i] == s["instability"]
+
+
+def test_batched_orbits_reject_bad_shapes():
+    m = ts.SliderModel()
+    with pytest.raises(ValueError, match=r"roots has shape"):
+        _core.periodic_orbits(m.values(), "bilateral", "constant", ["mu"], np.array([[0.2], [0.21]]),
+                              roots=np.zeros((1, 5)))  # fmt: skip
+    with pytest.raises(ValueError, match="periods has 1 entries"):
+        _core.periodic_orbits(m.values(), "bilateral", "constant", ["mu"], np.array([[0.2], [0.21]]),
+                              y0=np.zeros((2, 6)), periods=np.array([0.01]))  # fmt: skip
+    with pytest.raises(ValueError, match="give either"):
+        _core.periodic_orbits(m.values(), "bilateral", "constant", ["mu"], np.array([[0.2]]))

@@ -503,15 +503,18 @@ def _dynamics(model_values, contact, friction_law, point_params, method, options
                 elif method in ("tidf", "shooting"):
                     reason[i] = "sliding unstable; no describing-function cycle within the law's validity"
             # Stage 3: shooting where the describing function's error matters.
-            shoot = [i for i in range(n) if phys[i] <= -2 or (method == "shooting" and phys[i] >= 0)]
-            for i in shoot:
-                j = int(np.searchsorted(sel, i))
-                k = -2 - phys[i] if phys[i] <= -2 else phys[i]
-                pv = dict(base, **{nm: float(values[i, c]) for c, nm in enumerate(names)})
-                root = np.array([df[v][j, k] for v in ("omega", "A0", "A1", "A2", "theta")])
+            shoot = np.array([i for i in range(n) if phys[i] <= -2 or (method == "shooting" and phys[i] >= 0)], dtype=int)
+            orbs = None
+            if shoot.size:
+                js = np.searchsorted(sel, shoot)
+                ks = np.where(phys[shoot] <= -2, -2 - phys[shoot], phys[shoot])
+                roots = np.column_stack([df[v][js, ks] for v in ("omega", "A0", "A1", "A2", "theta")])
                 t2 = time.perf_counter()
-                orb = _core.periodic_orbit(pv, "bilateral", friction_law, root=root, rtol=1e-10, tol=1e-8)
-                wall[i] += time.perf_counter() - t2
+                orbs = _core.periodic_orbits(base, "bilateral", friction_law, names, values[shoot], roots=roots,
+                                             rtol=1e-10, tol=1e-8, threads=threads)  # fmt: skip
+                wall[shoot] += (time.perf_counter() - t2) / shoot.size
+            for r, i in enumerate(shoot):
+                orb = {k: v[r] for k, v in orbs.items()}
                 out["newton_iterations"][i] += orb["newton_iterations"]
                 out["n_rhs"][i] += orb["n_rhs"]
                 if orb["status"] != STATUS["success"]:

@@ -83,6 +83,21 @@ def periodic_orbit(
     max_iter: int = 30,
     tol: float = 1e-9,
 ) -> dict[str, Any]: ...
+def periodic_orbits(
+    base: dict[str, float],
+    contact: str,
+    friction_law: str,
+    names: list[str],
+    values: npt.NDArray[np.float64],
+    roots: npt.NDArray[np.float64] | None = None,
+    y0: npt.NDArray[np.float64] | None = None,
+    periods: npt.NDArray[np.float64] | None = None,
+    variant: str = "consistent",
+    rtol: float = 1e-11,
+    max_iter: int = 30,
+    tol: float = 1e-9,
+    threads: int | None = None,
+) -> dict[str, Any]: ...
 def tidf_solve(
     values: dict[str, float],
     friction_law: str,

@@ -81,27 +81,27 @@ def shooting_pd_map(normal_load, mu, *, model: SliderModel | None = None, t_max:
     attractor = np.full(n, -1, dtype=np.int8)
     periodic = tr.outcome.values == OUTCOME_NAMES.index("periodic")
     ends = np.column_stack([tr[f"{name}_end"].values for name, _, _ in STATE_VARS])
-    for i in np.flatnonzero(periodic):
-        vals = m.replace(normal_load=float(pl[i]), mu=float(pm[i])).values()
-        # Given the attractor's own period (twice the mode's past a doubling), shooting finds it.
-        oa = _core.periodic_orbit(vals, m.contact, m.friction_law, y0=ends[i], period=float(tr.period.values[i]))
-        if oa["status"] == 0:
-            attractor[i] = int(oa["stable"])
-        o = _core.periodic_orbit(vals, m.contact, m.friction_law, y0=ends[i], period=float(t_guess[i]))
-        iters[i] = o["newton_iterations"]
-        if o["status"] != 0:
-            code[i] = SHOOTING_NAMES.index("not_converged")
-            continue
-        flip[i], period1[i] = o["flip_multiplier"], o["period"]
-        kind = INSTABILITY_NAMES[o["instability"]]
-        if kind == "flip":
-            code[i] = SHOOTING_NAMES.index("flip_unstable")
-        elif kind != "stable":
-            code[i] = SHOOTING_NAMES.index("other_unstable")
-        elif np.isfinite(flip[i]) and flip[i] < -1.0 + FLIP_TOL:
-            code[i] = SHOOTING_NAMES.index("near_flip")
-        else:
-            code[i] = SHOOTING_NAMES.index("valid")
+    idx = np.flatnonzero(periodic)
+    if idx.size:
+        vals = np.column_stack([pl[idx], pm[idx]])
+
+        def shoot(periods):
+            return _core.periodic_orbits(m.values(), m.contact, m.friction_law, ["normal_load", "mu"], vals,
+                                         y0=ends[idx], periods=periods, threads=threads)  # fmt: skip
+
+        o1 = shoot(t_guess[idx])  # the linear mode's period: the guess a user would make
+        oa = shoot(tr.period.values[idx])  # the attractor's own period (twice the mode's past a doubling)
+        attractor[idx] = np.where(oa["status"] == 0, oa["stable"].astype(np.int8), -1)
+        iters[idx] = o1["newton_iterations"]
+        ok = o1["status"] == 0
+        flip[idx] = np.where(ok, o1["flip_multiplier"], np.nan)
+        period1[idx] = np.where(ok, o1["period"], np.nan)
+        kind = np.array([INSTABILITY_NAMES[k] for k in o1["instability"]])
+        near = np.isfinite(flip[idx]) & (flip[idx] < -1.0 + FLIP_TOL)
+        c = np.select([~ok, kind == "flip", kind != "stable", near],
+                      [SHOOTING_NAMES.index(x) for x in ("not_converged", "flip_unstable", "other_unstable", "near_flip")],
+                      SHOOTING_NAMES.index("valid"))  # fmt: skip
+        code[idx] = c.astype(np.uint8)
     dims = ("normal_load", "mu")
     shape = ll.shape
     ratio = np.where(periodic, tr.period.values / t_guess, np.nan)

@@ -750,6 +750,13 @@ fn classify(ev: &[C64; 6], trivial: usize, stable: bool) -> (Instability, f64) {
     (kind, flip)
 }
 
+impl PeriodicOrbit {
+    /// An orbit that was not computed (NaN everywhere) with `status`, e.g. after a panic.
+    pub fn not_computed(status: Status) -> Self {
+        failed(State::repeat(f64::NAN), f64::NAN, status, Stats::default())
+    }
+}
+
 fn failed(y: State, t: f64, status: Status, stats: Stats) -> PeriodicOrbit {
     let nan = f64::NAN;
     PeriodicOrbit {

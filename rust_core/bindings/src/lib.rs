@@ -761,11 +761,8 @@ fn periodic_orbit<'py>(
     let s = Slider::new(p).map_err(CoreError::from)?;
     let opts = ShootingOptions { rtol, max_iter, tol, ..ShootingOptions::default() };
     let variant = variant_from(variant)?;
-    let orbit = match (y0, period, root) {
-        (Some(y), Some(t), None) => {
-            let y = State::from_column_slice(y.as_slice()?);
-            py.detach(|| shooting::shoot(&s, &y, t, &opts))
-        }
+    let start = match (y0, period, root) {
+        (Some(y), Some(t), None) => Start::State(State::from_column_slice(y.as_slice()?), t),
         (None, None, Some(r)) => {
             let r = r.as_slice()?;
             if r.len() != 5 {
@@ -773,17 +770,120 @@ fn periodic_orbit<'py>(
                     CoreError(format!("root has {} entries: must be [omega, A0, A1, A2, theta]", r.len())).into()
                 );
             }
-            let x = Unknowns::from_column_slice(r);
-            py.detach(|| {
-                let t = Tidf::new(&s, variant);
-                let torsion = linear::linear_stability(&s).mode(linear::ModeKind::Torsion).frequency;
-                let root = t.describe(&x, torsion, SearchOptions::default().physical_band);
-                shooting::shoot_from_root(&s, &root, &opts)
-            })
+            Start::Root(Unknowns::from_column_slice(r))
         }
         _ => return Err(CoreError("give either y0 and period, or root".into()).into()),
     };
+    let orbit = py.detach(|| shoot_start(&s, &start, variant, &opts));
     orbit_dict(py, &orbit)
+}
+
+/// Where a shooting solve starts.
+enum Start {
+    /// A describing-function root `[omega, A0, A1, A2, theta]`.
+    Root(Unknowns),
+    /// A state on (or near) the orbit and a period guess [s].
+    State(State, f64),
+}
+
+/// Shoot from `start`.
+fn shoot_start(s: &Slider, start: &Start, variant: Variant, opts: &ShootingOptions) -> PeriodicOrbit {
+    match start {
+        Start::Root(x) => {
+            let t = Tidf::new(s, variant);
+            let torsion = linear::linear_stability(s).mode(linear::ModeKind::Torsion).frequency;
+            let root = t.describe(x, torsion, SearchOptions::default().physical_band);
+            shooting::shoot_from_root(s, &root, opts)
+        }
+        Start::State(y, period) => shooting::shoot(s, y, *period, opts),
+    }
+}
+
+/// Periodic orbits of many parameter sets in parallel (GIL released; a panic becomes
+/// `status = panic` for its row). Each row starts from a describing-function root
+/// `roots[i] = [omega, A0, A1, A2, theta]` (with `variant`), or from a state `y0[i]` with a
+/// period guess `periods[i]`. Returns arrays over rows, the per-orbit fields of `periodic_orbit`.
+#[pyfunction]
+#[pyo3(signature = (base, contact, friction_law, names, values, roots=None, y0=None, periods=None, variant="consistent", rtol=1e-11, max_iter=30, tol=1e-9, threads=None))]
+#[allow(clippy::too_many_arguments)]
+fn periodic_orbits<'py>(
+    py: Python<'py>,
+    base: HashMap<String, f64>,
+    contact: &str,
+    friction_law: &str,
+    names: Vec<String>,
+    values: PyReadonlyArray2<'py, f64>,
+    roots: Option<PyReadonlyArray2<'py, f64>>,
+    y0: Option<PyReadonlyArray2<'py, f64>>,
+    periods: Option<PyReadonlyArray1<'py, f64>>,
+    variant: &str,
+    rtol: f64,
+    max_iter: u32,
+    tol: f64,
+    threads: Option<usize>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let params = ensemble_params(&base, contact, friction_law, &names, &values.as_array())?;
+    let n = params.len();
+    let opts = ShootingOptions { rtol, max_iter, tol, ..ShootingOptions::default() };
+    let variant = variant_from(variant)?;
+    let starts: Vec<Start> = match (roots, y0, periods) {
+        (Some(r), None, None) => {
+            let r = r.as_array();
+            if r.dim() != (n, 5) {
+                return Err(CoreError(format!("roots has shape {:?}: must be ({n}, 5)", r.dim())).into());
+            }
+            (0..n).map(|i| Start::Root(Unknowns::from_fn(|c, _| r[(i, c)]))).collect()
+        }
+        (None, Some(y), Some(t)) => {
+            let (y, t) = (y.as_array(), t.as_array());
+            let states = y0_rows(&y, n)?;
+            if t.len() != n {
+                return Err(CoreError(format!("periods has {} entries: must be {n}", t.len())).into());
+            }
+            states.into_iter().zip(t.iter()).map(|(s, &p)| Start::State(s, p)).collect()
+        }
+        _ => return Err(CoreError("give either roots, or y0 and periods".into()).into()),
+    };
+    let rows: Vec<(Params, Start)> = params.into_iter().zip(starts).collect();
+    let out: Vec<PeriodicOrbit> = py.detach(|| {
+        par_map(
+            &rows,
+            threads,
+            |(p, start)| shoot_start(&Slider::new(*p).expect("validated"), start, variant, &opts),
+            |_| PeriodicOrbit::not_computed(Status::Panic),
+        )
+    });
+    let d = PyDict::new(py);
+    let f = |g: fn(&PeriodicOrbit) -> f64| Array1::from_iter(out.iter().map(g)).into_pyarray(py);
+    d.set_item("period", f(|o| o.period))?;
+    d.set_item("omega", f(|o| o.omega))?;
+    d.set_item("A0", f(|o| o.harmonics.a0))?;
+    d.set_item("A1", f(|o| o.harmonics.a1))?;
+    d.set_item("A2", f(|o| o.harmonics.a2))?;
+    d.set_item("A3", f(|o| o.harmonics.a3))?;
+    d.set_item("theta", f(|o| o.harmonics.theta))?;
+    d.set_item("z_max", f(|o| o.z_max))?;
+    d.set_item("open_fraction", f(|o| o.open_fraction))?;
+    d.set_item("min_normal_force", f(|o| o.min_normal_force))?;
+    d.set_item("flip_multiplier", f(|o| o.flip_multiplier))?;
+    d.set_item("residual", f(|o| o.residual_norm))?;
+    let mut moduli = Array2::<f64>::zeros((n, 6));
+    let mut state0 = Array2::<f64>::zeros((n, 6));
+    for (i, o) in out.iter().enumerate() {
+        for c in 0..6 {
+            moduli[(i, c)] = o.moduli[c];
+            state0[(i, c)] = o.state0[c];
+        }
+    }
+    d.set_item("moduli", moduli.into_pyarray(py))?;
+    d.set_item("state0", state0.into_pyarray(py))?;
+    d.set_item("stable", Array1::from_iter(out.iter().map(|o| o.stable)).into_pyarray(py))?;
+    d.set_item("contact_opens", Array1::from_iter(out.iter().map(|o| o.contact_opens)).into_pyarray(py))?;
+    d.set_item("instability", Array1::from_iter(out.iter().map(|o| o.instability.code())).into_pyarray(py))?;
+    d.set_item("status", Array1::from_iter(out.iter().map(|o| o.status.code())).into_pyarray(py))?;
+    d.set_item("newton_iterations", Array1::from_iter(out.iter().map(|o| o.newton_iterations)).into_pyarray(py))?;
+    d.set_item("n_rhs", Array1::from_iter(out.iter().map(|o| o.stats.n_rhs)).into_pyarray(py))?;
+    Ok(d)
 }
 
 /// How a periodic orbit is unstable (`PeriodicOrbit::instability`), in code order.
@@ -809,6 +909,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(method_names, m)?)?;
     m.add_function(wrap_pyfunction!(steady_outcome_names, m)?)?;
     m.add_function(wrap_pyfunction!(instability_names, m)?)?;
+    m.add_function(wrap_pyfunction!(periodic_orbits, m)?)?;
     m.add_function(wrap_pyfunction!(validate_params, m)?)?;
     m.add_function(wrap_pyfunction!(static_point, m)?)?;
     m.add_function(wrap_pyfunction!(simulate, m)?)?;
