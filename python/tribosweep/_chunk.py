@@ -87,7 +87,7 @@ DECIDED_BY: dict[str, int] = {name: i for i, name in enumerate(DECIDED_BY_NAMES)
 
 #: Bistability check: value -> meaning (int8; -1 = the method did not check).
 BISTABLE_VALUES: tuple[int, ...] = (-1, 0, 1)
-BISTABLE_NAMES: tuple[str, ...] = ("not_checked", "monostable", "bistable")
+BISTABLE_NAMES: tuple[str, ...] = ("not_checked", "no_cycle_found", "bistable")
 
 #: Whether the mild-wear model applies at a point, in code order.
 WEAR_APPLICABILITY_NAMES: tuple[str, ...] = ("mild_wear_regime", "outside_mild_wear_regime", "undetermined")
@@ -421,7 +421,7 @@ def _transient(model_values, contact, friction_law, point_params, sel, options, 
     return _core.ensemble(
         {k: float(v) for k, v in model_values.items()}, contact, friction_law, names, values,
         np.ascontiguousarray(y0, dtype=np.float64),
-        float(options.get("t_max", T_MAX)), options.get("integrator", "dopri5"), float(options.get("rtol", 1e-8)),
+        float(options.get("t_max", T_MAX)), options.get("integrator", "dop853"), float(options.get("rtol", 1e-8)),
         None if atol is None else np.asarray(atol, dtype=np.float64), None, options.get("threads"), "steady",
         float(options.get("periodic_tol", 1e-5)), options.get("decay_amplitude"),
     )  # fmt: skip
@@ -570,7 +570,7 @@ def _dynamics(model_values, contact, friction_law, point_params, method, options
         out["bistable"][stable & ~lin_failed] = 0
         if cand.size:
             amp = np.where(np.isfinite(out["orbit_a1"][cand]), out["orbit_a1"][cand], out["tidf_a1"][cand])
-            y0b = _mode_start(full, friction_law, cand, 1.5 * amp)
+            y0b = _mode_start(full, friction_law, cand, float(options.get("bistability_start", 1.5)) * amp)
             t1 = time.perf_counter()
             summ = _transient(model_values, "unilateral", friction_law, point_params, cand, options, y0b)
             wall[cand] += (time.perf_counter() - t1) / cand.size

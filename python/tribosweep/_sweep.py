@@ -409,7 +409,7 @@ def sweep(
     wear_reference: _wear.WearReference | None = None,
     wear_calibration: _wear.WearCalibration | None = None,
     t_max: float = _chunk.T_MAX,
-    integrator: str = "dopri5",
+    integrator: str = "dop853",
     rtol: float = 1e-8,
     atol: float | Sequence[float] | None = None,
     periodic_tol: float = 1e-5,
@@ -473,15 +473,21 @@ def sweep(
     t_max : float, s
         Longest simulated time of a transient run (100). A run that has not settled by then leaves
         the regime to linear stability (``unstable_undetermined`` where sliding is unstable).
-    integrator : {"dopri5", "dop853", "rodas4"}
-        Time integrator of the transient runs.
+    integrator : {"dop853", "dopri5", "rodas4"}
+        Time integrator of the transient runs. DOP853 by default: on the unilateral (impacting)
+        transients it is about twice as fast as Dopri5 at rtol 1e-8 and about 7x more accurate
+        (the work-precision charts of ``tribosweep bench``); a 1,058-point seed sweep takes 18 s
+        instead of 34 s.
     rtol, atol
         Integration tolerances (as in :func:`tribosweep.simulate`).
     periodic_tol : float
         Relative repetition tolerance that declares a cycle.
     check_bistability : bool
         ``auto``: at stable points with a saddle cycle, run a unilateral transient from outside the
-        saddle to see whether a stable cycle coexists with sliding (``bistable``).
+        saddle to see whether a stable cycle coexists with sliding (``bistable``). ``bistable = 1``
+        proves coexistence (a stable cycle was reached); ``0`` only says this start returned to
+        sliding: the impacting motion has intertwined basins, and about 2 % of the points of a seed
+        sweep change verdict with the integration tolerance alone (even rtol 1e-11 against 1e-12).
     unstable_disturbance : float
         ``auto``: transients of linearly unstable points start on the unstable mode with
         ``|z| = unstable_disturbance |z_st|``.

@@ -415,12 +415,20 @@ where
             }
         };
         let t_new = if last { t_end } else { t + h };
-        if n_ev > 0 && opts.interior_checks > 0 {
-            if let Some(t_in) = hidden_crossing(sys, &st, mode, (t, &y), (h, t_new, &y_new), n_ev, &g0, &pend, opts) {
-                // A crossing and its return inside this step: redo it ending inside the excursion.
-                stats.n_reject += 1;
-                h = t_in - t;
-                continue;
+        // One interpolant per step, shared by the hidden-crossing check and the events (its
+        // extra stages, where a method has them, are built once and counted once).
+        let dense = st.dense(sys, mode, t, h, &y, &y_new);
+        let mut g1 = [0.0; MAX_EVENTS];
+        if n_ev > 0 {
+            sys.events(t_new, &y_new, mode, &mut g1);
+            if opts.interior_checks > 0 {
+                if let Some(t_in) = hidden_crossing(sys, &dense, mode, t, t_new, n_ev, &g0, &g1, &pend, opts) {
+                    // A crossing and its return inside this step: redo it ending inside the excursion.
+                    stats.n_rhs += dense.extra_rhs();
+                    stats.n_reject += 1;
+                    h = t_in - t;
+                    continue;
+                }
             }
         }
         stats.n_accept += 1;
@@ -432,14 +440,9 @@ where
         let h_next = (h * ratio).min(h_max);
 
         // ---- events on the accepted step ----
-        let dense = st.dense(sys, mode, t, h, &y, &y_new);
-        let mut g1 = [0.0; MAX_EVENTS];
         let mut busy = false;
-        if n_ev > 0 {
-            sys.events(t_new, &y_new, mode, &mut g1);
-            for i in 0..n_ev {
-                busy |= pend[i].is_some() || crosses(g0[i], g1[i]);
-            }
+        for i in 0..n_ev {
+            busy |= pend[i].is_some() || crosses(g0[i], g1[i]);
         }
         let ev = if busy {
             step_events(sys, obs, opts, &mut stats, &dense, mode, (t, &y), (t_new, &y_new), n_ev, &g0, &g1, &mut pend)
@@ -522,20 +525,18 @@ struct Switched {
 /// a crossing and its return hidden inside the step.
 #[inline(never)]
 #[allow(clippy::too_many_arguments)]
-fn hidden_crossing<const N: usize, S: OdeSystem<N>, St: Stepper<N, S>>(
+fn hidden_crossing<const N: usize, S: OdeSystem<N>, D: Dense<N>>(
     sys: &S,
-    st: &St,
+    dense: &D,
     mode: S::Mode,
-    (t, y): (f64, &SVector<f64, N>),
-    (h, t_new, y_end): (f64, f64, &SVector<f64, N>),
+    t: f64,
+    t_new: f64,
     n_ev: usize,
     g0: &[f64; MAX_EVENTS],
+    g1: &[f64; MAX_EVENTS],
     pend: &[Option<f64>; MAX_EVENTS],
     opts: &Options<N>,
 ) -> Option<f64> {
-    let dense = st.dense(sys, mode, t, h, y, y_end);
-    let mut g1 = [0.0; MAX_EVENTS];
-    sys.events(t_new, y_end, mode, &mut g1);
     let k = opts.interior_checks as usize;
     let mut gk = [0.0; MAX_EVENTS];
     for j in 1..=k {
