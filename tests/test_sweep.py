@@ -97,6 +97,7 @@ def test_bad_extra_axes(extra, match):
         ({"integrator": "euler"}, "integrator"),
         ({"resume": True}, "resume=True needs output"),
         ({"disturbance": [1.0, 2.0]}, "disturbance"),
+        ({"bistability_start": 0.9}, r"bistability_start = 0.9 is not valid: must be > 1"),
     ],
 )
 def test_bad_options(kwargs, match):

@@ -391,6 +391,13 @@ def _global_attrs(plan: _Plan, command: str, f_ref: float) -> dict:
     return attrs
 
 
+def _bistability_start(value) -> float:
+    v = _checks.positive("bistability_start", value)
+    if v <= 1.0:
+        raise ValueError(f"bistability_start = {value!r} is not valid: must be > 1 (a start outside the saddle cycle)")
+    return v
+
+
 def sweep(
     model: SliderModel | None = None,
     *,
@@ -416,6 +423,7 @@ def sweep(
     decay_amplitude: float | None = None,
     check_bistability: bool = True,
     unstable_disturbance: float = 1.0,
+    bistability_start: float = 1.5,
     command: str | None = None,
 ) -> xr.Dataset:
     """Map the slider's regime over normal load x arm length x sliding speed (x extra axes).
@@ -491,6 +499,9 @@ def sweep(
     unstable_disturbance : float
         ``auto``: transients of linearly unstable points start on the unstable mode with
         ``|z| = unstable_disturbance |z_st|``.
+    bistability_start : float
+        ``auto``: the bistability check starts on the torsion mode at this multiple (> 1) of the
+        saddle cycle's A1.
     decay_amplitude : float, m, optional
         Amplitude below which a motion counts as decayed (default ``1e-3 |z_st|``).
     command : str, optional
@@ -563,6 +574,7 @@ def sweep(
         "decay_amplitude": None if decay_amplitude is None else _checks.positive("decay_amplitude", decay_amplitude),
         "check_bistability": bool(check_bistability),
         "unstable_disturbance": _checks.positive("unstable_disturbance", unstable_disturbance),
+        "bistability_start": _bistability_start(bistability_start),
         "y0": _disturbance(disturbance).tolist(),
         "wear": {
             "normal_load": wear_reference.normal_load,
