@@ -1521,4 +1521,42 @@ mod hidden_crossing_tests {
             assert!(ends_only.stats.n_events < 11, "{method:?}: the test does not exercise hidden crossings");
         }
     }
+
+    /// `Peak` with a counter of its right-hand-side calls.
+    struct Counted(std::cell::Cell<u64>);
+    impl OdeSystem<2> for Counted {
+        type Mode = ();
+        fn rhs(&self, t: f64, y: &SVector<f64, 2>, m: ()) -> SVector<f64, 2> {
+            self.0.set(self.0.get() + 1);
+            Peak.rhs(t, y, m)
+        }
+        // Analytic, as the slider's (a finite-difference Jacobian is one n_jac, not n_rhs).
+        fn jacobian(&self, _t: f64, _y: &SVector<f64, 2>, _m: ()) -> nalgebra::SMatrix<f64, 2, 2> {
+            nalgebra::SMatrix::<f64, 2, 2>::new(0.0, 1.0, -1.0, 0.0)
+        }
+        fn initial_mode(&self, _t: f64, _y: &SVector<f64, 2>) {}
+        fn n_events(&self) -> usize {
+            1
+        }
+        fn events(&self, t: f64, y: &SVector<f64, 2>, m: (), g: &mut [f64; MAX_EVENTS]) {
+            Peak.events(t, y, m, g)
+        }
+    }
+
+    #[test]
+    fn n_rhs_counts_every_evaluation_with_events_and_interior_checks() {
+        // The reported cost is the true one: rejected steps, the steps redone after a hidden
+        // crossing, event location and DOP853's extra dense-output stages included.
+        let y0 = SVector::<f64, 2>::new(0.1f64.cos(), -0.1f64.sin());
+        for method in [Method::Dopri5, Method::Dop853, Method::Rodas4] {
+            for checks in [0, 7] {
+                let mut o = Options::<2>::new(1e-4, 1e-6);
+                o.interior_checks = checks;
+                let sys = Counted(std::cell::Cell::new(0));
+                let sol = integrate(&sys, method, 0.1, y0, 33.0, &o, &mut NoObserver);
+                assert!(sol.stats.n_events > 0);
+                assert_eq!(sol.stats.n_rhs, sys.0.get(), "{method:?}, {checks} checks: {:?}", sol.stats);
+            }
+        }
+    }
 }
