@@ -1,0 +1,48 @@
+"""How well posed is the bistability verdict? The same seed sweep at several integration settings.
+
+The ``auto`` bistability check runs one unilateral transient started outside the saddle cycle. A
+found cycle proves coexistence; a return to sliding does not prove its absence. This bench counts
+the points whose verdict changes between runs that differ only in integration error, and with
+the start's distance from the saddle.
+
+    python benches/bench_bistability.py [--loads 46 --arms 23 --threads 2]
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+import tribosweep as ts
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--loads", type=int, default=46)
+    ap.add_argument("--arms", type=int, default=23)
+    ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--starts", type=float, nargs="*", default=[1.5], help="bistability_start factors")
+    a = ap.parse_args(argv)
+    grid = dict(normal_load=np.linspace(10, 150, a.loads), arm_length=np.linspace(0.05, 0.127, a.arms),
+                sliding_speed=[0.46], method="auto", threads=a.threads, progress=False, t_max=20.0)  # fmt: skip
+    settings = [("dopri5", 1e-8), ("dop853", 1e-8), ("dop853", 1e-11), ("dop853", 1e-12)]
+    for start in a.starts:
+        verdicts = {}
+        for integ, rtol in settings:
+            t0 = time.perf_counter()
+            ds = ts.sweep(integrator=integ, rtol=rtol, bistability_start=start, **grid)
+            verdicts[(integ, rtol)] = ds.bistable.values.ravel()
+            print(f"start {start:4.1f} x A1  {integ:6} rtol {rtol:.0e}: {int((ds.bistable.values == 1).sum()):4d} bistable "
+                  f"of {ds.bistable.size} points, {time.perf_counter() - t0:6.1f} s", flush=True)  # fmt: skip
+        keys = list(verdicts)
+        for i in range(len(keys)):
+            for j in range(i + 1, len(keys)):
+                n = int((verdicts[keys[i]] != verdicts[keys[j]]).sum())
+                print(f"    verdict differs at {n:3d} points: {keys[i][0]} {keys[i][1]:.0e} vs {keys[j][0]} {keys[j][1]:.0e}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
