@@ -556,3 +556,16 @@ def test_regime_map_marks_bistable_points():
     fig = regime_map(ds)
     assert any("bistable" in s for s in labels(fig))
     assert any(p.get_hatch() == "//" for p in fig.axes[0].patches)
+
+
+def test_regime_map_labels_multi_period_cycles():
+    from tribosweep.plot import regime_map
+
+    ds = ts.sweep(normal_load=[10.0, 30.0, 60.0], arm_length=[0.05, 0.1], method="linear", progress=False)
+    texts = lambda fig: [t.get_text() for t in fig.axes[0].texts]  # noqa: E731
+    assert "2T" not in texts(regime_map(ds))
+    ds["cycle_period_ratio"][2, 1, 0] = 2.08  # the period-2 cycle at 80 N, mu 0.425
+    ds["cycle_period_ratio"][0, 0, 0] = 1.04  # an ordinary cycle: no label
+    fig = regime_map(ds)
+    assert texts(fig) == ["2T"]
+    assert any("mode periods" in t.get_text() for leg in fig.legends for t in leg.get_texts())

@@ -138,6 +138,19 @@ def regime_map(ds: xr.Dataset, *, x: str | None = None, y: str | None = None, fa
                 for j, i in zip(*np.nonzero(b)):
                     ax.add_patch(Rectangle((xe[i], ye[j]), xe[i + 1] - xe[i], ye[j + 1] - ye[j], fill=False,
                                            hatch="//", edgecolor="k", lw=0.0))
+        if "cycle_period_ratio" in ds:
+            # Cycles of several mode periods (past a period doubling, or subharmonic bouncing).
+            r = ds.cycle_period_ratio.isel({d: 0 for d in rest})
+            r = (r if fi is None else r.isel({facet: fi})).transpose(y, x).values
+            k = np.where(np.isfinite(r), np.rint(r), 0)
+            multi = k >= 2
+            if multi.any():
+                present.add("multi_period")
+                xe, ye = _edges(ds[x].values), _edges(ds[y].values)
+                small = multi.size > 400
+                for j, i in zip(*np.nonzero(multi)):
+                    ax.text(0.5 * (xe[i] + xe[i + 1]), 0.5 * (ye[j] + ye[j + 1]), f"{int(k[j, i])}T", ha="center",
+                            va="center", fontsize=4 if small else 6, color="k")  # fmt: skip
         ax.set_xlabel(_label(ds, x))
         if fi is not None:
             ax.set_title(f"{facet} = {ds[facet].values[fi]:g} {ds[facet].attrs.get('units', '')}".strip(), fontsize=9)
@@ -150,6 +163,8 @@ def regime_map(ds: xr.Dataset, *, x: str | None = None, y: str | None = None, fa
                for i, r in enumerate(REGIME_NAMES) if i in present]  # fmt: skip
     if "bistable" in present:
         handles.append(Patch(facecolor="none", edgecolor="k", hatch="//", lw=0.3, label="bistable (a stable cycle coexists)"))
+    if "multi_period" in present:
+        handles.append(Patch(facecolor="none", edgecolor="none", label="nT: a cycle of n mode periods\n(period doubling, subharmonic)"))
     fig.legend(handles=handles, loc="outside right center", fontsize=8, frameon=False)
     title = f"regime ({ds.attrs.get('method', '?')})"
     if fixed:
