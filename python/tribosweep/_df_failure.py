@@ -24,6 +24,7 @@ import numpy as np
 import xarray as xr
 
 from . import _core
+from ._flags import flag_attrs
 from ._model import SliderModel
 from ._sweep import sweep
 
@@ -31,10 +32,6 @@ from ._sweep import sweep
 ACCURACY = 0.05
 VALIDITY_NAMES = ("valid", "no_root", "contact_opens", "inaccurate", "orbit_not_found")
 NEWTON_NAMES = ("converged", "other_root", "not_converged")
-
-
-def _flag(names) -> dict:
-    return {"flag_values": np.arange(len(names), dtype=np.uint8), "flag_meanings": " ".join(names)}
 
 
 def tidf_validity_map(normal_load, arm_length, *, mu: float = 0.215, threads: int | None = None) -> xr.Dataset:
@@ -51,7 +48,7 @@ def tidf_validity_map(normal_load, arm_length, *, mu: float = 0.215, threads: in
     code[no_root] = VALIDITY_NAMES.index("no_root")
     out = xr.Dataset(
         {
-            "tidf_validity": (ds.tidf_a1.dims, code, {"long_name": "validity of the describing function"} | _flag(VALIDITY_NAMES)),
+            "tidf_validity": (ds.tidf_a1.dims, code, flag_attrs(VALIDITY_NAMES, "validity of the describing function")),
             "tidf_a1_error": ds.tidf_a1_error,
             "newton_iterations": ds.newton_iterations,
         },
@@ -79,7 +76,7 @@ def newton_basin_map(frequency_offset, amplitude_factor, *, model: SliderModel |
     code = np.where(st != 0, 2, np.where(same, 0, 1)).astype(np.uint8)
     return xr.Dataset(
         {
-            "newton": (("amplitude_factor", "frequency_offset"), code, {"long_name": "Newton outcome"} | _flag(NEWTON_NAMES)),
+            "newton": (("amplitude_factor", "frequency_offset"), code, flag_attrs(NEWTON_NAMES, "Newton outcome")),
             "iterations": (("amplitude_factor", "frequency_offset"), out["iterations"].reshape(af.size, fo.size),
                            {"units": "1", "long_name": "Newton iterations"}),
         },

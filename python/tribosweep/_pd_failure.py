@@ -32,7 +32,7 @@ import numpy as np
 import xarray as xr
 
 from . import _core
-from ._flags import INSTABILITY_NAMES, OUTCOME_NAMES
+from ._flags import INSTABILITY_NAMES, OUTCOME_NAMES, flag_attrs
 from ._frequency import FLIP_TOL
 from ._model import SliderModel
 from ._simulate import STATE_VARS, ensemble
@@ -41,10 +41,6 @@ SHOOTING_NAMES = ("valid", "near_flip", "flip_unstable", "other_unstable", "not_
 #: Simulated time allowed to the transients [s]: near the flip the approach to the cycle is slow
 #: (multipliers of modulus 0.99), 26 s at 80 N and mu = 0.4225.
 T_MAX = 40.0
-
-
-def _flag(names) -> dict:
-    return {"flag_values": np.arange(len(names), dtype=np.uint8), "flag_meanings": " ".join(names)}
 
 
 def _unilateral(model: SliderModel | None) -> SliderModel:
@@ -107,8 +103,7 @@ def shooting_pd_map(normal_load, mu, *, model: SliderModel | None = None, t_max:
     ratio = np.where(periodic, tr.period.values / t_guess, np.nan)
     return xr.Dataset(
         {
-            "shooting": (dims, code.reshape(shape), {"long_name": "period-1 shooting from the transient's state"}
-                         | _flag(SHOOTING_NAMES)),  # fmt: skip
+            "shooting": (dims, code.reshape(shape), flag_attrs(SHOOTING_NAMES, "period-1 shooting from the transient's state")),
             "flip_multiplier": (dims, flip.reshape(shape), {
                 "units": "1", "long_name": "most negative real Floquet multiplier of the period-1 orbit"}),
             "newton_iterations": (dims, iters.reshape(shape), {"units": "1", "long_name": "Newton iterations"}),
@@ -174,7 +169,7 @@ def bifurcation_diagram(mu, *, normal_load: float = 80.0, model: SliderModel | N
         {
             "z_peaks": (("mu", "peak"), peaks, {"units": "m", "long_name": "local maxima of z at the end of the transient"}),
             "flip_multiplier": ("mu", flip, {"units": "1", "long_name": "most negative real multiplier, period-1 branch"}),
-            "instability": ("mu", inst, {"long_name": "instability of the period-1 branch"} | _flag(INSTABILITY_NAMES)),
+            "instability": ("mu", inst, flag_attrs(INSTABILITY_NAMES, "instability of the period-1 branch")),
             "branch_period": ("mu", p1, {"units": "s", "long_name": "period of the period-1 branch"}),
             "branch_status": ("mu", st, {"long_name": "status of the continuation solve (255: not computed)"}),
         },
