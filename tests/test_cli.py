@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
+import tribosweep as ts
 from tribosweep import _chunk, cli
 
 _REAL_COMPUTE_CHUNK = _chunk.compute_chunk
@@ -199,3 +200,15 @@ def test_commands_registry_is_extensible():
         assert called == ["y"]
     finally:
         del cli.COMMANDS["hello"]
+
+
+def test_info_counts_bistable_points_and_multi_period_cycles(tmp_path, capsys):
+    nc = tmp_path / "m.nc"
+    ds = ts.sweep(normal_load=[10.0, 30.0], arm_length=[0.05, 0.1], method="linear", progress=False)
+    ds["cycle_period_ratio"][1, 0, 0] = 2.03
+    ds["bistable"][0, 1, 0] = 1
+    ds.to_netcdf(nc)
+    code, out, _ = run(["info", nc], capsys)
+    assert code == 0
+    assert "cycles of several mode periods (period doubling, subharmonic): 1" in out
+    assert "bistable:" in out and "not_checked" in out

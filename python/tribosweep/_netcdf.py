@@ -64,6 +64,11 @@ def point_specs(dims: tuple[str, ...], *, wear_rate: bool = False) -> list[VarSp
         "tolerance alone"
     )
     by_name["reason"].attrs["comment"] = "free text; empty for a point decided without trouble"
+    by_name["z1_amplitude"].attrs["comment"] = (
+        "harmonics are of the cycle's own period: for a cycle of n mode periods (cycle_period_ratio about n, "
+        "after a period doubling or on subharmonic bouncing) the motion at the mode's frequency is the n-th "
+        "harmonic (z2_amplitude for n = 2), and z1_amplitude is small"
+    )
     by_name["wall_time"].attrs["comment"] = "a measurement: differs between runs"
     return out
 

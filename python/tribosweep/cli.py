@@ -224,7 +224,7 @@ def describe(ds, path: str | None = None) -> str:
     for key in ("method", "source", "history"):
         if key in ds.attrs:
             lines.append(f"{key}: {ds.attrs[key]}")
-    for var in ("regime", "decided_by", "status"):
+    for var in ("regime", "decided_by", "status", "bistable"):
         if var not in ds:
             continue
         names = str(ds[var].attrs.get("flag_meanings", "")).split()
@@ -233,6 +233,11 @@ def describe(ds, path: str | None = None) -> str:
         counts = [(n, int(np.count_nonzero(codes == v))) for v, n in zip(values, names)]
         lines.append(f"{var}:")
         lines.extend(f"  {n:<24s}{c:>8d}" for n, c in counts if c)
+    if "cycle_period_ratio" in ds:
+        r = np.asarray(ds.cycle_period_ratio.values).ravel()
+        multi = np.isfinite(r) & (np.rint(np.where(np.isfinite(r), r, 0)) >= 2)
+        if multi.any():
+            lines.append(f"cycles of several mode periods (period doubling, subharmonic): {int(multi.sum())}")
     for var, dim in (("normal_load_extrapolated", "loads"), ("arm_length_extrapolated", "arm lengths")):
         if var in ds:
             v = np.asarray(ds[var].values)
