@@ -125,3 +125,19 @@ def test_unstable_sliding_without_unilateral_contact_diverges():
     uni = ts.ensemble(ts.SliderModel(contact="unilateral"), 20.0, {"mu": [0.35]}, steady=True, rtol=1e-8)
     assert ts.OUTCOME_NAMES[int(uni.outcome[0])] == "periodic"
     assert 640 < float(uni.omega[0]) < 660 and float(uni.fraction_off_disk[0]) > 0.1
+
+
+def test_batched_path_locates_the_escape_as_the_scalar_path_does():
+    # Bilateral, constant mu, Dopri5, end state only: the lane-batched path. mu 0.35 escapes
+    # (|z| reaches the 1 mm limit) at about 4.3 s; the batch locates it inside the step.
+    m = ts.SliderModel()
+    mus = np.array([0.2, 0.35, 0.21, 0.36])
+    batch = ts.ensemble(m, 20.0, {"mu": mus}, y0=[1e-6, 0, 0, 0, 0, 0], rtol=1e-6, method="dopri5")
+    for i, mu in enumerate(mus):
+        one = ts.simulate(m.replace(mu=float(mu)), 20.0, y0=[1e-6, 0, 0, 0, 0, 0], rtol=1e-6, method="dopri5")
+        assert int(batch.status[i]) == int(one.status), mu
+        assert float(batch.t_reached[i]) == pytest.approx(float(one.t_reached), rel=1e-9)
+        if mu >= 0.35:
+            assert ts.STATUS_NAMES[int(batch.status[i])] == "diverged"
+            assert abs(float(batch.z_end[i])) == pytest.approx(1e-3, rel=1e-9)
+            assert float(batch.max_abs_z[i]) == pytest.approx(float(one.max_abs_z), rel=1e-9)

@@ -321,18 +321,10 @@ fn ensemble<'py>(
                             let sliders: Vec<Slider> =
                                 g.iter().map(|(p, _)| Slider::new(*p).expect("validated")).collect();
                             let y0s: Vec<State> = g.iter().map(|(_, y)| *y).collect();
+                            // The batch locates an escape inside its step, as the scalar path does.
                             tribosweep_core::ode::batch::run_bilateral_batch(&sliders, &y0s, t_end, &tol)
                                 .into_iter()
-                                .enumerate()
-                                .map(|(k, r)| {
-                                    // The batch stops a diverging lane at a step end; the scalar
-                                    // path locates the escape. Diverged runs are rare: redo them.
-                                    if r.status == Status::Diverged {
-                                        (steady::run(&sliders[k], &y0s[k], t_end, method, &tol), String::new())
-                                    } else {
-                                        (r, String::new())
-                                    }
-                                })
+                                .map(|r| (r, String::new()))
                                 .collect()
                         },
                         |msg| vec![(failed_run(Status::Panic), format!("panic: {msg}")); group],

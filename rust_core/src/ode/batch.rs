@@ -19,10 +19,10 @@
 //! - The right-hand side is the slider's in contact mode, with the dynamic law force used directly
 //!   instead of `(F_st + F_z) - F_st`, so states agree with the scalar path to rounding per step,
 //!   not bitwise; step counts agree to a few per cent (they are identical on most trajectories).
-//! - **Events are not located.** The bilateral constant-`mu` model never switches mode, so only the
-//!   escape event matters: when `|z| >= escape_limit` at the end of an accepted step the lane stops
-//!   there with `Status::Diverged` (the scalar path stops at the located crossing inside the step,
-//!   so `t`, `y` and `max_abs_z` of a diverged run differ; `max_abs_z >= escape_limit` holds).
+//! - **Only the escape is located.** The bilateral constant-`mu` model never switches mode, so only
+//!   the escape event matters: when `|z| >= escape_limit` at the end of an accepted step, the
+//!   crossing is located on the step's interpolant as the scalar path's event is (Illinois to
+//!   `event_tol`, the far side of the crossing) and the lane stops there with `Status::Diverged`.
 //!   `Stats::n_events` is 0 (the scalar path counts the located, non-acting gap, normal-force and
 //!   slip crossings too). A run that starts at `|z| >= escape_limit` stops after its first step.
 //! - [`Extremes`] are updated at the initial state and at every accepted step end (the scalar path
@@ -43,7 +43,9 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::controller::{initial_step, FAC_MAX, FAC_MIN, SAFETY};
-use super::{Options, Stats};
+use super::dopri5::Dopri5Dense;
+use super::driver::locate;
+use super::{Dense, Options, Stats};
 use crate::model::{idx, ContactMode, ContactModel, FrictionLaw, Slider, State};
 use crate::status::Status;
 use crate::steady::{characteristic_sizes, options_for, Extremes, RunResult, Tolerances};
@@ -238,6 +240,7 @@ fn run_impl(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances) -> 
     let opts = Options::<6>::new(tol.rtol, 1.0);
     let rtol = tol.rtol;
     let max_steps = opts.max_steps;
+    let event_tol = opts.event_tol;
     let h_min_rel = opts.h_min_rel;
     let mut out: Vec<Option<RunResult>> = vec![None; n];
     let zero = [0.0; W];
@@ -420,6 +423,7 @@ fn run_impl(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances) -> 
         }
         let r = exp_lanes(&arg);
         // Kept as several simple loops over the lanes: each vectorises on its own.
+        let t_start = ln.t;
         let mut ended = [false; W];
         for l in 0..W {
             let ok = ok[l];
@@ -441,6 +445,15 @@ fn run_impl(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances) -> 
             let end_a = last[l] || z >= c.esc[l];
             let end_r = h_new.is_nan() || h_new < floor[l];
             ended[l] = if ok { end_a } else { end_r };
+        }
+        let mut escaped = false;
+        for l in 0..W {
+            escaped |= ok[l] & ended[l] & (yn[idx::Z][l].abs() >= c.esc[l]);
+        }
+        if escaped {
+            let stages = [&ln.f, &k2, &k3, &k4, &k5, &k6, &k7];
+            let step = Step { t0: &t_start, h: &hh, ok: &ok };
+            locate_escapes(c, &ln.who, &ln.y, &stages, &step, &mut yn, &mut fz, &mut ln.t, sliders, event_tol);
         }
         for l in 0..W {
             ln.n_acc[l] += ok[l] as u64;
@@ -560,6 +573,56 @@ fn ln_lanes(x: &L) -> L {
 #[inline]
 fn lane_state(v: &V6, l: usize) -> State {
     State::from_fn(|i, _| v[i][l])
+}
+
+/// Lanes whose accepted step ends at `|z| >= escape_limit`: locate the crossing on the step's
+/// interpolant, as the scalar path's escape event does (Illinois to `event_tol`, the time on the
+/// far side of the crossing), and make the lane's step end there: `yn`, the contact force `fz`
+/// and `t` of those lanes are replaced, so that the state, the extremes and the time reported are
+/// the located ones. Called before the lane state is overwritten (`ln.y`, `ln.f` still hold the
+/// step's start and first stage). Cold: diverging runs are rare.
+/// The attempted step of every lane: start times, step sizes, accepted or not.
+struct Step<'a> {
+    t0: &'a L,
+    h: &'a L,
+    ok: &'a [bool; W],
+}
+
+#[cold]
+#[inline(never)]
+#[allow(clippy::too_many_arguments)]
+fn locate_escapes(
+    c: &Coef,
+    who: &[usize; W],
+    y: &V6,
+    stages: &[&V6; 7],
+    step: &Step<'_>,
+    yn: &mut V6,
+    fz: &mut L,
+    t: &mut L,
+    sliders: &[Slider],
+    event_tol: f64,
+) {
+    for l in 0..W {
+        if who[l] == usize::MAX || !step.ok[l] || yn[idx::Z][l].abs() < c.esc[l] {
+            continue;
+        }
+        let esc = c.esc[l];
+        let k: [State; 7] = std::array::from_fn(|j| lane_state(stages[j], l));
+        let (y0, y1) = (lane_state(y, l), lane_state(yn, l));
+        // `t` already holds the accepted step's end.
+        let (t0, t1) = (step.t0[l], t[l]);
+        let dense = Dopri5Dense::from_stages(&k, &y0, &y1, t0, step.h[l]);
+        let g = |tt: f64| esc - dense.eval(tt)[idx::Z].abs();
+        let (g0, g1) = (esc - y0[idx::Z].abs(), esc - y1[idx::Z].abs());
+        let te = if g0 > 0.0 { locate(g, t0, g0, t1, g1, event_tol) } else { t1 };
+        let ye = if te == t1 { y1 } else { dense.eval(te) };
+        for i in 0..6 {
+            yn[i][l] = ye[i];
+        }
+        fz[l] = sliders[who[l]].forces(&ye, ContactMode::Contact).normal - c.fst[l];
+        t[l] = te;
+    }
 }
 
 /// Write lane `l`'s result and mark it idle.
@@ -837,8 +900,14 @@ mod tests {
         assert!(d.t < 20.0 && d.y.iter().all(|v| v.is_finite()));
         let sc = run(&s, &y0, 20.0, Method::Dopri5, &tol(1e-6));
         assert_eq!(sc.status, Status::Diverged);
-        // Stopped at the end of the step that crossed: within a step or so of the located time.
-        assert!((d.t - sc.t).abs() < 0.01 * sc.t, "{} vs {}", d.t, sc.t);
+        // The escape is located inside the step, as the scalar path's event: the same time and
+        // state to the paths' rounding-level differences (amplified over a growing run).
+        eprintln!("batch t {:.15e} z {:.6e}; scalar t {:.15e} z {:.6e}", d.t, d.y[0], sc.t, sc.y[0]);
+        assert!((d.t - sc.t).abs() < 1e-9 * sc.t, "{} vs {}", d.t, sc.t);
+        assert!((d.y[0].abs() / s.p.escape_limit - 1.0) < 1e-9, "{}", d.y[0]);
+        assert!((d.y - sc.y).amax() < 1e-6 * sc.y.amax(), "{} vs {}", d.y, sc.y);
+        assert_eq!(d.stats.n_accept, sc.stats.n_accept);
+        assert!((d.extremes.max_abs_z - sc.extremes.max_abs_z).abs() < 1e-12, "{:?} vs {:?}", d.extremes, sc.extremes);
         for (i, x) in r.iter().enumerate() {
             assert!(x.y.iter().all(|v| v.is_finite()), "#{i}");
             if i != 2 {

@@ -65,6 +65,20 @@ pub(crate) struct Dopri5Dense<'a, const N: usize> {
     h: f64,
 }
 
+impl<'a, const N: usize> Dopri5Dense<'a, N> {
+    /// The interpolant of a step `[t0, t0 + h]` from `y0` to `y1` with stages `k` (for callers
+    /// that keep the stages themselves, as the lane-batched stepper does).
+    pub(crate) fn from_stages(
+        k: &'a [SVector<f64, N>; 7],
+        y0: &'a SVector<f64, N>,
+        y1: &'a SVector<f64, N>,
+        t0: f64,
+        h: f64,
+    ) -> Self {
+        Dopri5Dense { k, y0, y1, t0, h }
+    }
+}
+
 impl<const N: usize> Dense<N> for Dopri5Dense<'_, N> {
     #[inline]
     fn eval(&self, t: f64) -> SVector<f64, N> {
