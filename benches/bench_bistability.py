@@ -1,7 +1,8 @@
 """How well posed is the bistability verdict? The same seed sweep at several integration settings.
 
-The ``auto`` bistability check runs one unilateral transient started outside the saddle cycle. A
-found cycle proves coexistence; a return to sliding does not prove its absence. This bench counts
+The ``auto`` bistability check runs one unilateral transient started outside the saddle cycle and
+records where it goes (returned to sliding, a stable cycle, sustained non-periodic motion, escape).
+A found cycle proves coexistence; a return to sliding does not prove its absence. This bench counts
 the points whose verdict changes between runs that differ only in integration error, and with
 the start's distance from the saddle.
 
@@ -16,6 +17,7 @@ import time
 import numpy as np
 
 import tribosweep as ts
+from tribosweep._chunk import BISTABLE_NAMES, BISTABLE_VALUES
 
 
 def main(argv=None) -> int:
@@ -33,14 +35,20 @@ def main(argv=None) -> int:
         for integ, rtol in settings:
             t0 = time.perf_counter()
             ds = ts.sweep(integrator=integ, rtol=rtol, bistability_start=start, **grid)
-            verdicts[(integ, rtol)] = ds.bistable.values.ravel()
-            print(f"start {start:4.1f} x A1  {integ:6} rtol {rtol:.0e}: {int((ds.bistable.values == 1).sum()):4d} bistable "
-                  f"of {ds.bistable.size} points, {time.perf_counter() - t0:6.1f} s", flush=True)  # fmt: skip
+            v = ds.bistable.values.ravel()
+            verdicts[(integ, rtol)] = v
+            counts = ", ".join(f"{name} {int((v == code).sum())}" for code, name in zip(BISTABLE_VALUES, BISTABLE_NAMES))
+            print(f"start {start:4.1f} x A1  {integ:6} rtol {rtol:.0e} ({time.perf_counter() - t0:5.1f} s): {counts}",
+                  flush=True)  # fmt: skip
         keys = list(verdicts)
         for i in range(len(keys)):
             for j in range(i + 1, len(keys)):
-                n = int((verdicts[keys[i]] != verdicts[keys[j]]).sum())
-                print(f"    verdict differs at {n:3d} points: {keys[i][0]} {keys[i][1]:.0e} vs {keys[j][0]} {keys[j][1]:.0e}")
+                a, b = verdicts[keys[i]], verdicts[keys[j]]
+                n = int((a != b).sum())
+                # The question that matters first: does a large disturbance return to sliding?
+                nr = int(((a == 0) != (b == 0)).sum())
+                print(f"    {keys[i][0]} {keys[i][1]:.0e} vs {keys[j][0]} {keys[j][1]:.0e}: verdict differs at {n:3d} "
+                      f"points, returned-or-not at {nr:3d}")  # fmt: skip
     return 0
 
 

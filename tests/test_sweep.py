@@ -275,7 +275,7 @@ def test_classification_of_transient_summaries(summary, stable, regime, decided_
 def test_a_failed_point_is_data_not_an_exception(monkeypatch):
     # Whatever goes wrong in the core for one point (here a simulated panic) becomes that point's
     # status and reason; the sweep goes on with the others.
-    def panicking(model_values, contact, friction_law, point_params, sel, options, y0=None):
+    def panicking(model_values, contact, friction_law, point_params, sel, options, y0=None, decay=None):
         n = sel.size
         return {"status": np.full(n, ts.STATUS["panic"], np.uint8), "outcome": np.full(n, 4, np.uint8),
                 "reason": ["panic: boom"] * n, **{k: np.full(n, np.nan) for k in (
@@ -569,3 +569,29 @@ def test_regime_map_labels_multi_period_cycles():
     fig = regime_map(ds)
     assert texts(fig) == ["2T"]
     assert any("mode periods" in t.get_text() for leg in fig.legends for t in leg.get_texts())
+
+
+def test_bistability_check_outcomes():
+    # The check's run started outside the saddle either returns to sliding (130 N, 6.1 cm), reaches
+    # a stable cycle (130 N, 9.4 cm; 10 N, 8.3 cm), sustains a bouncing motion that is not periodic
+    # by t_max (10 N, 9.4 cm: quasi-periodic bouncing, amplitude constant for tens of seconds), or
+    # escapes past 1 mm (10 N, 10.5 cm). At 10 N, 6.1 cm sliding is unstable: not checked.
+    ds = ts.sweep(normal_load=[10.0, 130.0], arm_length=[0.061, 0.083, 0.094, 0.105], progress=False)
+    names = [_chunk.BISTABLE_NAMES[_chunk.BISTABLE_VALUES.index(int(v))] for v in ds.bistable.values.ravel()]
+    assert names == ["not_checked", "bistable", "sustained_motion", "escapes",
+                     "returned_to_sliding", "returned_to_sliding", "bistable", "sustained_motion"]  # fmt: skip
+    reasons = ds.reason.values.ravel()
+    assert reasons[2].startswith("sustained motion coexists") and "escapes" in reasons[3]
+    assert ds.regime.values.ravel()[4] == ts.REGIME_NAMES.index("steady_sliding")
+
+
+def test_a_returning_check_stops_inside_the_saddle(monkeypatch):
+    # A returned run stops once it is back inside the saddle with the pin on the disk, not after
+    # decaying to 1e-3 |z_st|: the same verdict for a fraction of the work.
+    point = dict(normal_load=[130.0], arm_length=[0.061], progress=False)
+    early = ts.sweep(**point)
+    monkeypatch.setattr(_chunk, "BISTABILITY_RETURN", 0.0)
+    late = ts.sweep(**point)
+    assert int(early.bistable.item()) == int(late.bistable.item()) == 0
+    # 245,488 against 377,188 right-hand sides (the linear and describing-function stages are in both).
+    assert int(early.n_rhs.item()) < 0.75 * int(late.n_rhs.item()), (int(early.n_rhs.item()), int(late.n_rhs.item()))

@@ -86,8 +86,16 @@ DECIDED_BY_NAMES: tuple[str, ...] = ("linear", "tidf", "shooting", "transient")
 DECIDED_BY: dict[str, int] = {name: i for i, name in enumerate(DECIDED_BY_NAMES)}
 
 #: Bistability check: value -> meaning (int8; -1 = the method did not check).
-BISTABLE_VALUES: tuple[int, ...] = (-1, 0, 1)
-BISTABLE_NAMES: tuple[str, ...] = ("not_checked", "no_cycle_found", "bistable")
+#: Outcome of the bistability check (a unilateral run started outside the saddle cycle):
+#: not checked; it returned to sliding; it reached a stable cycle (bistable); it sustained a motion
+#: that neither returned nor settled on a cycle by t_max (quasi-periodic or chaotic bouncing, or a
+#: slow approach); it escaped past the escape limit; the run failed.
+BISTABLE_VALUES: tuple[int, ...] = (-1, 0, 1, 2, 3, 4)
+BISTABLE_NAMES: tuple[str, ...] = (
+    "not_checked", "returned_to_sliding", "bistable", "sustained_motion", "escapes", "check_failed",
+)  # fmt: skip
+#: The check's run outcome -> its code.
+_CHECK_CODE: dict[str, int] = {"decayed": 0, "periodic": 1, "unsettled": 2, "diverged": 3, "failed": 4}
 
 #: Whether the mild-wear model applies at a point, in code order.
 WEAR_APPLICABILITY_NAMES: tuple[str, ...] = ("mild_wear_regime", "outside_mild_wear_regime", "undetermined")
@@ -105,6 +113,11 @@ IMPLEMENTED_METHODS: tuple[str, ...] = METHODS
 #: divided by this margin (the DF's A1 error grows with amplitude: 10-20 % at tens of um).
 SHOOT_MARGIN: float = 2.0
 
+#: The bistability check's run counts as returned to sliding once its motion (every component, in
+#: units of its characteristic size) is below this fraction of the saddle cycle's A1, and below
+#: half of |z_st| (the pin on the disk), and shrinking.
+BISTABILITY_RETURN: float = 0.2
+
 #: Per-point output of :func:`compute_chunk`: name -> (dtype, units or None, long name).
 #: Flag variables carry their meanings in ``FLAG_MEANINGS``. Every name here is an output key.
 POINT_VARIABLES: dict[str, tuple[str, str | None, str]] = {
@@ -112,7 +125,7 @@ POINT_VARIABLES: dict[str, tuple[str, str | None, str]] = {
     "status": ("u1", None, "status of the computation that decided the regime"),
     "reason": ("str", None, "reason for a failed or undetermined point (empty otherwise)"),
     "decided_by": ("u1", None, "analysis stage that decided the regime"),
-    "bistable": ("i1", None, "coexistence of stable sliding and a stable cycle"),
+    "bistable": ("i1", None, "outcome of the bistability check (a run started outside the saddle cycle)"),
     "growth_rate": ("f8", "s-1", "largest real part of the eigenvalues of steady sliding (> 0: unstable)"),
     "linear_frequency": ("f8", "rad s-1", "angular frequency of the least stable linear mode"),
     "normal_mode_frequency": ("f8", "Hz", "frequency Im(lambda_normal)/2 pi of the linearised normal mode"),
@@ -412,7 +425,7 @@ def _mode_start(full: Mapping[str, np.ndarray], friction_law: str, sel: np.ndarr
     return np.ascontiguousarray(y0)
 
 
-def _transient(model_values, contact, friction_law, point_params, sel, options, y0=None) -> dict:
+def _transient(model_values, contact, friction_law, point_params, sel, options, y0=None, decay=None) -> dict:
     names = sorted(point_params)
     values = np.column_stack([np.asarray(point_params[k], dtype=np.float64)[sel] for k in names])
     if y0 is None:
@@ -423,7 +436,8 @@ def _transient(model_values, contact, friction_law, point_params, sel, options, 
         np.ascontiguousarray(y0, dtype=np.float64),
         float(options.get("t_max", T_MAX)), options.get("integrator", "dop853"), float(options.get("rtol", 1e-8)),
         None if atol is None else np.asarray(atol, dtype=np.float64), None, options.get("threads"), "steady",
-        float(options.get("periodic_tol", 1e-5)), options.get("decay_amplitude"),
+        float(options.get("periodic_tol", 1e-5)), options.get("decay_amplitude"), 512, None, None,
+        None if decay is None else np.ascontiguousarray(decay, dtype=np.float64),
     )  # fmt: skip
 
 
@@ -572,11 +586,18 @@ def _dynamics(model_values, contact, friction_law, point_params, method, options
             amp = np.where(np.isfinite(out["orbit_a1"][cand]), out["orbit_a1"][cand], out["tidf_a1"][cand])
             y0b = _mode_start(full, friction_law, cand, float(options.get("bistability_start", 1.5)) * amp)
             t1 = time.perf_counter()
-            summ = _transient(model_values, "unilateral", friction_law, point_params, cand, options, y0b)
+            # A run back inside the saddle with the pin on the disk follows the bilateral law, for
+            # which it is in sliding's basin: it has returned. Stop it there instead of waiting for
+            # the default 1e-3 |z_st| (tens of seconds at the slowly decaying points).
+            z_abs = np.abs(_static_penetration(full, cand))
+            user = options.get("decay_amplitude")
+            floor = 1e-3 * z_abs if user is None else np.full(cand.size, float(user))
+            decay = np.maximum(floor, np.minimum(BISTABILITY_RETURN * amp, 0.5 * z_abs))
+            summ = _transient(model_values, "unilateral", friction_law, point_params, cand, options, y0b, decay)
             wall[cand] += (time.perf_counter() - t1) / cand.size
             out["n_rhs"][cand] += np.asarray(summ["n_rhs"], dtype=np.int64)
             cyc = np.array([OUTCOME_NAMES[o] == "periodic" for o in summ["outcome"]])
-            out["bistable"][cand] = cyc.astype(np.int8)
+            out["bistable"][cand] = [_CHECK_CODE[OUTCOME_NAMES[o]] for o in summ["outcome"]]
             for j, i in enumerate(cand):
                 if cyc[j]:
                     out["cycle_omega"][i] = summ["omega"][j]
@@ -585,6 +606,11 @@ def _dynamics(model_values, contact, friction_law, point_params, method, options
                     out["phi1_amplitude"][i] = summ["phi1_amp"][j]
                     out["fraction_off_disk"][i] = summ["fraction_off_disk"][j]
                     reason[i] = "bistable: a stable cycle coexists (reached from outside the saddle); amplitudes are its"
+                elif out["bistable"][i] == 2:
+                    reason[i] = ("sustained motion coexists: a run from outside the saddle neither returned to sliding "
+                                 "nor settled on a cycle by t_max")  # fmt: skip
+                elif out["bistable"][i] == 3:
+                    reason[i] = "a run from outside the saddle escapes (|z| past the escape limit)"
 
     with np.errstate(invalid="ignore", divide="ignore"):
         out["cycle_period_ratio"] = out["linear_frequency"] / out["cycle_omega"]

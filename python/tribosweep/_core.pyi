@@ -47,6 +47,7 @@ def ensemble(
     n_fourier: int = 512,
     max_steps: int | None = None,
     max_events: int | None = None,
+    decay_amplitudes: npt.NDArray[np.float64] | None = None,
 ) -> dict[str, Any]: ...
 def linear_stability(
     base: dict[str, float],

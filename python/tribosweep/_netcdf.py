@@ -57,11 +57,12 @@ def point_specs(dims: tuple[str, ...], *, wear_rate: bool = False) -> list[VarSp
     by_name = {v.name: v for v in out}
     by_name["regime"].attrs["comment"] = "; ".join(f"{k}: {v}" for k, v in _chunk.REGIME_DOC.items())
     by_name["bistable"].attrs["comment"] = (
-        "-1 (not_checked): the method did not look for coexisting sliding and cycle states; "
-        "1 (bistable): a run started outside the saddle cycle reached a stable cycle, a proof of coexistence; "
-        "0 (no_cycle_found): that run returned to sliding, which is no proof: the impacting motion has "
-        "intertwined basins, and about 2 % of a seed sweep's points change verdict with the integration "
-        "tolerance alone"
+        "-1 not_checked: the method did not look; 0 returned_to_sliding: a run started outside the saddle cycle "
+        "decayed back to sliding, which is no proof that nothing else coexists (the impacting motion has "
+        "intertwined basins: about 2 % of a seed sweep's points change verdict with the integration tolerance "
+        "alone); 1 bistable: it reached a stable cycle, a proof of coexistence; 2 sustained_motion: it neither "
+        "returned nor settled on a cycle by t_max (quasi-periodic or chaotic bouncing, or a slow approach); "
+        "3 escapes: |z| passed the escape limit; 4 check_failed: the run failed (see status codes of a rerun)"
     )
     by_name["reason"].attrs["comment"] = "free text; empty for a point decided without trouble"
     by_name["z1_amplitude"].attrs["comment"] = (

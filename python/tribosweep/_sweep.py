@@ -492,10 +492,13 @@ def sweep(
         Relative repetition tolerance that declares a cycle.
     check_bistability : bool
         ``auto``: at stable points with a saddle cycle, run a unilateral transient from outside the
-        saddle to see whether a stable cycle coexists with sliding (``bistable``). ``bistable = 1``
-        proves coexistence (a stable cycle was reached); ``0`` only says this start returned to
-        sliding: the impacting motion has intertwined basins, and about 2 % of the points of a seed
-        sweep change verdict with the integration tolerance alone (even rtol 1e-11 against 1e-12).
+        saddle and record where it goes (``bistable``): ``returned_to_sliding`` (stopped once back
+        inside the saddle with the pin on the disk, where the bilateral law holds and the saddle
+        bounds sliding's basin), ``bistable`` (a stable cycle: a proof of coexistence),
+        ``sustained_motion`` (neither, by ``t_max``: quasi-periodic or chaotic bouncing, or a slow
+        approach), ``escapes`` (|z| past the escape limit), or ``check_failed``. A return is no proof
+        that nothing else coexists: the impacting motion has intertwined basins, and about 2 % of
+        a seed sweep's points change verdict with the integration tolerance alone.
     unstable_disturbance : float
         ``auto``: transients of linearly unstable points start on the unstable mode with
         ``|z| = unstable_disturbance |z_st|``.

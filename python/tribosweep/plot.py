@@ -38,6 +38,14 @@ def _matplotlib():
     return Figure, Patch
 
 
+#: Bistability-check outcomes drawn over the regime colours: code -> (key, hatch, legend label).
+_COEXISTING = {
+    1: ("bistable", "//", "bistable (a stable cycle coexists)"),
+    2: ("sustained", "\\\\", "sustained motion coexists\n(not periodic by t_max)"),
+    3: ("escapes", "xx", "a large disturbance escapes"),
+}
+
+
 def _edges(c: np.ndarray) -> np.ndarray:
     """Cell edges around centres ``c`` (midpoints; a single centre gets a +-5 % cell)."""
     c = np.asarray(c, dtype=np.float64)
@@ -126,18 +134,18 @@ def regime_map(ds: xr.Dataset, *, x: str | None = None, y: str | None = None, fa
         present.update(np.unique(z).tolist())
         ax.pcolormesh(_edges(ds[x].values), _edges(ds[y].values), z, cmap=cmap, norm=norm, shading="flat")
         if "bistable" in ds:
-            # Stable sliding coexisting with a stable cycle: hatched, since the regime then depends on
-            # the initial disturbance (MODEL.md §6: the seed point is such a case).
+            # Stable sliding coexisting with another motion: hatched, since the regime then depends
+            # on the initial disturbance (MODEL.md §6: the seed point is such a case).
             b = ds.bistable.isel({d: 0 for d in rest})
-            b = (b if fi is None else b.isel({facet: fi})).transpose(y, x).values == 1
-            if b.any():
+            b = (b if fi is None else b.isel({facet: fi})).transpose(y, x).values
+            xe, ye = _edges(ds[x].values), _edges(ds[y].values)
+            for code, (key, hatch, _) in _COEXISTING.items():
                 from matplotlib.patches import Rectangle
 
-                present.add("bistable")
-                xe, ye = _edges(ds[x].values), _edges(ds[y].values)
-                for j, i in zip(*np.nonzero(b)):
+                for j, i in zip(*np.nonzero(b == code)):
+                    present.add(key)
                     ax.add_patch(Rectangle((xe[i], ye[j]), xe[i + 1] - xe[i], ye[j + 1] - ye[j], fill=False,
-                                           hatch="//", edgecolor="k", lw=0.0))
+                                           hatch=hatch, edgecolor="k", lw=0.0))  # fmt: skip
         if "cycle_period_ratio" in ds:
             # Cycles of several mode periods (past a period doubling, or subharmonic bouncing).
             r = ds.cycle_period_ratio.isel({d: 0 for d in rest})
@@ -161,8 +169,9 @@ def regime_map(ds: xr.Dataset, *, x: str | None = None, y: str | None = None, fa
     axes[0].set_ylabel(_label(ds, y))
     handles = [Patch(facecolor=REGIME_COLORS[r], edgecolor="k", lw=0.3, label=r.replace("_", " "))
                for i, r in enumerate(REGIME_NAMES) if i in present]  # fmt: skip
-    if "bistable" in present:
-        handles.append(Patch(facecolor="none", edgecolor="k", hatch="//", lw=0.3, label="bistable (a stable cycle coexists)"))
+    for key, hatch, label in _COEXISTING.values():
+        if key in present:
+            handles.append(Patch(facecolor="none", edgecolor="k", hatch=hatch, lw=0.3, label=label))
     if "multi_period" in present:
         handles.append(Patch(facecolor="none", edgecolor="none", label="nT: a cycle of n mode periods\n(period doubling, subharmonic)"))
     fig.legend(handles=handles, loc="outside right center", fontsize=8, frameon=False)

@@ -261,7 +261,7 @@ fn y0_rows(y0: &numpy::ndarray::ArrayView2<'_, f64>, n: usize) -> Result<Vec<Sta
 /// Many trajectories in parallel (GIL released). `kind` is "final" (end state), "sampled"
 /// (states at `t_eval`) or "steady" (run to steady state and summarise; `t_end` is then `t_max`).
 #[pyfunction]
-#[pyo3(signature = (base, contact, friction_law, names, values, y0, t_end, method, rtol, atol=None, t_eval=None, threads=None, kind="final", periodic_tol=1e-5, decay_amplitude=None, n_fourier=512, max_steps=None, max_events=None))]
+#[pyo3(signature = (base, contact, friction_law, names, values, y0, t_end, method, rtol, atol=None, t_eval=None, threads=None, kind="final", periodic_tol=1e-5, decay_amplitude=None, n_fourier=512, max_steps=None, max_events=None, decay_amplitudes=None))]
 #[allow(clippy::too_many_arguments)]
 fn ensemble<'py>(
     py: Python<'py>,
@@ -283,10 +283,26 @@ fn ensemble<'py>(
     n_fourier: usize,
     max_steps: Option<u64>,
     max_events: Option<u64>,
+    decay_amplitudes: Option<PyReadonlyArray1<'py, f64>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let params = ensemble_params(&base, contact, friction_law, &names, &values.as_array())?;
     let n = params.len();
     let y0s = y0_rows(&y0.as_array(), n)?;
+    // Per-trajectory decay thresholds of the steady kind (override `decay_amplitude`).
+    let decays: Option<Vec<f64>> = match decay_amplitudes {
+        Some(a) => {
+            let v = a.as_slice()?.to_vec();
+            if v.len() != n || v.iter().any(|x| !(x.is_finite() && *x > 0.0)) {
+                return Err(CoreError(format!(
+                    "decay_amplitudes must hold {n} finite values > 0 (one per trajectory); got {} values",
+                    v.len()
+                ))
+                .into());
+            }
+            Some(v)
+        }
+        None => None,
+    };
     let method = method_from(method)?;
     let tol = tolerances(rtol, atol, max_steps, max_events)?;
     let t_eval: Option<Vec<f64>> = t_eval.map(|a| a.as_slice().map(|s| s.to_vec())).transpose()?;
@@ -378,13 +394,18 @@ fn ensemble<'py>(
                 n_fourier,
                 ..SteadyOptions::default()
             };
+            let rows: Vec<(usize, &(Params, State))> = items.iter().enumerate().collect();
             let out: Vec<(Summary, String)> = py.detach(|| {
                 par_map(
-                    &items,
+                    &rows,
                     threads,
-                    |(p, y0)| {
+                    |&(i, (p, y0))| {
                         let s = Slider::new(*p).expect("validated before the parallel section");
-                        (steady::run_to_steady(&s, y0, &opts), String::new())
+                        let o = match &decays {
+                            Some(d) => SteadyOptions { decay_amplitude: Some(d[i]), ..opts },
+                            None => opts,
+                        };
+                        (steady::run_to_steady(&s, y0, &o), String::new())
                     },
                     |msg| (Summary::failed(Status::Panic), format!("panic: {msg}")),
                 )
