@@ -497,8 +497,9 @@ def sweep(
         bounds sliding's basin), ``bistable`` (a stable cycle: a proof of coexistence),
         ``sustained_motion`` (neither, by ``t_max``: quasi-periodic or chaotic bouncing, or a slow
         approach), ``escapes`` (|z| past the escape limit), or ``check_failed``. A return is no proof
-        that nothing else coexists: the impacting motion has intertwined basins, and about 2 % of
-        a seed sweep's points change verdict with the integration tolerance alone.
+        that nothing else coexists: the impacting motion has intertwined basins. On 1,058 seed-sweep
+        points, 13 change the returned-or-not verdict between rtol 1e-11 and 1e-12 alone, and 60
+        change category (sustained bouncing can escape later).
     unstable_disturbance : float
         ``auto``: transients of linearly unstable points start on the unstable mode with
         ``|z| = unstable_disturbance |z_st|``.
