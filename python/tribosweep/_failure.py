@@ -31,6 +31,7 @@ import xarray as xr
 from ._flags import STATUS_NAMES, flag_attrs
 from ._model import PARAM_LONG_NAMES, PARAM_UNITS, SliderModel
 from ._simulate import ensemble
+from .plot import _edges
 
 #: Two-letter codes drawn into failing cells.
 STATUS_SHORT: dict[str, str] = {
@@ -178,17 +179,6 @@ def _flag_names(da: xr.DataArray) -> dict[int, str]:
 def _is_log(v: np.ndarray) -> bool:
     v = np.asarray(v, dtype=np.float64)
     return v.size > 1 and bool(np.all(v > 0)) and v.max() / v.min() >= 30.0
-
-
-def _edges(c: np.ndarray, log: bool) -> np.ndarray:
-    c = np.asarray(c, dtype=np.float64)
-    if log:
-        return 10.0 ** _edges(np.log10(c), False)
-    if c.size == 1:
-        half = 0.05 * abs(c[0]) or 0.5
-        return np.array([c[0] - half, c[0] + half])
-    mid = 0.5 * (c[1:] + c[:-1])
-    return np.concatenate([[c[0] - (mid[0] - c[0])], mid, [c[-1] + (c[-1] - mid[-1])]])
 
 
 def _axis_label(ds: xr.Dataset, dim: str) -> str:

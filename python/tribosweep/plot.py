@@ -46,9 +46,12 @@ _COEXISTING = {
 }
 
 
-def _edges(c: np.ndarray) -> np.ndarray:
-    """Cell edges around centres ``c`` (midpoints; a single centre gets a +-5 % cell)."""
+def _edges(c: np.ndarray, log: bool = False) -> np.ndarray:
+    """Cell edges around centres ``c`` (midpoints, of the logarithms with ``log``; a single centre
+    gets a +-5 % cell)."""
     c = np.asarray(c, dtype=np.float64)
+    if log:
+        return 10.0 ** _edges(np.log10(c))
     if c.size == 1:
         half = 0.05 * abs(c[0]) or 0.5
         return np.array([c[0] - half, c[0] + half])
