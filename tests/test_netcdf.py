@@ -91,7 +91,7 @@ def test_every_variable_is_described(sweep_file):
         assert "BELOW a Hopf load" in ds.attrs["comment"]
         assert ds.regime.dtype == np.uint8 and ds.bistable.dtype == np.int8
         assert ds.regime.attrs["flag_meanings"].split() == list(ts.REGIME_NAMES)
-        assert ds.bistable.attrs["flag_values"].tolist() == [-1, 0, 1, 2, 3, 4]
+        assert ds.bistable.attrs["flag_values"].tolist() == [-1, 0, 1, 2, 3, 4, 5]
         assert ds.bistable.attrs["flag_meanings"].split()[:3] == ["not_checked", "returned_to_sliding", "bistable"]
         assert ds.attrs["arm_exponent_normal"] == pytest.approx(ts.ARM_EXPONENTS["normal"])
 

@@ -595,3 +595,12 @@ def test_a_returning_check_stops_inside_the_saddle(monkeypatch):
     assert int(early.bistable.item()) == int(late.bistable.item()) == 0
     # 245,488 against 377,188 right-hand sides (the linear and describing-function stages are in both).
     assert int(early.n_rhs.item()) < 0.75 * int(late.n_rhs.item()), (int(early.n_rhs.item()), int(late.n_rhs.item()))
+
+
+def test_stable_point_without_a_saddle_is_marked_no_saddle():
+    # 30 N, mu 0.05: sliding stable, and the describing function has no physical root there (no
+    # saddle cycle to start outside of); 84.46 N, mu 0.05 has one and its check returns to sliding.
+    ds = ts.sweep(normal_load=[30.0, 84.46], extra_axes={"mu": [0.05]}, progress=False)
+    names = [_chunk.BISTABLE_NAMES[_chunk.BISTABLE_VALUES.index(int(v))] for v in ds.bistable.values.ravel()]
+    assert names == ["no_saddle", "returned_to_sliding"]
+    assert np.isnan(ds.tidf_a1.values.ravel()[0]) and np.isfinite(ds.tidf_a1.values.ravel()[1])

@@ -85,14 +85,15 @@ REGIME: dict[str, int] = {name: i for i, name in enumerate(REGIME_NAMES)}
 DECIDED_BY_NAMES: tuple[str, ...] = ("linear", "tidf", "shooting", "transient")
 DECIDED_BY: dict[str, int] = {name: i for i, name in enumerate(DECIDED_BY_NAMES)}
 
-#: Bistability check: value -> meaning (int8; -1 = the method did not check).
-#: Outcome of the bistability check (a unilateral run started outside the saddle cycle):
-#: not checked; it returned to sliding; it reached a stable cycle (bistable); it sustained a motion
+#: Outcome of the bistability check (int8), a unilateral run started outside the saddle cycle:
+#: not checked (the method does not check, sliding is unstable, or the point's own transient
+#: decided it); it returned to sliding; it reached a stable cycle (bistable); it sustained a motion
 #: that neither returned nor settled on a cycle by t_max (quasi-periodic or chaotic bouncing, or a
-#: slow approach); it escaped past the escape limit; the run failed.
-BISTABLE_VALUES: tuple[int, ...] = (-1, 0, 1, 2, 3, 4)
+#: slow approach); it escaped past the escape limit; the run failed; no saddle cycle was predicted
+#: (the describing function has no root: nothing to start outside of).
+BISTABLE_VALUES: tuple[int, ...] = (-1, 0, 1, 2, 3, 4, 5)
 BISTABLE_NAMES: tuple[str, ...] = (
-    "not_checked", "returned_to_sliding", "bistable", "sustained_motion", "escapes", "check_failed",
+    "not_checked", "returned_to_sliding", "bistable", "sustained_motion", "escapes", "check_failed", "no_saddle",
 )  # fmt: skip
 #: The check's run outcome -> its code.
 _CHECK_CODE: dict[str, int] = {"decayed": 0, "periodic": 1, "unsettled": 2, "diverged": 3, "failed": 4}
@@ -581,7 +582,7 @@ def _dynamics(model_values, contact, friction_law, point_params, method, options
     # sliding or settles on a stable cycle that coexists with it.
     if method == "auto" and options.get("check_bistability", True):
         cand = np.flatnonzero(stable & (out["regime"] == REGIME["steady_sliding"]) & np.isfinite(out["tidf_a1"]))
-        out["bistable"][stable & ~lin_failed] = 0
+        out["bistable"][stable & ~lin_failed & ~np.isfinite(out["tidf_a1"])] = BISTABLE_VALUES[-1]  # no_saddle
         if cand.size:
             amp = np.where(np.isfinite(out["orbit_a1"][cand]), out["orbit_a1"][cand], out["tidf_a1"][cand])
             y0b = _mode_start(full, friction_law, cand, float(options.get("bistability_start", 1.5)) * amp)

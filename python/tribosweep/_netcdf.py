@@ -57,12 +57,15 @@ def point_specs(dims: tuple[str, ...], *, wear_rate: bool = False) -> list[VarSp
     by_name = {v.name: v for v in out}
     by_name["regime"].attrs["comment"] = "; ".join(f"{k}: {v}" for k, v in _chunk.REGIME_DOC.items())
     by_name["bistable"].attrs["comment"] = (
-        "-1 not_checked: the method did not look; 0 returned_to_sliding: a run started outside the saddle cycle "
+        "-1 not_checked: the method did not look (or sliding is unstable, or the point's own transient decided "
+        "it); 0 returned_to_sliding: a run started outside the saddle cycle "
         "decayed back to sliding, which is no proof that nothing else coexists (the impacting motion has "
         "intertwined basins: on 1,058 seed-sweep points 13 change the returned-or-not verdict and 60 the "
         "category between integration tolerances 1e-11 and 1e-12 alone); 1 bistable: it reached a stable cycle, a proof of coexistence; 2 sustained_motion: it neither "
         "returned nor settled on a cycle by t_max (quasi-periodic or chaotic bouncing, or a slow approach); "
-        "3 escapes: |z| passed the escape limit; 4 check_failed: the run failed (see status codes of a rerun)"
+        "3 escapes: |z| passed the escape limit; 4 check_failed: the run failed (see status codes of a rerun); "
+        "5 no_saddle: stable sliding with no saddle cycle predicted by the describing function, nothing to start "
+        "outside of"
     )
     by_name["reason"].attrs["comment"] = "free text; empty for a point decided without trouble"
     by_name["z1_amplitude"].attrs["comment"] = (
