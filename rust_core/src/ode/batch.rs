@@ -446,11 +446,9 @@ fn run_impl(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances) -> 
             let end_r = h_new.is_nan() || h_new < floor[l];
             ended[l] = if ok { end_a } else { end_r };
         }
-        let mut escaped = false;
-        for l in 0..W {
-            escaped |= ok[l] & ended[l] & (yn[idx::Z][l].abs() >= c.esc[l]);
-        }
-        if escaped {
+        // Off the common path: only when some lane ends this step.
+        let attention = ended.iter().fold(false, |a, &b| a | b);
+        if attention && (0..W).any(|l| ok[l] && ended[l] && yn[idx::Z][l].abs() >= c.esc[l]) {
             let stages = [&ln.f, &k2, &k3, &k4, &k5, &k6, &k7];
             let step = Step { t0: &t_start, h: &hh, ok: &ok };
             locate_escapes(c, &ln.who, &ln.y, &stages, &step, &mut yn, &mut fz, &mut ln.t, sliders, event_tol);
@@ -476,7 +474,6 @@ fn run_impl(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances) -> 
             ln.min_vr[l] = if ok { ln.min_vr[l].min(vr) } else { ln.min_vr[l] };
             ln.max_z[l] = if ok { ln.max_z[l].max(z.abs()) } else { ln.max_z[l] };
         }
-        let attention = ended.iter().fold(false, |a, &b| a | b);
         if attention {
             for l in 0..W {
                 if !ended[l] || ln.who[l] == usize::MAX {
