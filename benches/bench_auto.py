@@ -49,7 +49,7 @@ def main(argv=None) -> int:
     auto = ts.sweep(method="auto", **axes)
     t_auto = time.perf_counter() - t0
     t0 = time.perf_counter()
-    lean = ts.sweep(method="auto", check_bistability=False, **axes)
+    lean = ts.sweep(method="auto", census=False, **axes)
     t_lean = time.perf_counter() - t0
     assert np.array_equal(lean.regime.values, ts.sweep(method="auto", **axes).regime.values)
     t0 = time.perf_counter()

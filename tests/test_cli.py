@@ -211,4 +211,4 @@ def test_info_counts_bistable_points_and_multi_period_cycles(tmp_path, capsys):
     code, out, _ = run(["info", nc], capsys)
     assert code == 0
     assert "cycles of several mode periods (period doubling, subharmonic): 1" in out
-    assert "bistable:" in out and "not_checked" in out
+    assert "bistable:" in out and "not_checked" in out and "coexisting" in out

@@ -117,22 +117,28 @@ def test_bilateral_orbit_from_the_seed_root(seed_values):
 
 
 def test_unilateral_cycle_by_shooting_is_stable(seed_values):
+    # The bouncing cycle followed from mu = 0.30 (where a small disturbance grows into it) down to
+    # the seed's 0.215: stable at every step, and the seed values at the end.
     ref = seed_values["unilateral_bouncing_cycle_seed"]
-    m = ts.SliderModel(contact="unilateral")
-    hot = ts.ensemble(m.replace(mu=0.30), 22.0, {"mu": [0.30]}, y0=[0.1e-6, 0, 0, 0, 0, 0], rtol=1e-8)
-    y = np.array([float(hot[f"{v}_end"][0]) for v in ("z", "z_dot", "x", "x_dot", "phi", "phi_dot")])
-    # Continue at mu = 0.215 for 6 s and take the state at the last period's largest z (zd = 0
-    # there, the shooting's phase condition).
-    t = np.linspace(5.99, 6.0, 10001)
-    warm = ts.simulate(m, 6.0, y0=y, rtol=1e-10, t_eval=t)
-    i = int(np.argmax(warm.z.values))
-    y = np.array([float(warm[v][i]) for v in ("z", "z_dot", "x", "x_dot", "phi", "phi_dot")])
-    orb = ts.periodic_orbit(m, (y, 2 * np.pi / 640.0))
-    assert int(orb.status) == 0, int(orb.status)
-    assert bool(orb.stable)
+    orb, path = ts.follow_cycle(ts.SliderModel(contact="unilateral"))
+    assert [p["mu"] for p in (path[0], path[-1])] == [0.30, 0.215] and len(path) == 18
+    assert all(p["status"] == 0 and p["stable"] for p in path)
+    # Along the branch the frequency falls with mu (649.6 rad/s at 0.30): no jump to another branch.
+    assert np.all(np.diff([p["omega"] for p in path]) < 0)
+    assert int(orb.status) == 0 and bool(orb.stable)
     assert rel(float(orb.omega), ref["omega"]) < 1e-4
     assert rel(float(orb.A1), ref["A1"]) < 1e-3
     assert abs(float(orb.open_fraction) - ref["fraction_off_disk"]) < 2e-3
+
+
+def test_follow_cycle_rejects_bad_input():
+    with pytest.raises(ValueError, match="parameter = 'spam'"):
+        ts.follow_cycle(ts.SliderModel(contact="unilateral"), parameter="spam")
+    with pytest.raises(ValueError, match="step"):
+        ts.follow_cycle(ts.SliderModel(contact="unilateral"), step=0.0)
+    # At mu = 0.1 and the seed load sliding is stable and a small disturbance decays: no cycle to follow.
+    with pytest.raises(ValueError, match="settled on no cycle"):
+        ts.follow_cycle(ts.SliderModel(contact="unilateral"), start=0.1)
 
 
 def test_seed_report_table_is_computed(tmp_path):

@@ -16,7 +16,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import tribosweep as ts
-from tribosweep import _chunk, _netcdf
+from tribosweep import _census, _chunk, _netcdf
 from tribosweep._netcdf import MemoryWriter, NetCDFWriter, VarSpec, flat_slabs
 
 
@@ -91,8 +91,8 @@ def test_every_variable_is_described(sweep_file):
         assert "BELOW a Hopf load" in ds.attrs["comment"]
         assert ds.regime.dtype == np.uint8 and ds.bistable.dtype == np.int8
         assert ds.regime.attrs["flag_meanings"].split() == list(ts.REGIME_NAMES)
-        assert ds.bistable.attrs["flag_values"].tolist() == [-1, 0, 1, 2, 3, 4, 5]
-        assert ds.bistable.attrs["flag_meanings"].split()[:3] == ["not_checked", "returned_to_sliding", "bistable"]
+        assert ds.bistable.attrs["flag_values"].tolist() == [-1, 0, 1, 2]
+        assert ds.bistable.attrs["flag_meanings"].split() == ["not_checked", "one_attractor", "coexisting", "no_saddle"]
         assert ds.attrs["arm_exponent_normal"] == pytest.approx(ts.ARM_EXPONENTS["normal"])
 
 
@@ -211,5 +211,6 @@ def test_a_failed_assembly_leaves_no_file(tmp_path, monkeypatch):
 
 def test_point_specs_cover_the_chunk_output():
     specs = {s.name for s in _netcdf.point_specs(("x",))}
-    assert specs == set(_chunk.POINT_VARIABLES)
+    assert specs == set(_chunk.POINT_VARIABLES) | set(_census.CENSUS_VARIABLES)
+    assert {s.name: s.dims for s in _netcdf.point_specs(("x",))}["basin_fraction"] == ("x", "attractor")
     assert {s.name for s in _netcdf.point_specs(("x",), wear_rate=True)} == specs | {"wear_rate"}

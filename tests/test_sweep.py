@@ -13,7 +13,7 @@ import pytest
 import xarray as xr
 
 import tribosweep as ts
-from tribosweep import _chunk, _sweep
+from tribosweep import _census, _chunk, _sweep
 from tribosweep._chunk import REGIME
 
 LINEAR = {"method": "linear", "progress": False}
@@ -97,7 +97,9 @@ def test_bad_extra_axes(extra, match):
         ({"integrator": "euler"}, "integrator"),
         ({"resume": True}, "resume=True needs output"),
         ({"disturbance": [1.0, 2.0]}, "disturbance"),
-        ({"bistability_start": 0.9}, r"bistability_start = 0.9 is not valid: must be > 1"),
+        ({"samples": 0}, r"samples = 0 is out of range: must be an integer in \[1, 100000\]"),
+        ({"disturbance_scale": -1.0}, "disturbance_scale"),
+        ({"census_t_max": 0.0}, "census_t_max"),
     ],
 )
 def test_bad_options(kwargs, match):
@@ -134,12 +136,17 @@ def test_tidf_and_shooting_stages_at_the_seed(seed_values):
 
 @requires_driver
 def test_auto_finds_the_seed_bistable():
-    # MODEL.md §6: at the seed, stable sliding and a stable bouncing cycle coexist.
+    # MODEL.md §6: at the seed, stable sliding and a stable bouncing cycle coexist. The census sees
+    # both (fractions near 0.7 / 0.3 at K = 32: each is more than 4 standard errors from 0 and 1).
     ds = ts.sweep(normal_load=[84.46], method="auto", progress=False)
     assert int(ds.regime.values.ravel()[0]) == REGIME["steady_sliding"]
-    assert int(ds.bistable.values.ravel()[0]) == 1
-    assert abs(float(ds.cycle_omega.values.ravel()[0]) / 640.371 - 1) < 1e-3
-    assert abs(float(ds.fraction_off_disk.values.ravel()[0]) - 0.115) < 0.005
+    assert int(ds.bistable.values.ravel()[0]) == _chunk.BISTABLE["coexisting"]
+    p = ds.basin_fraction.values.reshape(-1, 4)[0]
+    assert 0 < p[0] < 1 and 0 < p[1] < 1, p
+    assert abs(float(ds.largest_cycle_omega.values.ravel()[0]) / 640.371 - 1) < 1e-3
+    assert abs(float(ds.largest_cycle_fraction_off_disk.values.ravel()[0]) - 0.115) < 0.005
+    # The point's own regime is sliding: its cycle variables stay empty (the coexisting cycle is the census's).
+    assert np.isnan(ds.cycle_omega.values.ravel()[0])
 
 
 # --- the linear stage ------------------------------------------------------------------------------
@@ -304,7 +311,7 @@ def test_an_unsettled_run_leaves_the_regime_to_linear_stability():
 
 @requires_driver
 def test_auto_runs_the_transient_only_where_sliding_is_unstable():
-    ds = ts.sweep(normal_load=[10.0, 50.0], method="auto", progress=False, threads=2, check_bistability=False)
+    ds = ts.sweep(normal_load=[10.0, 50.0], method="auto", progress=False, threads=2, census=False)
     r = ds.regime.values.ravel()
     assert r[1] == REGIME["steady_sliding"] and ds.n_rhs.values.ravel()[1] == 0
     assert r[0] in (REGIME["self_excited"], REGIME["contact_loss"], REGIME["stick_slip"], REGIME["diverged"])
@@ -334,7 +341,7 @@ def test_compute_chunk_is_pure_and_picklable():
             {"wear": {"normal_load": 84.46, "sliding_speed": 0.46, "frequency_hz": 229.2}})  # fmt: skip
     a = _chunk.compute_chunk(*pickle.loads(pickle.dumps(args)))
     b = _chunk.compute_chunk(*args)
-    assert set(a) == set(_chunk.POINT_VARIABLES)
+    assert set(a) == set(_chunk.POINT_VARIABLES) | set(_census.CENSUS_VARIABLES)
     for k in a:
         if k != "wall_time":
             np.testing.assert_array_equal(a[k], b[k])
@@ -521,7 +528,7 @@ def test_auto_agrees_with_transient_where_the_transient_settles():
     # auto decides many points without integrating, and without the bistability question (which
     # `transient` from a small disturbance does not ask) it integrates less.
     assert (auto.decided_by.values != _chunk.DECIDED_BY["transient"]).sum() >= 4
-    lean = ts.sweep(method="auto", check_bistability=False, **kw)
+    lean = ts.sweep(method="auto", census=False, **kw)
     assert np.array_equal(lean.regime.values, auto.regime.values)
     cheap = (lean.decided_by.values.ravel() != _chunk.DECIDED_BY["transient"]) & (lean.regime.values.ravel() != REGIME["unstable_undetermined"])
     assert np.all(lean.n_rhs.values.ravel()[cheap] == 0) and np.all(full.n_rhs.values.ravel()[cheap] > 10_000)
@@ -532,7 +539,7 @@ def test_auto_agrees_with_transient_where_the_transient_settles():
 def test_points_that_differ_only_in_speed_share_their_dynamics_exactly():
     # Constant friction: V only shifts v_r. The sweep computes the dynamics once per (load, arm)
     # and must give the same numbers as separate single-speed sweeps.
-    kw = dict(normal_load=[8.0, 84.46], method="auto", progress=False, check_bistability=False, t_max=20.0)
+    kw = dict(normal_load=[8.0, 84.46], method="auto", progress=False, census=False, t_max=20.0)
     both = ts.sweep(sliding_speed=[0.3, 0.6], **kw)
     for j, v in enumerate([0.3, 0.6]):
         one = ts.sweep(sliding_speed=[v], **kw)
@@ -551,10 +558,10 @@ def test_regime_map_marks_bistable_points():
 
     ds = ts.sweep(normal_load=[10.0, 30.0, 60.0], arm_length=[0.05, 0.1], method="linear", progress=False)
     labels = lambda fig: [t.get_text() for leg in fig.legends for t in leg.get_texts()]  # noqa: E731
-    assert not any("bistable" in s for s in labels(regime_map(ds)))
-    ds["bistable"][1, 0, 0] = 1
+    assert not any("coexists" in s for s in labels(regime_map(ds)))
+    ds["bistable"][1, 0, 0] = _chunk.BISTABLE["coexisting"]
     fig = regime_map(ds)
-    assert any("bistable" in s for s in labels(fig))
+    assert any("coexists" in s for s in labels(fig))
     assert any(p.get_hatch() == "//" for p in fig.axes[0].patches)
 
 
@@ -571,36 +578,27 @@ def test_regime_map_labels_multi_period_cycles():
     assert any("mode periods" in t.get_text() for leg in fig.legends for t in leg.get_texts())
 
 
-def test_bistability_check_outcomes():
-    # The check's run started outside the saddle either returns to sliding (130 N, 6.1 cm), reaches
-    # a stable cycle (130 N, 9.4 cm; 10 N, 8.3 cm), sustains a bouncing motion that is not periodic
-    # by t_max (10 N, 9.4 cm: quasi-periodic bouncing, amplitude constant for tens of seconds), or
-    # escapes past 1 mm (10 N, 10.5 cm). At 10 N, 6.1 cm sliding is unstable: not checked.
-    ds = ts.sweep(normal_load=[10.0, 130.0], arm_length=[0.061, 0.083, 0.094, 0.105], progress=False)
-    names = [_chunk.BISTABLE_NAMES[_chunk.BISTABLE_VALUES.index(int(v))] for v in ds.bistable.values.ravel()]
-    assert names == ["not_checked", "bistable", "sustained_motion", "escapes",
-                     "returned_to_sliding", "returned_to_sliding", "bistable", "sustained_motion"]  # fmt: skip
-    reasons = ds.reason.values.ravel()
-    assert reasons[2].startswith("sustained motion coexists") and "escapes" in reasons[3]
-    assert ds.regime.values.ravel()[4] == ts.REGIME_NAMES.index("steady_sliding")
+def test_a_returning_census_sample_stops_inside_the_saddle(monkeypatch):
+    # A returning disturbance stops once it is back inside the saddle with the pin on the disk,
+    # not after decaying to 1e-3 |z_st|: the same fractions for a fraction of the work. At 130 N,
+    # 6.1 cm every disturbance returns (the run is far from any basin boundary).
+    from tribosweep import _census
 
-
-def test_a_returning_check_stops_inside_the_saddle(monkeypatch):
-    # A returned run stops once it is back inside the saddle with the pin on the disk, not after
-    # decaying to 1e-3 |z_st|: the same verdict for a fraction of the work.
-    point = dict(normal_load=[130.0], arm_length=[0.061], progress=False)
+    point = dict(normal_load=[130.0], arm_length=[0.061], progress=False, samples=8)
     early = ts.sweep(**point)
-    monkeypatch.setattr(_chunk, "BISTABILITY_RETURN", 0.0)
+    monkeypatch.setattr(_census, "RETURN_FRACTION", 0.0)
     late = ts.sweep(**point)
-    assert int(early.bistable.item()) == int(late.bistable.item()) == 0
-    # 245,488 against 377,188 right-hand sides (the linear and describing-function stages are in both).
+    assert early.basin_stability.item() == late.basin_stability.item() == 1.0
+    # Decaying from about 0.2 A1 to 1e-3 |z_st| at 0.5 1/s costs several seconds of simulated time
+    # per sample: the early stop must save at least a quarter of the work.
     assert int(early.n_rhs.item()) < 0.75 * int(late.n_rhs.item()), (int(early.n_rhs.item()), int(late.n_rhs.item()))
 
 
 def test_stable_point_without_a_saddle_is_marked_no_saddle():
     # 30 N, mu 0.05: sliding stable, and the describing function has no physical root there (no
-    # saddle cycle to start outside of); 84.46 N, mu 0.05 has one and its check returns to sliding.
+    # saddle cycle: no census); 84.46 N, mu 0.05 has one, and every disturbance returns to sliding.
     ds = ts.sweep(normal_load=[30.0, 84.46], extra_axes={"mu": [0.05]}, progress=False)
     names = [_chunk.BISTABLE_NAMES[_chunk.BISTABLE_VALUES.index(int(v))] for v in ds.bistable.values.ravel()]
-    assert names == ["no_saddle", "returned_to_sliding"]
+    assert names == ["no_saddle", "one_attractor"]
+    assert ds.basin_stability.values.ravel()[1] == 1.0 and ds.census_samples.values.ravel().tolist() == [0, 32]
     assert np.isnan(ds.tidf_a1.values.ravel()[0]) and np.isfinite(ds.tidf_a1.values.ravel()[1])

@@ -8,9 +8,10 @@ from __future__ import annotations
 
 from . import _core
 from ._apparatus import ARM_EXPONENTS, apparatus_model, arm_frequencies
-from ._chunk import REGIME_NAMES
+from ._census import ATTRACTOR_NAMES, census
+from ._chunk import BISTABLE_NAMES, REGIME_NAMES
 from ._flags import INSTABILITY_NAMES, OUTCOME_NAMES, STATUS, STATUS_NAMES
-from ._frequency import describing_function, hopf_load, linear_stability, periodic_orbit
+from ._frequency import describing_function, follow_cycle, hopf_load, linear_stability, periodic_orbit
 from ._model import PARAM_NAMES, SliderModel
 from ._simulate import DEFAULT_Y0, ensemble, simulate
 from ._sweep import sweep
@@ -20,6 +21,8 @@ __version__: str = _core.__version__
 
 __all__ = [
     "ARM_EXPONENTS",
+    "ATTRACTOR_NAMES",
+    "BISTABLE_NAMES",
     "DEFAULT_Y0",
     "INSTABILITY_NAMES",
     "OUTCOME_NAMES",
@@ -33,8 +36,10 @@ __all__ = [
     "__version__",
     "apparatus_model",
     "arm_frequencies",
+    "census",
     "describing_function",
     "ensemble",
+    "follow_cycle",
     "hopf_load",
     "linear_stability",
     "normal_mode_frequency_hz",

@@ -36,15 +36,15 @@ The sweep methods combine them, modelling no more than each point needs:
   is within a factor ``SHOOT_MARGIN`` of the describing function's amplitude (there the DF's error
   matters); a transient only where those cannot decide: unstable sliding (the DF has no cycle
   there: the bifurcation is subcritical), a disturbance at or beyond the saddle, or a failed stage.
-  With ``check_bistability`` (default on), a stable point with a saddle cycle also gets a
-  unilateral transient started outside the saddle: if it settles on a cycle, stable sliding and
-  that cycle coexist (``bistable``).
+  With ``census`` (default on), a stable point with a saddle cycle also gets the attractor
+  census (``tribosweep._census``): K disturbances, each run to its attractor, reported as
+  fractions with standard errors; ``bistable`` (coexistence) is derived from it.
 
 Transients of linearly unstable points start on the unstable (torsion) mode with
 ``|z| = unstable_disturbance |z_st|`` (default 1: the size at which the contact opens) instead of ``y0``: a small disturbance
 grows at the linear rate (0.07 /s near the Hopf load), which would cost about 100 s of simulated
 time for nothing. The attractor reached is the same when it is the only one; where it is not, the
-bistability check is what tells.
+attractor census is what tells.
 """
 
 from __future__ import annotations
@@ -55,7 +55,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from . import _core
+from . import _census, _core
 from ._flags import OUTCOME_NAMES, STATUS, STATUS_NAMES
 
 #: Regime of a sweep point, in code order (the netCDF ``flag_values`` of ``regime``).
@@ -85,18 +85,14 @@ REGIME: dict[str, int] = {name: i for i, name in enumerate(REGIME_NAMES)}
 DECIDED_BY_NAMES: tuple[str, ...] = ("linear", "tidf", "shooting", "transient")
 DECIDED_BY: dict[str, int] = {name: i for i, name in enumerate(DECIDED_BY_NAMES)}
 
-#: Outcome of the bistability check (int8), a unilateral run started outside the saddle cycle:
-#: not checked (the method does not check, sliding is unstable, or the point's own transient
-#: decided it); it returned to sliding; it reached a stable cycle (bistable); it sustained a motion
-#: that neither returned nor settled on a cycle by t_max (quasi-periodic or chaotic bouncing, or a
-#: slow approach); it escaped past the escape limit; the run failed; no saddle cycle was predicted
-#: (the describing function has no root: nothing to start outside of).
-BISTABLE_VALUES: tuple[int, ...] = (-1, 0, 1, 2, 3, 4, 5)
-BISTABLE_NAMES: tuple[str, ...] = (
-    "not_checked", "returned_to_sliding", "bistable", "sustained_motion", "escapes", "check_failed", "no_saddle",
-)  # fmt: skip
-#: The check's run outcome -> its code.
-_CHECK_CODE: dict[str, int] = {"decayed": 0, "periodic": 1, "unsettled": 2, "diverged": 3, "failed": 4}
+#: Coexistence at a point (int8), derived from the attractor census (``tribosweep._census``):
+#: not checked (no census: the method does not take one, ``census=False``, sliding is unstable,
+#: or the point failed); one attractor seen; more than one attractor seen (coexistence, with the
+#: evidence counted in ``basin_fraction`` and ``reason``); no census because the describing
+#: function predicts no saddle cycle around stable sliding (nothing to find).
+BISTABLE_VALUES: tuple[int, ...] = (-1, 0, 1, 2)
+BISTABLE_NAMES: tuple[str, ...] = ("not_checked", "one_attractor", "coexisting", "no_saddle")
+BISTABLE: dict[str, int] = dict(zip(BISTABLE_NAMES, BISTABLE_VALUES))
 
 #: Whether the mild-wear model applies at a point, in code order.
 WEAR_APPLICABILITY_NAMES: tuple[str, ...] = ("mild_wear_regime", "outside_mild_wear_regime", "undetermined")
@@ -114,11 +110,6 @@ IMPLEMENTED_METHODS: tuple[str, ...] = METHODS
 #: divided by this margin (the DF's A1 error grows with amplitude: 10-20 % at tens of um).
 SHOOT_MARGIN: float = 2.0
 
-#: The bistability check's run counts as returned to sliding once its motion (every component, in
-#: units of its characteristic size) is below this fraction of the saddle cycle's A1, and below
-#: half of |z_st| (the pin on the disk), and shrinking.
-BISTABILITY_RETURN: float = 0.2
-
 #: Per-point output of :func:`compute_chunk`: name -> (dtype, units or None, long name).
 #: Flag variables carry their meanings in ``FLAG_MEANINGS``. Every name here is an output key.
 POINT_VARIABLES: dict[str, tuple[str, str | None, str]] = {
@@ -126,7 +117,7 @@ POINT_VARIABLES: dict[str, tuple[str, str | None, str]] = {
     "status": ("u1", None, "status of the computation that decided the regime"),
     "reason": ("str", None, "reason for a failed or undetermined point (empty otherwise)"),
     "decided_by": ("u1", None, "analysis stage that decided the regime"),
-    "bistable": ("i1", None, "outcome of the bistability check (a run started outside the saddle cycle)"),
+    "bistable": ("i1", None, "coexistence of attractors seen by the census"),
     "growth_rate": ("f8", "s-1", "largest real part of the eigenvalues of steady sliding (> 0: unstable)"),
     "linear_frequency": ("f8", "rad s-1", "angular frequency of the least stable linear mode"),
     "normal_mode_frequency": ("f8", "Hz", "frequency Im(lambda_normal)/2 pi of the linearised normal mode"),
@@ -348,6 +339,7 @@ def empty_result(n: int, *, wear_rate: bool = False) -> dict[str, np.ndarray]:
             out[name] = np.full(n, np.nan)
         else:
             out[name] = np.zeros(n, dtype=dtype)
+    out.update(_census.empty(n))
     out["bistable"][:] = -1
     out["tidf_roots"][:] = -1
     out["tidf_contact_opens"][:] = -1
@@ -409,17 +401,24 @@ def _static_penetration(full: Mapping[str, np.ndarray], sel: np.ndarray) -> np.n
     return -2.0 * f / (k0 + np.sqrt(k0 * k0 + 4.0 * ka * f))
 
 
-def _mode_start(full: Mapping[str, np.ndarray], friction_law: str, sel: np.ndarray, z_amp: np.ndarray) -> np.ndarray:
+def _mode_start(full: Mapping[str, np.ndarray], friction_law: str, sel: np.ndarray, z_amp: np.ndarray,
+                eigenvalues: np.ndarray) -> np.ndarray:
     """Initial states on the least stable linear mode of each selected point, with ``|z| = z_amp``.
 
     A disturbance along the mode that self-excites (the torsion mode) reaches the attractor far
-    sooner than one in ``z`` alone, which mostly excites the heavily damped normal mode.
+    sooner than one in ``z`` alone, which mostly excites the heavily damped normal mode. The mode
+    shape is the census's closed form (no LAPACK: the same bits on every machine's BLAS);
+    ``eigenvalues`` are the core's, ``(sel.size, 6)``.
     """
     n = max(np.size(v) for v in full.values())
-    sub = {k: np.broadcast_to(np.asarray(full[k], dtype=np.float64), (n,))[sel] for k in _LINEAR_FIELDS}
-    lam, vec = np.linalg.eig(jacobians(sub, friction_law))
-    k = np.argmax(lam.real + 1e-9 * np.abs(lam.imag), axis=1)  # least stable; the +Im member of the pair
-    v = vec[np.arange(sel.size), :, k]
+    sub = {k: np.broadcast_to(np.asarray(full[k], dtype=np.float64), (n,))[sel] for k in full}
+    lam = np.asarray(eigenvalues)
+    k = np.argmax(lam.real + 1e-9 * lam.imag, axis=1)  # least stable; the +Im member of the pair
+    lam = lam[np.arange(sel.size), k]
+    if friction_law == "constant":
+        v = _census.mode_shape(sub, lam)
+    else:
+        v = _census._mode_shape_numeric(jacobians(sub, friction_law), lam)
     # Rotate so that z is real and positive at t = 0 (zd then follows from the mode), scale |z|.
     v = v * np.exp(-1j * np.angle(v[:, 0]))[:, None]
     y0 = v.real / np.maximum(np.abs(v[:, :1].real), 1e-300) * np.asarray(z_amp)[:, None]
@@ -559,7 +558,8 @@ def _dynamics(model_values, contact, friction_law, point_params, method, options
             z_st = _static_penetration(full, sel)
             zd = float(options.get("unstable_disturbance", 1.0))
             if unstable.any():
-                y0s[unstable] = _mode_start(full, friction_law, sel[unstable], zd * np.abs(z_st[unstable]))
+                y0s[unstable] = _mode_start(full, friction_law, sel[unstable], zd * np.abs(z_st[unstable]),
+                                            np.asarray(lin["eigenvalues"])[sel[unstable]])
         t1 = time.perf_counter()
         summary = _transient(model_values, contact, friction_law, point_params, sel, options, y0s)
         wall[sel] += (time.perf_counter() - t1) / sel.size
@@ -577,41 +577,42 @@ def _dynamics(model_values, contact, friction_law, point_params, method, options
         out["min_slip_velocity"][sel] = summary["min_slip_velocity"]
         out["n_rhs"][sel] += np.asarray(summary["n_rhs"], dtype=np.int64)
 
-    # Stage 5 (auto): bistability where a saddle cycle surrounds stable sliding. A unilateral run
-    # started outside the saddle (on the torsion mode, |z| = 1.5 A1 of the saddle) either returns to
-    # sliding or settles on a stable cycle that coexists with it.
-    if method == "auto" and options.get("check_bistability", True):
-        cand = np.flatnonzero(stable & (out["regime"] == REGIME["steady_sliding"]) & np.isfinite(out["tidf_a1"]))
-        out["bistable"][stable & ~lin_failed & ~np.isfinite(out["tidf_a1"])] = BISTABLE_VALUES[-1]  # no_saddle
+    # Stage 5 (auto): the attractor census where a saddle cycle surrounds stable sliding: K
+    # disturbances, each run to its attractor with the point's contact law; fractions with
+    # standard errors (tribosweep._census). Stable points without a saddle have nothing to find.
+    if method == "auto" and options.get("census", True):
+        ok = stable & ~lin_failed
+        no_saddle = ok & ~np.isfinite(out["tidf_a1"])
+        out["bistable"][no_saddle] = BISTABLE["no_saddle"]
+        cand = np.flatnonzero(ok & (out["regime"] == REGIME["steady_sliding"]) & np.isfinite(out["tidf_a1"]))
         if cand.size:
-            amp = np.where(np.isfinite(out["orbit_a1"][cand]), out["orbit_a1"][cand], out["tidf_a1"][cand])
-            y0b = _mode_start(full, friction_law, cand, float(options.get("bistability_start", 1.5)) * amp)
             t1 = time.perf_counter()
-            # A run back inside the saddle with the pin on the disk follows the bilateral law, for
-            # which it is in sliding's basin: it has returned. Stop it there instead of waiting for
-            # the default 1e-3 |z_st| (tens of seconds at the slowly decaying points).
-            z_abs = np.abs(_static_penetration(full, cand))
-            user = options.get("decay_amplitude")
-            floor = 1e-3 * z_abs if user is None else np.full(cand.size, float(user))
-            decay = np.maximum(floor, np.minimum(BISTABILITY_RETURN * amp, 0.5 * z_abs))
-            summ = _transient(model_values, "unilateral", friction_law, point_params, cand, options, y0b, decay)
+            res, per = _census.run(
+                model_values, contact, friction_law, point_params, cand,
+                samples=int(options.get("samples", _census.SAMPLES)),
+                scale=float(options.get("disturbance_scale", _census.DISTURBANCE_SCALE)),
+                t_max=float(options.get("census_t_max", _census.CENSUS_T_MAX)),
+                integrator=options.get("integrator", "dop853"), rtol=float(options.get("rtol", 1e-8)),
+                atol=options.get("atol"), periodic_tol=float(options.get("periodic_tol", 1e-5)), threads=threads,
+                eigenvalues=np.asarray(lin["eigenvalues"])[cand], linear_frequency=out["linear_frequency"][cand],
+                saddle_a1=out["tidf_a1"][cand],
+            )  # fmt: skip
             wall[cand] += (time.perf_counter() - t1) / cand.size
-            out["n_rhs"][cand] += np.asarray(summ["n_rhs"], dtype=np.int64)
-            cyc = np.array([OUTCOME_NAMES[o] == "periodic" for o in summ["outcome"]])
-            out["bistable"][cand] = [_CHECK_CODE[OUTCOME_NAMES[o]] for o in summ["outcome"]]
+            out["n_rhs"][cand] += per["n_rhs"].sum(axis=1)
+            for key, arr in res.items():
+                out[key][cand] = arr
             for j, i in enumerate(cand):
-                if cyc[j]:
-                    out["cycle_omega"][i] = summ["omega"][j]
-                    out["z1_amplitude"][i] = summ["z1_amp"][j]
-                    out["z2_amplitude"][i] = summ["z2_amp"][j]
-                    out["phi1_amplitude"][i] = summ["phi1_amp"][j]
-                    out["fraction_off_disk"][i] = summ["fraction_off_disk"][j]
-                    reason[i] = "bistable: a stable cycle coexists (reached from outside the saddle); amplitudes are its"
-                elif out["bistable"][i] == 2:
-                    reason[i] = ("sustained motion coexists: a run from outside the saddle neither returned to sliding "
-                                 "nor settled on a cycle by t_max")  # fmt: skip
-                elif out["bistable"][i] == 3:
-                    reason[i] = "a run from outside the saddle escapes (|z| past the escape limit)"
+                nv = int(res["census_samples"][j])
+                if nv == 0:
+                    reason[i] = _census.failed_reason(per, j)
+                    continue
+                out["bistable"][i] = BISTABLE["coexisting"] if res["n_attractors"][j] > 1 else BISTABLE["one_attractor"]
+                counts = np.rint(res["basin_fraction"][j] * nv).astype(int)
+                seen = ", ".join(f"{a} {c}/{nv}" for a, c in zip(_census.ATTRACTOR_NAMES, counts) if c)
+                if res["n_attractors"][j] > 1:
+                    reason[i] = f"coexisting attractors (census): {seen}"
+                elif counts[0] < nv:
+                    reason[i] = f"census: {seen}"
 
     with np.errstate(invalid="ignore", divide="ignore"):
         out["cycle_period_ratio"] = out["linear_frequency"] / out["cycle_omega"]

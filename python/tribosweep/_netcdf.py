@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import xarray as xr
 
-from . import _chunk
+from . import _census, _chunk
 
 
 @dataclass
@@ -54,18 +54,24 @@ def point_specs(dims: tuple[str, ...], *, wear_rate: bool = False) -> list[VarSp
             if units is not None:
                 attrs["units"] = units
         out.append(VarSpec(name, dims, dtype, attrs))
+    for name, (dtype, units, long_name, per_attractor) in _census.CENSUS_VARIABLES.items():
+        attrs = {"long_name": long_name} | ({} if units is None else {"units": units})
+        out.append(VarSpec(name, dims + (("attractor",) if per_attractor else ()), dtype, attrs))
     by_name = {v.name: v for v in out}
+    by_name["basin_fraction"].attrs["comment"] = (
+        "census: K disturbances on the torsion and normal modes (amplitudes up to disturbance_scale |z_st|, a "
+        "Halton sequence seeded by the point's parameters), each run to its attractor; taken where sliding is "
+        "stable and a saddle cycle is predicted. "
+        + "; ".join(f"{k}: {v}" for k, v in _census.ATTRACTOR_DOC.items())
+    )
     by_name["regime"].attrs["comment"] = "; ".join(f"{k}: {v}" for k, v in _chunk.REGIME_DOC.items())
     by_name["bistable"].attrs["comment"] = (
-        "-1 not_checked: the method did not look (or sliding is unstable, or the point's own transient decided "
-        "it); 0 returned_to_sliding: a run started outside the saddle cycle "
-        "decayed back to sliding, which is no proof that nothing else coexists (the impacting motion has "
-        "intertwined basins: on 1,058 seed-sweep points 13 change the returned-or-not verdict and 60 the "
-        "category between integration tolerances 1e-11 and 1e-12 alone); 1 bistable: it reached a stable cycle, a proof of coexistence; 2 sustained_motion: it neither "
-        "returned nor settled on a cycle by t_max (quasi-periodic or chaotic bouncing, or a slow approach); "
-        "3 escapes: |z| passed the escape limit; 4 check_failed: the run failed (see status codes of a rerun); "
-        "5 no_saddle: stable sliding with no saddle cycle predicted by the describing function, nothing to start "
-        "outside of"
+        "derived from the attractor census: -1 not_checked (no census: sliding unstable, census off, or failed); "
+        "0 one_attractor: every counted disturbance reached the same attractor; 1 coexisting: more than one "
+        "attractor seen (steady sliding, each distinct cycle and irregular motion count; escapes do not), the "
+        "evidence is basin_fraction; 2 no_saddle: stable sliding with no saddle cycle predicted by the describing "
+        "function, nothing to find. One attractor seen is no proof that nothing else coexists: a basin smaller "
+        "than about 1/K of the disturbances is likely missed"
     )
     by_name["reason"].attrs["comment"] = "free text; empty for a point decided without trouble"
     by_name["z1_amplitude"].attrs["comment"] = (
@@ -132,6 +138,17 @@ def clean_attrs(attrs: Mapping) -> dict:
     return {k: _attr_value(v) for k, v in attrs.items() if v is not None}
 
 
+#: Dimensions a per-point variable may carry after the sweep's own: name -> (values, attributes).
+TRAILING_DIMS: dict[str, tuple[np.ndarray, dict]] = {
+    "attractor": (
+        np.arange(len(_census.ATTRACTOR_NAMES), dtype=np.int8),
+        {"long_name": "attractor reached by census disturbances",
+         "flag_values": np.arange(len(_census.ATTRACTOR_NAMES), dtype=np.int8),
+         "flag_meanings": " ".join(_census.ATTRACTOR_NAMES)},
+    ),
+}  # fmt: skip
+
+
 class _Schema:
     def __init__(self, coords, static_vars, points, attrs):
         self.coords = coords  # {dim: (values, attrs)}
@@ -140,6 +157,11 @@ class _Schema:
         self.attrs = clean_attrs(attrs)
         self.dims = tuple(coords)
         self.shape = tuple(len(coords[d][0]) for d in self.dims)
+        self.trailing = {d: TRAILING_DIMS[d] for p in points for d in p.dims[len(self.dims) :]}
+
+    def tail(self, spec: VarSpec) -> tuple[int, ...]:
+        """Shape of a variable's dimensions after the sweep's own."""
+        return tuple(len(self.trailing[d][0]) for d in spec.dims[len(self.dims) :])
 
 
 class NetCDFWriter:
@@ -172,6 +194,11 @@ class NetCDFWriter:
             var = nc.createVariable(dim, "f8", (dim,))
             var.setncatts(clean_attrs(a))
             var[:] = np.asarray(values, dtype=np.float64)
+        for dim, (values, a) in self.schema.trailing.items():
+            nc.createDimension(dim, len(values))
+            var = nc.createVariable(dim, values.dtype, (dim,))
+            var.setncatts(clean_attrs(a))
+            var[:] = values
         for name, (dims, values, a) in self.schema.static_vars.items():
             values = np.asarray(values)
             fill = np.nan if values.dtype.kind == "f" else None
@@ -196,10 +223,11 @@ class NetCDFWriter:
         for idx, part in flat_slabs(start, stop, self.schema.shape):
             shape = _slab_shape(idx)
             for name, (spec, var) in self.vars.items():
-                data = np.asarray(arrays[name])[part].reshape(shape)
+                tail = self.schema.tail(spec)
+                data = np.asarray(arrays[name])[part].reshape(shape + tail)
                 if spec.dtype == "str":
                     data = data.astype(object)
-                var[idx] = data
+                var[idx + (slice(None),) * len(tail)] = data
 
     def close(self) -> None:
         """Close the file and move it to its final path (atomic on one file system)."""
@@ -224,7 +252,7 @@ class MemoryWriter:
         self.data = {}
         for spec in self.schema.points:
             dtype = object if spec.dtype == "str" else spec.dtype
-            self.data[spec.name] = np.empty(n, dtype=dtype)
+            self.data[spec.name] = np.empty((n,) + self.schema.tail(spec), dtype=dtype)
 
     def write(self, start: int, stop: int, arrays: Mapping[str, np.ndarray]) -> None:
         """Store the points ``[start, stop)``."""
@@ -235,7 +263,9 @@ class MemoryWriter:
         """The finished Dataset."""
         s = self.schema
         coords = {d: (d, np.asarray(v, dtype=np.float64), clean_attrs(a)) for d, (v, a) in s.coords.items()}
+        coords.update({d: (d, v, clean_attrs(a)) for d, (v, a) in s.trailing.items()})
         data = {name: (dims, np.asarray(v), clean_attrs(a)) for name, (dims, v, a) in s.static_vars.items()}
         for spec in s.points:
-            data[spec.name] = (spec.dims, self.data[spec.name].reshape(s.shape), clean_attrs(spec.attrs))
+            shape = s.shape + s.tail(spec)
+            data[spec.name] = (spec.dims, self.data[spec.name].reshape(shape), clean_attrs(spec.attrs))
         return xr.Dataset(data, coords=coords, attrs=s.attrs)

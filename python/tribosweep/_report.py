@@ -7,7 +7,7 @@ import pathlib
 
 import numpy as np
 
-from ._frequency import describing_function, hopf_load, linear_stability, periodic_orbit
+from ._frequency import describing_function, follow_cycle, hopf_load, linear_stability, periodic_orbit
 from ._model import SliderModel
 from ._simulate import ensemble
 
@@ -53,15 +53,19 @@ def seed_analysis(model: SliderModel | None = None) -> dict:
                             A2=float(orb.A2), A3=float(orb.A3), theta_deg=float(orb.theta) * _DEG,
                             moduli=orb.floquet_moduli.values.tolist(), stable=bool(orb.stable),
                             z_max=float(orb.z_max), open_fraction=float(orb.open_fraction), status=int(orb.status))
-    # The unilateral bouncing cycle (MODEL.md §6 recipe: mu = 0.30 for 22 s, then mu = 0.215).
-    hot = ensemble(m.replace(contact="unilateral", mu=0.30), 22.0, {"mu": [0.30]}, y0=[0.1e-6, 0, 0, 0, 0, 0],
-                   rtol=1e-8)
-    y1 = np.array([float(hot[f"{v}_end"][0]) for v in ("z", "z_dot", "x", "x_dot", "phi", "phi_dot")])
-    cyc = ensemble(m.replace(contact="unilateral"), 30.0, {"mu": [m.mu]}, y0=y1, steady=True, rtol=1e-9)
+    # The unilateral bouncing cycle, followed from mu = 0.30 (where it is the attractor a small
+    # disturbance grows into) down to the model's mu by shooting: a property of the model, not of
+    # one trajectory. MODEL.md §6's recipe (22 s at 0.30, then a transient at 0.215) lands near a
+    # basin boundary, and its outcome flips with the last bit of a float. The harmonics are then
+    # read by a run started on the orbit (it repeats within two periods).
+    um = m.replace(contact="unilateral")
+    orb, _path = follow_cycle(um)
+    cyc = ensemble(um, 1.0, {"mu": [m.mu]}, y0=orb.state0.values, steady=True, rtol=1e-11, method="dop853")
     out["bouncing"] = dict(omega=float(cyc.omega[0]), A0=float(cyc.z0[0]), A1=float(cyc.z1_amp[0]),
                            A2=float(cyc.z2_amp[0]), A3=float(cyc.z3_amp[0]), theta_deg=float(cyc.z2_phase[0]) * _DEG,
                            phi1=float(cyc.phi1_amp[0]), phi1_deg=float(cyc.phi1_phase[0]) * _DEG,
-                           fraction_off_disk=float(cyc.fraction_off_disk[0]))
+                           fraction_off_disk=float(cyc.fraction_off_disk[0]), stable=bool(orb.stable),
+                           orbit_omega=float(orb.omega), moduli=orb.floquet_moduli.values.tolist())  # fmt: skip
     return out
 
 

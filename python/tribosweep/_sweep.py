@@ -18,13 +18,14 @@ import math
 import os
 import shutil
 import sys
+import warnings
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
-from . import _apparatus, _checks, _chunk, _netcdf, _wear
+from . import _apparatus, _census, _checks, _chunk, _netcdf, _wear
 from ._model import PARAM_LONG_NAMES, PARAM_NAMES, PARAM_UNITS, SliderModel
 from ._simulate import DEFAULT_Y0
 
@@ -43,7 +44,7 @@ RESERVED_FIELDS: tuple[str, ...] = ("normal_load", "sliding_speed", "omega_norma
 DEFAULT_CHUNK_SIZE: dict[str, int] = {"linear": 4096}
 DEFAULT_CHUNK_SIZE_OTHER: int = 64
 #: Version of the parts-directory layout.
-PARTS_FORMAT: int = 1
+PARTS_FORMAT: int = 2  # 2: the attractor census replaced the one-run bistability check
 
 HOPF_CAVEAT: str = (
     "In this model (MODEL.md section 4) steady sliding is linearly unstable BELOW a Hopf load (24.90 N at the "
@@ -391,11 +392,10 @@ def _global_attrs(plan: _Plan, command: str, f_ref: float) -> dict:
     return attrs
 
 
-def _bistability_start(value) -> float:
-    v = _checks.positive("bistability_start", value)
-    if v <= 1.0:
-        raise ValueError(f"bistability_start = {value!r} is not valid: must be > 1 (a start outside the saddle cycle)")
-    return v
+def _samples(value) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not 1 <= value <= 100_000:
+        raise ValueError(f"samples = {value!r} is out of range: must be an integer in [1, 100000] (disturbances per point)")
+    return int(value)
 
 
 def sweep(
@@ -421,9 +421,12 @@ def sweep(
     atol: float | Sequence[float] | None = None,
     periodic_tol: float = 1e-5,
     decay_amplitude: float | None = None,
-    check_bistability: bool = True,
+    census: bool = True,
+    samples: int = _census.SAMPLES,
+    census_t_max: float = _census.CENSUS_T_MAX,
+    disturbance_scale: float = _census.DISTURBANCE_SCALE,
     unstable_disturbance: float = 1.0,
-    bistability_start: float = 1.5,
+    check_bistability: bool | None = None,
     command: str | None = None,
 ) -> xr.Dataset:
     """Map the slider's regime over normal load x arm length x sliding speed (x extra axes).
@@ -490,23 +493,25 @@ def sweep(
         Integration tolerances (as in :func:`tribosweep.simulate`).
     periodic_tol : float
         Relative repetition tolerance that declares a cycle.
-    check_bistability : bool
-        ``auto``: at stable points with a saddle cycle, run a unilateral transient from outside the
-        saddle and record where it goes (``bistable``): ``returned_to_sliding`` (stopped once back
-        inside the saddle with the pin on the disk, where the bilateral law holds and the saddle
-        bounds sliding's basin), ``bistable`` (a stable cycle: a proof of coexistence),
-        ``sustained_motion`` (neither, by ``t_max``: quasi-periodic or chaotic bouncing, or a slow
-        approach), ``escapes`` (|z| past the escape limit), or ``check_failed``; ``no_saddle`` where
-        the describing function predicts no saddle cycle. A return is no proof
-        that nothing else coexists: the impacting motion has intertwined basins. On 1,058 seed-sweep
-        points, 13 change the returned-or-not verdict between rtol 1e-11 and 1e-12 alone, and 60
-        change category (sustained bouncing can escape later).
+    census : bool
+        ``auto``: take the attractor census (``tribosweep.census``) at stable points with a saddle
+        cycle: ``samples`` disturbances on the torsion and normal modes, each run to its attractor
+        with the model's contact law; ``basin_fraction`` (with ``basin_fraction_se``) on the
+        ``attractor`` dimension (sliding, cycle, irregular, escape), ``basin_stability``,
+        ``n_attractors``, ``n_cycles`` and the largest cycle's frequency and amplitude. ``bistable``
+        is derived from it: ``coexisting`` where more than one attractor was seen,
+        ``one_attractor``, or ``no_saddle`` where the describing function predicts no saddle (no
+        census: nothing to find). The census is most of an ``auto`` sweep's cost.
+    samples : int
+        Census disturbances per point ``K`` (default 32); fractions carry ``sqrt(p (1 - p) / K)``.
+    census_t_max : float, s
+        Longest simulated time of one census disturbance (30); bounded motion that has neither
+        decayed nor repeated by then counts as ``irregular``.
+    disturbance_scale : float
+        Largest modal amplitude of a census disturbance in units of ``|z_st|`` (3).
     unstable_disturbance : float
         ``auto``: transients of linearly unstable points start on the unstable mode with
         ``|z| = unstable_disturbance |z_st|``.
-    bistability_start : float
-        ``auto``: the bistability check starts on the torsion mode at this multiple (> 1) of the
-        saddle cycle's A1.
     decay_amplitude : float, m, optional
         Amplitude below which a motion counts as decayed (default ``1e-3 |z_st|``).
     command : str, optional
@@ -541,6 +546,10 @@ def sweep(
     >>> ds.regime.sel(arm_length=0.072, sliding_speed=0.46).values.tolist()
     [6, 0]
     """
+    if check_bistability is not None:
+        warnings.warn("sweep(check_bistability=...) is renamed census=...; the old name goes away in 0.3",
+                      DeprecationWarning, stacklevel=2)  # fmt: skip
+        census = bool(check_bistability)
     if model is None:
         model = SliderModel(contact="unilateral")
     if not isinstance(model, SliderModel):
@@ -577,9 +586,11 @@ def sweep(
         "atol": None if atol_arr is None else atol_arr.tolist(),
         "periodic_tol": _checks.positive("periodic_tol", periodic_tol),
         "decay_amplitude": None if decay_amplitude is None else _checks.positive("decay_amplitude", decay_amplitude),
-        "check_bistability": bool(check_bistability),
+        "census": bool(census),
+        "samples": _samples(samples),
+        "census_t_max": _checks.positive("census_t_max", census_t_max),
+        "disturbance_scale": _checks.positive("disturbance_scale", disturbance_scale),
         "unstable_disturbance": _checks.positive("unstable_disturbance", unstable_disturbance),
-        "bistability_start": _bistability_start(bistability_start),
         "y0": _disturbance(disturbance).tolist(),
         "wear": {
             "normal_load": wear_reference.normal_load,

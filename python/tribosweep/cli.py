@@ -238,6 +238,12 @@ def describe(ds, path: str | None = None) -> str:
         multi = np.isfinite(r) & (np.rint(np.where(np.isfinite(r), r, 0)) >= 2)
         if multi.any():
             lines.append(f"cycles of several mode periods (period doubling, subharmonic): {int(multi.sum())}")
+    if "basin_fraction" in ds and "census_samples" in ds:
+        k = np.asarray(ds.census_samples.values).ravel()
+        if (k > 0).any():
+            bs = np.asarray(ds.basin_stability.values).ravel()[k > 0]
+            lines.append(f"attractor census: {int((k > 0).sum())} points, {int(k.max())} disturbances each; basin "
+                         f"stability median {np.median(bs):.2f} (min {bs.min():.2f}, max {bs.max():.2f})")  # fmt: skip
     for var, dim in (("normal_load_extrapolated", "loads"), ("arm_length_extrapolated", "arm lengths")):
         if var in ds:
             v = np.asarray(ds[var].values)

@@ -38,11 +38,9 @@ def _matplotlib():
     return Figure, Patch
 
 
-#: Bistability-check outcomes drawn over the regime colours: code -> (key, hatch, legend label).
+#: Census coexistence drawn over the regime colours: ``bistable`` code -> (key, hatch, legend label).
 _COEXISTING = {
-    1: ("bistable", "//", "bistable (a stable cycle coexists)"),
-    2: ("sustained", "\\\\", "sustained motion coexists\n(not periodic by t_max)"),
-    3: ("escapes", "xx", "a large disturbance escapes"),
+    1: ("coexisting", "//", "another attractor coexists\n(attractor census)"),
 }
 
 

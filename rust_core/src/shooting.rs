@@ -1163,14 +1163,27 @@ mod tests {
 
     /// MODEL.md §6 recipe: the unilateral model at mu = 0.30 from z = 0.1 um for 22 s, then at
     /// mu = 0.215 for 6 s; the end state lies on the stable bouncing cycle.
+    /// A state on the seed's unilateral bouncing cycle, found robustly: at mu = 0.30 sliding is
+    /// unstable and the bouncing cycle is the attractor a small disturbance grows into; shooting
+    /// there, then following the cycle down to mu = 0.215 in steps of 0.005 (natural-parameter
+    /// continuation, each solve started from the last orbit). A single transient continued at
+    /// 0.215 (MODEL.md §6's recipe) lands near a basin boundary: moved by one ulp, it can decay.
     fn bouncing_cycle_start() -> (Slider, State) {
         let p = Params { contact: ContactModel::Unilateral, mu: 0.30, ..Params::seed() };
         let hot = Slider::new(p).unwrap();
         let (y1, r1) = run_watched(&hot, &State::new(0.1e-6, 0.0, 0.0, 0.0, 0.0, 0.0), 22.0, 1e-9);
-        let seed = Slider::new(Params { mu: 0.215, ..p }).unwrap();
-        let (y2, r2) = run_watched(&seed, &y1, 6.0, 1e-9);
-        eprintln!("recipe: {r1} + {r2} chunks integrated again for a hidden switch");
-        (seed, y2)
+        eprintln!("mu = 0.30 transient: {r1} chunks integrated again for a hidden switch");
+        let tors = crate::linear::linear_stability(&hot).mode(crate::linear::ModeKind::Torsion).frequency;
+        let opts = ShootingOptions::default();
+        let mut o = shoot(&hot, &y1, 2.0 * PI / tors, &opts);
+        assert_eq!(o.status, Status::Success, "mu = 0.30");
+        for k in 1..=17 {
+            let mu = 0.30 - 0.005 * k as f64;
+            let s = Slider::new(Params { mu, ..p }).unwrap();
+            o = shoot(&s, &o.state0, o.period, &opts);
+            assert!(o.status == Status::Success && o.stable, "mu = {mu}: {:?}", o.status);
+        }
+        (Slider::new(Params { mu: 0.215, ..p }).unwrap(), o.state0)
     }
 
     #[test]

@@ -1,0 +1,497 @@
+"""Attractor census (basin stability): what a point does after many disturbances, as fractions.
+
+One run from one start cannot say how likely each outcome is, and where the basins of the
+impacting motion are intertwined its verdict flips with the last bit of a float (a different
+libm, BLAS kernel or rtol). The census runs ``K`` disturbances per point to their attractors and
+reports the fraction that reaches each, with its binomial standard error (Menck et al., Nature
+Physics 9, 2013). A flipped trajectory then moves a fraction by ``1/K`` instead of flipping a verdict.
+
+The disturbances (documented distribution)
+    Each sample is a start on the two modes that matter at a point, from steady sliding::
+
+        y0 = Re(a_t e^{i theta_t} v_t + a_n e^{i theta_n} v_n)
+
+    ``v_t``, ``v_n``: the torsion-dominated and the normal mode of the linearisation, scaled to
+    ``z = 1``; ``a_t, a_n`` uniform in ``[0, scale |z_st|)``; ``theta`` uniform in ``[0, 2 pi)``.
+    The torsion mode is the one that self-excites (the saddle cycle and the bouncing cycle lie
+    along it); the heavily damped normal mode adds a disturbance in ``z`` alone. ``x`` does not act
+    back on ``z`` and ``phi`` under constant friction; it starts on the modes' own ``x``.
+    ``(a_t, theta_t, a_n, theta_n) / (scale |z_st|, 2 pi, scale |z_st|, 2 pi)`` is the 4-D Halton
+    sequence (bases 2, 3, 5, 7, indices 1..K) shifted modulo 1 by a Cranley-Patterson rotation
+    drawn from a hash of the point's own parameters (the float64 bytes of every field that enters
+    the dynamics, in name order). A point's samples therefore depend on nothing but the point:
+    not on chunking, threads, executor, the sweep around it, or the machine; the first ``K`` of
+    a larger census are the same samples.
+
+What each sample reaches (``ATTRACTOR_NAMES``)
+    ``sliding`` (decayed), ``cycle`` (a periodic state; cycles are told apart by period
+    multiplicity, frequency and first-harmonic amplitude within ``CYCLE_TOL``), ``irregular``
+    (bounded and neither periodic nor decayed by ``t_max``: quasi-periodic or chaotic bouncing, or
+    an approach slower than ``t_max``), ``escape`` (``|z|`` past the escape limit: outside the
+    model's validity). A sample whose integration failed is counted apart (``census_failed``) and
+    left out of the fractions.
+
+Early stops
+    A cycle stops once its section state has repeated to ``periodic_tol`` twice. A sample at a
+    stable point with a saddle cycle of amplitude ``A1`` stops as ``sliding`` once its motion (every
+    component, in units of its characteristic size) is below ``min(0.2 A1, 0.5 |z_st|)`` and
+    shrinking: the pin is then on the disk, the law is the smooth bilateral one, and the motion
+    is well inside the saddle cycle that bounds sliding's basin in the normal-form (centre-manifold)
+    picture of the subcritical Hopf point. This is not a proof for the full 6-D state; the strict
+    quadratic-Lyapunov ball of the linearisation is about a thousand times smaller at the seed
+    (the torsion mode's damping margin is 0.33 1/s against nonlinear rates of order
+    ``K_a |z| / (m w)``), so it would not stop anything earlier.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from collections.abc import Mapping
+
+import numpy as np
+
+from . import _core
+from ._flags import OUTCOME_NAMES, STATUS, STATUS_NAMES
+
+#: What a census sample reaches, in code order (the ``attractor`` dimension).
+ATTRACTOR_NAMES: tuple[str, ...] = ("sliding", "cycle", "irregular", "escape")
+#: One-line meaning of each, for the netCDF ``comment``.
+ATTRACTOR_DOC: dict[str, str] = {
+    "sliding": "the disturbance decayed to steady sliding",
+    "cycle": "the run settled on a periodic cycle",
+    "irregular": "bounded motion, neither periodic nor decayed by the census t_max (quasi-periodic or chaotic "
+    "bouncing, or a slower approach)",
+    "escape": "|z| passed the escape limit (outside the model's validity)",
+}
+#: Steady-state outcome name -> attractor index (-1: failed, left out of the fractions).
+_ATTRACTOR_OF: dict[str, int] = {"decayed": 0, "periodic": 1, "unsettled": 2, "diverged": 3, "failed": -1}
+
+#: Default number of disturbances per point.
+SAMPLES: int = 32
+#: Default amplitude scale of the disturbances, in units of |z_st| (the size at which the contact
+#: opens). At the seed the saddle cycle's A1 is 1.35 |z_st| and the bouncing cycle's 1.43 |z_st|,
+#: so the default box reaches past both.
+DISTURBANCE_SCALE: float = 3.0
+#: Default longest simulated time of one sample [s]. Near a Hopf point a disturbance decays at
+#: 0.07 1/s; such a slow approach is reported as ``irregular`` (say so when reading fractions there).
+CENSUS_T_MAX: float = 30.0
+#: Relative tolerance within which two cycles (same period multiplicity) are the same: frequency
+#: and first-harmonic amplitude of z.
+CYCLE_TOL: float = 1e-2
+#: A returning sample stops once its motion is below this fraction of the saddle cycle's A1 (and
+#: half of |z_st|), and shrinking.
+RETURN_FRACTION: float = 0.2
+
+_HALTON_BASES = (2, 3, 5, 7)
+
+#: Fields of the model that enter the dynamics (and so the sample's seed). ``sliding_speed``
+#: enters only through the friction law's speed dependence; it is dropped for constant friction.
+_SEED_FIELDS = (
+    "mass", "inertia", "moment_arm", "omega_normal", "omega_friction", "omega_torsion", "zeta_normal",
+    "zeta_friction", "zeta_torsion", "contact_stiffness", "contact_quadratic", "contact_damping",
+    "twist_coupling", "mu", "normal_load", "sliding_speed", "torsion_sign", "friction_regularization",
+    "mu_static", "stribeck_velocity", "escape_limit",
+)  # fmt: skip
+
+
+def halton(n: int, base: int) -> np.ndarray:
+    """Radical-inverse (van der Corput) sequence in ``base`` at indices ``1..n``, exact to rounding.
+
+    Examples
+    --------
+    >>> halton(4, 2).tolist()
+    [0.5, 0.25, 0.75, 0.125]
+    """
+    out = np.zeros(n)
+    idx = np.arange(1, n + 1, dtype=np.int64)
+    f = 1.0
+    while np.any(idx):
+        f /= base
+        out += f * (idx % base)
+        idx //= base
+    return out
+
+
+def point_shift(values: Mapping[str, float], friction_law: str) -> np.ndarray:
+    """Cranley-Patterson shift (4 numbers in ``[0, 1)``) from the point's own parameters.
+
+    The hash reads the IEEE float64 bytes (little-endian) of every field in ``_SEED_FIELDS``
+    present in ``values``, in that order, so it is the same on every machine.
+    """
+    h = hashlib.blake2b(digest_size=32)
+    h.update(friction_law.encode())
+    for k in _SEED_FIELDS:
+        if k == "sliding_speed" and friction_law == "constant":
+            continue
+        if k in values:
+            h.update(k.encode())
+            h.update(np.asarray(values[k], dtype="<f8").tobytes())
+    words = np.frombuffer(h.digest(), dtype="<u8")
+    return (words >> np.uint64(11)).astype(np.float64) / float(2**53)
+
+
+def _static(v: Mapping[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    f, k0, ka = v["normal_load"], v["contact_stiffness"], v["contact_quadratic"]
+    z_st = -2.0 * f / (k0 + np.sqrt(k0 * k0 + 4.0 * ka * f))  # cancellation-free, MODEL.md §3
+    return z_st, k0 - 2.0 * ka * z_st
+
+
+def mode_shape(v: Mapping[str, np.ndarray], lam: np.ndarray) -> np.ndarray:
+    """Eigenvectors ``(n, 6)`` with ``z = 1`` for eigenvalues ``lam`` (n,) of steady sliding, constant friction.
+
+    Closed form of MODEL.md §2 linearised: with ``z = 1`` the torsion equation gives ``phi``,
+    then the frictional equation ``x``. Only complex arithmetic: no LAPACK, so the shapes do not
+    depend on which BLAS kernels a machine picks.
+    """
+    z_st, k_s = _static(v)
+    c = v["torsion_sign"] * v["moment_arm"] / v["inertia"] * v["mu"]
+    lt = lam * lam + 2.0 * v["zeta_torsion"] * v["omega_torsion"] * lam + v["omega_torsion"] ** 2
+    lx = lam * lam + 2.0 * v["zeta_friction"] * v["omega_friction"] * lam + v["omega_friction"] ** 2
+    phi = c * (-k_s - v["contact_damping"] * lam) / (lt - c * v["twist_coupling"])
+    fz = -k_s - v["contact_damping"] * lam + v["twist_coupling"] * phi
+    x = v["mu"] * fz / v["mass"] / lx
+    one = np.ones_like(lam)
+    return np.stack([one, lam, x, lam * x, phi, lam * phi], axis=1)
+
+
+def _mode_shape_numeric(j: np.ndarray, lam: np.ndarray) -> np.ndarray:
+    """Eigenvectors from the null space of ``J - lam I`` (speed-dependent friction: x acts back)."""
+    out = np.empty((lam.size, 6), dtype=complex)
+    for i in range(lam.size):
+        _, _, vh = np.linalg.svd(j[i] - lam[i] * np.eye(6))
+        vec = vh[-1].conj()
+        out[i] = vec / vec[0] if abs(vec[0]) > 1e-12 * np.abs(vec).max() else vec / np.abs(vec).max()
+    return out
+
+
+def starts(
+    full: Mapping[str, np.ndarray], friction_law: str, samples: int, scale: float, eigenvalues: np.ndarray
+) -> np.ndarray:
+    """Start states ``(n, samples, 6)`` of the census of ``n`` points (see the module docstring).
+
+    ``full`` holds every model field per point (arrays of length ``n``); ``eigenvalues`` is the
+    core's ``(n, 6)`` array in the order friction, torsion, normal (pairs, +Im first).
+    """
+    n = eigenvalues.shape[0]
+    v = {k: np.broadcast_to(np.asarray(full[k], dtype=np.float64), (n,)) for k in full}
+    lam_t, lam_n = eigenvalues[:, 2], eigenvalues[:, 4]
+    if friction_law == "constant":
+        vt, vn = mode_shape(v, lam_t), mode_shape(v, lam_n)
+    else:
+        from ._chunk import jacobians
+
+        j = jacobians(v, friction_law)
+        vt, vn = _mode_shape_numeric(j, lam_t), _mode_shape_numeric(j, lam_n)
+    z_abs = np.abs(_static(v)[0])
+    u = np.column_stack([halton(samples, b) for b in _HALTON_BASES])  # (K, 4)
+    y0 = np.empty((n, samples, 6))
+    for i in range(n):
+        shift = point_shift({k: v[k][i] for k in _SEED_FIELDS if k in v}, friction_law)
+        w = np.mod(u + shift, 1.0)
+        amp = scale * z_abs[i]
+        ct = amp * w[:, 0] * np.exp(2j * np.pi * w[:, 1])
+        cn = amp * w[:, 2] * np.exp(2j * np.pi * w[:, 3])
+        y0[i] = (ct[:, None] * vt[i] + cn[:, None] * vn[i]).real
+    return y0
+
+
+def _cycles(omega, mult, a1, tol: float) -> tuple[np.ndarray, list[int]]:
+    """Cluster periodic samples (in sample order, deterministic); label per sample, first member per cluster."""
+    label = np.full(omega.size, -1)
+    heads: list[int] = []
+    for s in range(omega.size):
+        for c, h in enumerate(heads):
+            if mult[s] == mult[h] and abs(omega[s] - omega[h]) <= tol * omega[h] and abs(a1[s] - a1[h]) <= tol * max(
+                a1[h], 1e-12
+            ):
+                label[s] = c
+                break
+        else:
+            label[s] = len(heads)
+            heads.append(s)
+    return label, heads
+
+
+#: Per-point census output: name -> (dtype, units or None, long name, has the attractor dimension).
+CENSUS_VARIABLES: dict[str, tuple[str, str | None, str, bool]] = {
+    "basin_fraction": ("f8", "1", "fraction of the census disturbances that reach each attractor", True),
+    "basin_fraction_se": ("f8", "1", "binomial standard error of basin_fraction, sqrt(p (1 - p) / K)", True),
+    "basin_stability": ("f8", "1", "fraction of the census disturbances that return to steady sliding", False),
+    "n_attractors": ("i8", "1", "coexisting attractors seen by the census: sliding, each distinct cycle, irregular "
+                     "motion (-1: no census)", False),
+    "n_cycles": ("i8", "1", "distinct periodic cycles the census found (-1: no census)", False),
+    "census_samples": ("i8", "1", "census disturbances counted in the fractions (0: no census)", False),
+    "census_failed": ("i8", "1", "census disturbances whose integration failed (left out of the fractions)", False),
+    "largest_cycle_omega": ("f8", "rad s-1", "angular frequency of the census cycle with the largest basin", False),
+    "largest_cycle_a1": ("f8", "m", "first-harmonic amplitude of z of the census cycle with the largest basin",
+                         False),
+    "largest_cycle_period_ratio": ("f8", "1", "period of the census cycle with the largest basin in periods of the "
+                                   "least stable linear mode", False),
+    "largest_cycle_fraction_off_disk": ("f8", "1", "fraction of the period the pin is off the disk on the census "
+                                        "cycle with the largest basin", False),
+    "irregular_max_abs_z": ("f8", "m", "largest |z| reached by the census samples in irregular motion", False),
+}  # fmt: skip
+
+
+def empty(n: int) -> dict[str, np.ndarray]:
+    """Census output of ``n`` points that had no census."""
+    k = len(ATTRACTOR_NAMES)
+    out: dict[str, np.ndarray] = {}
+    for name, (dtype, _u, _l, per_attractor) in CENSUS_VARIABLES.items():
+        shape = (n, k) if per_attractor else (n,)
+        out[name] = np.full(shape, np.nan) if dtype == "f8" else np.zeros(shape, dtype=dtype)
+    out["n_attractors"][:] = -1
+    out["n_cycles"][:] = -1
+    return out
+
+
+def run(
+    model_values: Mapping[str, float],
+    contact: str,
+    friction_law: str,
+    point_params: Mapping[str, np.ndarray],
+    sel: np.ndarray,
+    *,
+    samples: int,
+    scale: float,
+    t_max: float,
+    integrator: str,
+    rtol: float,
+    atol,
+    periodic_tol: float,
+    threads: int | None,
+    eigenvalues: np.ndarray,
+    linear_frequency: np.ndarray,
+    saddle_a1: np.ndarray | None = None,
+    cycle_tol: float = CYCLE_TOL,
+) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+    """Census of the points ``sel`` of a chunk: one batched call for every sample of every point.
+
+    Parameters
+    ----------
+    eigenvalues, linear_frequency : arrays over ``sel``
+        The core's eigenvalues ``(m, 6)`` and the least stable mode's frequency of each point.
+    saddle_a1 : array over ``sel``, m, optional
+        The saddle cycle's A1 at stable points (NaN elsewhere): sets the early return to sliding.
+
+    Returns
+    -------
+    (dict, dict)
+        Per-point census variables over ``sel`` (``CENSUS_VARIABLES``) and per-sample arrays
+        (``outcome``, ``attractor``, ``cycle``, ``omega``, ``z1_amp``, ``t_end``, ``n_rhs``, ``y0``).
+    """
+    m = sel.size
+    out = empty(m)
+    names = sorted(point_params)
+    n = len(next(iter(point_params.values())))
+    full = {k: np.full(n, float(v)) for k, v in model_values.items()}
+    for k, a in point_params.items():
+        full[k] = np.asarray(a, dtype=np.float64)
+    sub = {k: np.asarray(full[k])[sel] for k in full}
+    y0 = starts(sub, friction_law, samples, scale, eigenvalues)  # (m, K, 6)
+    values = np.column_stack([np.asarray(point_params[k], dtype=np.float64)[sel] for k in names])
+    z_abs = np.abs(_static(sub)[0])
+    decay = 1e-3 * z_abs
+    if saddle_a1 is not None:
+        a1 = np.asarray(saddle_a1, dtype=np.float64)
+        known = np.isfinite(a1)
+        decay = np.where(known, np.maximum(decay, np.minimum(RETURN_FRACTION * np.where(known, a1, 0.0), 0.5 * z_abs)),
+                         decay)  # fmt: skip
+    res = _core.ensemble(
+        {k: float(v) for k, v in model_values.items()}, contact, friction_law, names,
+        np.repeat(values, samples, axis=0), np.ascontiguousarray(y0.reshape(m * samples, 6)), float(t_max),
+        integrator, float(rtol), None if atol is None else np.asarray(atol, dtype=np.float64), None, threads,
+        "steady", float(periodic_tol), None, 512, None, None, np.repeat(decay, samples),
+    )  # fmt: skip
+    outcome = np.asarray(res["outcome"]).reshape(m, samples)
+    status = np.asarray(res["status"]).reshape(m, samples)
+    attractor = np.vectorize(lambda o: _ATTRACTOR_OF[OUTCOME_NAMES[o]], otypes=[np.int64])(outcome)
+    # A run that stopped at t_max is bounded motion (irregular) only if it was not a numerical failure.
+    attractor[(attractor == 2) & (status != STATUS["not_converged"])] = -1
+    omega = np.asarray(res["omega"]).reshape(m, samples)
+    a1 = np.asarray(res["z1_amp"]).reshape(m, samples)
+    mult = np.asarray(res["multiplicity"]).reshape(m, samples)
+    off = np.asarray(res["fraction_off_disk"]).reshape(m, samples)
+    max_z = np.asarray(res["max_abs_z"]).reshape(m, samples)
+    cycle = np.full((m, samples), -1)
+    k = len(ATTRACTOR_NAMES)
+    for i in range(m):
+        a = attractor[i]
+        valid = a >= 0
+        nv = int(valid.sum())
+        out["census_samples"][i] = nv
+        out["census_failed"][i] = samples - nv
+        if nv == 0:
+            continue
+        counts = np.bincount(a[valid], minlength=k)
+        p = counts / nv
+        out["basin_fraction"][i] = p
+        out["basin_fraction_se"][i] = np.sqrt(p * (1.0 - p) / nv)
+        out["basin_stability"][i] = p[0]
+        per = np.flatnonzero(a == 1)
+        label, heads = _cycles(omega[i, per], mult[i, per], a1[i, per], cycle_tol)
+        cycle[i, per] = label
+        out["n_cycles"][i] = len(heads)
+        out["n_attractors"][i] = int(counts[0] > 0) + len(heads) + int(counts[2] > 0)
+        if heads:
+            big = int(np.argmax(np.bincount(label)))  # ties: the first found
+            s = per[heads[big]]
+            out["largest_cycle_omega"][i] = omega[i, s]
+            out["largest_cycle_a1"][i] = a1[i, s]
+            out["largest_cycle_period_ratio"][i] = linear_frequency[i] / omega[i, s]
+            out["largest_cycle_fraction_off_disk"][i] = off[i, s]
+        if counts[2]:
+            out["irregular_max_abs_z"][i] = float(np.max(max_z[i, a == 2]))
+    per_sample = {
+        "outcome": outcome, "status": status, "attractor": attractor, "cycle": cycle, "omega": omega,
+        "z1_amp": a1, "multiplicity": mult, "fraction_off_disk": off, "max_abs_z": max_z,
+        "t_end": np.asarray(res["t_end"]).reshape(m, samples),
+        "n_rhs": np.asarray(res["n_rhs"], dtype=np.int64).reshape(m, samples), "y0": y0,
+        "reason": np.asarray(res["reason"], dtype=str).reshape(m, samples),
+    }  # fmt: skip
+    return out, per_sample
+
+
+def failed_reason(per_sample: Mapping[str, np.ndarray], i: int) -> str:
+    """Why every sample of point ``i`` failed (the first sample's status and reason)."""
+    st = int(per_sample["status"][i, 0])
+    name = STATUS_NAMES[st] if st < len(STATUS_NAMES) else str(st)
+    detail = str(per_sample["reason"][i, 0])
+    return f"census: every disturbance failed (status {name}{': ' + detail if detail else ''})"
+
+
+def saddle_amplitude(base: Mapping[str, float], friction_law: str, names, values: np.ndarray, stable: np.ndarray,
+                     threads: int | None, grid: int = 1000) -> np.ndarray:
+    """A1 [m] of the describing function's physical root (the saddle cycle) at the stable points, NaN elsewhere.
+
+    The same call as the sweep's describing-function stage, so a point's census is the same in a
+    sweep and alone.
+    """  # fmt: skip
+    a1 = np.full(values.shape[0], np.nan)
+    sel = np.flatnonzero(stable)
+    if sel.size:
+        df = _core.describing_function(dict(base), "bilateral", friction_law, list(names), values[sel], "consistent",
+                                       150.0, 3000.0, grid, threads)  # fmt: skip
+        for j, i in enumerate(sel):
+            k = np.flatnonzero(df["physical"][j] == 1)
+            if df["status"][j] == STATUS["success"] and k.size:
+                a1[i] = df["A1"][j, k[0]]
+    return a1
+
+
+def census(
+    model,
+    *,
+    samples: int = SAMPLES,
+    disturbance_scale: float = DISTURBANCE_SCALE,
+    t_max: float = CENSUS_T_MAX,
+    integrator: str = "dop853",
+    rtol: float = 1e-8,
+    periodic_tol: float = 1e-5,
+    cycle_tol: float = CYCLE_TOL,
+    threads: int | None = None,
+):
+    """Attractor census of one model: ``samples`` disturbances, each run to its attractor.
+
+    See the module ``tribosweep._census`` for the distribution of the disturbances (the torsion
+    and normal modes, amplitudes up to ``disturbance_scale |z_st|``, a Halton sequence seeded by
+    the model's parameters) and the early stops. A sweep's census at a point equals this one for
+    the same model and settings.
+
+    Parameters
+    ----------
+    model : SliderModel
+        The point (use ``contact="unilateral"`` for the physical contact law).
+    samples : int
+        Number of disturbances ``K`` (1 to 1,000,000).
+    disturbance_scale : float
+        Largest modal amplitude of a disturbance, in units of the static penetration ``|z_st|`` (> 0).
+    t_max : float, s
+        Longest simulated time of one disturbance (> 0).
+    integrator : {"dop853", "dopri5", "rodas4"}
+        Time integrator.
+    rtol : float
+        Relative tolerance of the integration.
+    periodic_tol : float
+        Relative repetition tolerance of the section state that declares a cycle.
+    cycle_tol : float
+        Relative tolerance in frequency and first-harmonic amplitude within which cycles are one.
+    threads : int, optional
+        Rust worker threads (results do not depend on it).
+
+    Returns
+    -------
+    xarray.Dataset
+        ``basin_fraction`` and ``basin_fraction_se`` on ``attractor`` (sliding, cycle, irregular,
+        escape); ``basin_stability``, ``n_attractors``, ``n_cycles`` and the largest cycle's
+        frequency and amplitude; per ``sample``: the start ``y0``, the ``attractor`` reached, its
+        ``cycle`` label (-1 if none), ``omega``, ``z1_amp``, ``t_end`` and ``n_rhs``.
+
+    Examples
+    --------
+    >>> import tribosweep as ts
+    >>> ds = ts.census(ts.SliderModel(contact="unilateral", normal_load=20.0), samples=4, t_max=5.0)
+    >>> ds.basin_fraction.sizes["attractor"], int(ds.census_samples)
+    (4, 4)
+    """
+    import xarray as xr
+
+    from . import _checks
+    from ._model import SliderModel
+
+    if not isinstance(model, SliderModel):
+        raise TypeError(f"model = {model!r} must be a tribosweep.SliderModel")
+    if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or not 1 <= samples <= 1_000_000:
+        raise ValueError(f"samples = {samples!r} is out of range: must be an integer in [1, 1000000]")
+    scale = _checks.positive("disturbance_scale", disturbance_scale)
+    t_max = _checks.positive("t_max", t_max)
+    integrator = _checks.method(integrator)
+    rtol = _checks.rtol(rtol)
+    periodic_tol = _checks.positive("periodic_tol", periodic_tol)
+    cycle_tol = _checks.positive("cycle_tol", cycle_tol)
+    threads = _checks.threads(threads)
+    base = model.values()
+    names = ["normal_load"]
+    values = np.array([[base["normal_load"]]])
+    lin = _core.linear_stability(base, model.contact, model.friction_law, names, values, threads)
+    stable = np.asarray(lin["stable"], dtype=bool)
+    a1 = saddle_amplitude(base, model.friction_law, names, values, stable, threads)
+    res, per = run(
+        base, model.contact, model.friction_law, {"normal_load": values[:, 0]}, np.array([0]), samples=int(samples),
+        scale=scale, t_max=t_max, integrator=integrator, rtol=rtol, atol=None, periodic_tol=periodic_tol,
+        threads=threads, eigenvalues=np.asarray(lin["eigenvalues"]), linear_frequency=lin["least_stable_frequency"],
+        saddle_a1=a1, cycle_tol=cycle_tol,
+    )  # fmt: skip
+    from ._simulate import STATE_VARS
+
+    data = {}
+    for name, (_dtype, units, long_name, per_attractor) in CENSUS_VARIABLES.items():
+        attrs = {"long_name": long_name} | ({} if units is None else {"units": units})
+        data[name] = (("attractor",), res[name][0], attrs) if per_attractor else ((), res[name][0], attrs)
+    flag = {"flag_values": np.arange(-1, len(ATTRACTOR_NAMES), dtype=np.int8),
+            "flag_meanings": "failed " + " ".join(ATTRACTOR_NAMES)}  # fmt: skip
+    data["attractor_reached"] = (("sample",), per["attractor"][0].astype(np.int8),
+                                 {"long_name": "attractor each disturbance reached"} | flag)  # fmt: skip
+    data["cycle"] = (("sample",), per["cycle"][0], {"long_name": "label of the distinct cycle reached (-1: none)"})
+    for k, units, text in (("omega", "rad s-1", "angular frequency of the motion at the end of the run"),
+                           ("z1_amp", "m", "first-harmonic amplitude of z on the cycle (NaN if not periodic)"),
+                           ("t_end", "s", "simulated time when the attractor was recognised"),
+                           ("n_rhs", "1", "right-hand-side evaluations")):  # fmt: skip
+        data[k] = (("sample",), per[k][0], {"long_name": text, "units": units})
+    data["y0"] = (("sample", "state"), per["y0"][0], {"long_name": "start state [z, zd, x, xd, phi, phid]"})
+    coords = {
+        "attractor": ("attractor", np.arange(len(ATTRACTOR_NAMES), dtype=np.int8),
+                      {"long_name": "attractor", "flag_values": np.arange(len(ATTRACTOR_NAMES), dtype=np.int8),
+                       "flag_meanings": " ".join(ATTRACTOR_NAMES)}),
+        "attractor_name": ("attractor", np.array(ATTRACTOR_NAMES)),
+        "sample": ("sample", np.arange(samples)),
+        "state": ("state", np.array([s[0] for s in STATE_VARS])),
+    }  # fmt: skip
+    attrs = {f"model_{k}": v for k, v in base.items()}
+    attrs.update(model_contact=model.contact, model_friction_law=model.friction_law, samples=int(samples),
+                 disturbance_scale=scale, t_max=t_max, integrator=integrator, rtol=rtol, periodic_tol=periodic_tol,
+                 cycle_tol=cycle_tol, sliding_stable=int(stable[0]), saddle_a1=float(a1[0]),
+                 disturbances="y0 = Re(a_t e^(i theta_t) v_t + a_n e^(i theta_n) v_n), v_t, v_n the torsion and normal "
+                 "modes with z = 1, a uniform in [0, disturbance_scale |z_st|), theta uniform in [0, 2 pi); a Halton "
+                 "sequence shifted by a hash of the model's parameters")  # fmt: skip
+    return xr.Dataset(data, coords=coords, attrs=attrs)

@@ -1,0 +1,130 @@
+"""The attractor census: fractions with standard errors, and their independence of how they are computed."""
+
+from __future__ import annotations
+
+import concurrent.futures
+
+import numpy as np
+import pytest
+
+import tribosweep as ts
+from tribosweep import _census, _chunk
+
+SEED_U = ts.SliderModel(contact="unilateral")
+
+
+@pytest.fixture(scope="module")
+def seed64():
+    return ts.census(SEED_U, samples=64)
+
+
+def test_seed_sees_sliding_and_the_bouncing_cycle(seed64, seed_values):
+    # MODEL.md §6: at the seed with unilateral contact, steady sliding and the 640.4 rad/s bouncing
+    # cycle coexist. Both fractions must be strictly inside (0, 1); with p near 0.3 and K = 64 the
+    # standard error is 0.057, so each is more than 4 standard errors from either end.
+    p, se = seed64.basin_fraction.values, seed64.basin_fraction_se.values
+    assert 0 < p[0] < 1 and 0 < p[1] < 1, p
+    assert min(p[0], p[1], 1 - p[0], 1 - p[1]) > 4 * se[0], (p, se)
+    assert int(seed64.n_attractors) >= 2 and int(seed64.n_cycles) == 1
+    ref = seed_values["unilateral_bouncing_cycle_seed"]
+    assert float(seed64.largest_cycle_omega) == pytest.approx(ref["omega"], rel=1e-4)
+    assert float(seed64.largest_cycle_a1) == pytest.approx(ref["A1"], rel=1e-3)
+    assert float(seed64.largest_cycle_fraction_off_disk) == pytest.approx(ref["fraction_off_disk"], abs=2e-3)
+    # Every sample is accounted for, and the fractions are the counts.
+    reached = seed64.attractor_reached.values
+    assert int(seed64.census_samples) + int(seed64.census_failed) == 64
+    np.testing.assert_array_equal(p * 64, np.bincount(reached[reached >= 0], minlength=4))
+    assert float(seed64.basin_stability) == p[0]
+    # Standard error: the binomial formula.
+    np.testing.assert_allclose(se, np.sqrt(p * (1 - p) / 64), rtol=1e-15)
+
+
+def test_fractions_converge_within_their_standard_errors(seed64):
+    # K = 64 and K = 512 estimate the same basin fractions: they differ by less than 3 standard
+    # errors of the difference (the first 64 samples are shared, so this is conservative).
+    big = ts.census(SEED_U, samples=512)
+    for a in range(4):
+        p1, p2 = float(seed64.basin_fraction[a]), float(big.basin_fraction[a])
+        se = np.hypot(float(seed64.basin_fraction_se[a]), float(big.basin_fraction_se[a]))
+        assert abs(p1 - p2) <= 3 * se + 1e-12, (ts.ATTRACTOR_NAMES[a], p1, p2, se)
+    # The smaller census is the start of the larger: same samples, same fates.
+    np.testing.assert_array_equal(big.y0.values[:64], seed64.y0.values)
+    np.testing.assert_array_equal(big.attractor_reached.values[:64], seed64.attractor_reached.values)
+
+
+def test_samples_depend_only_on_the_point():
+    # The Cranley-Patterson shift is a hash of the point's parameters: the same point gives the
+    # same shift wherever it is computed; another load gives another; under constant friction the
+    # sliding speed does not enter the dynamics and does not enter the seed.
+    v = SEED_U.values()
+    a = _census.point_shift(v, "constant")
+    np.testing.assert_array_equal(a, _census.point_shift(dict(v), "constant"))
+    assert np.all((a >= 0) & (a < 1))
+    assert not np.array_equal(a, _census.point_shift(v | {"normal_load": 84.47}, "constant"))
+    np.testing.assert_array_equal(a, _census.point_shift(v | {"sliding_speed": 0.3}, "constant"))
+    assert not np.array_equal(_census.point_shift(v, "coulomb"), _census.point_shift(v | {"sliding_speed": 0.3},
+                                                                                      "coulomb"))  # fmt: skip
+
+
+def test_mode_shapes_are_eigenvectors():
+    # The closed-form mode shapes (no LAPACK) satisfy J v = lambda v to rounding.
+    v = {k: np.array([x]) for k, x in SEED_U.values().items()}
+    j = _chunk.jacobians(v)[0]
+    lam = np.linalg.eigvals(j)
+    for mode in lam[lam.imag > 0]:
+        vec = _census.mode_shape(v, np.array([mode]))[0]
+        assert np.abs(j @ vec - mode * vec).max() <= 1e-12 * np.abs(mode * vec).max()
+
+
+def test_halton_is_the_radical_inverse():
+    # Base 3: 1/3, 2/3, 1/9, 4/9, 7/9, 2/9 (indices 1..6 written backwards after the point).
+    np.testing.assert_allclose(_census.halton(6, 3), [1 / 3, 2 / 3, 1 / 9, 4 / 9, 7 / 9, 2 / 9], rtol=1e-15)
+
+
+SWEEP = dict(normal_load=[84.46, 130.0], arm_length=[0.072, 0.094], sliding_speed=[0.3, 0.46], samples=8,
+             census_t_max=10.0, progress=False)  # fmt: skip
+COMPARED = ("regime", "bistable", "basin_fraction", "basin_fraction_se", "n_attractors", "n_cycles",
+            "largest_cycle_omega", "largest_cycle_a1", "census_samples", "n_rhs", "reason", "min_slip_velocity")  # fmt: skip
+
+
+def _same(a, b):
+    for name in COMPARED:
+        np.testing.assert_array_equal(a[name].values, b[name].values, err_msg=name)
+
+
+def test_census_output_is_independent_of_threads_chunks_and_executor():
+    # A point's census depends on nothing but the point: 1 or 2 threads, chunks of 7 or 64 points
+    # (points that differ only in sliding speed share their dynamics under constant friction, and
+    # which of them represents the group changes with the chunking), in-process or a process pool.
+    ref = ts.sweep(threads=1, chunk_size=64, **SWEEP)
+    assert (ref.census_samples.values > 0).sum() >= 4  # the census ran at the stable points
+    _same(ref, ts.sweep(threads=2, chunk_size=7, **SWEEP))
+    _same(ref, ts.sweep(threads=1, chunk_size=3, **SWEEP))
+    with concurrent.futures.ProcessPoolExecutor(2) as pool:
+        _same(ref, ts.sweep(threads=1, chunk_size=5, executor=pool, **SWEEP))
+
+
+def test_a_sweep_point_has_the_standalone_census():
+    # The seed point inside a sweep and alone: the same samples, the same fates.
+    ds = ts.sweep(normal_load=[84.46], samples=16, progress=False)
+    alone = ts.census(ts.apparatus_model(84.46, 0.072, 0.46, base=SEED_U), samples=16)
+    np.testing.assert_array_equal(ds.basin_fraction.values.reshape(4), alone.basin_fraction.values)
+    assert int(ds.n_attractors.item()) == int(alone.n_attractors)
+
+
+@pytest.mark.parametrize(
+    "kwargs, needle",
+    [
+        ({"samples": 0}, r"samples = 0 is out of range"),
+        ({"samples": 2.5}, "samples"),
+        ({"disturbance_scale": 0.0}, "disturbance_scale"),
+        ({"t_max": -1.0}, "t_max"),
+        ({"rtol": 2.0}, "rtol"),
+        ({"integrator": "euler"}, "euler"),
+    ],
+)
+def test_census_rejects_bad_input(kwargs, needle):
+    with pytest.raises(ValueError, match=needle):
+        ts.census(SEED_U, **kwargs)
+    with pytest.raises(TypeError, match="SliderModel"):
+        ts.census("seed")
