@@ -514,11 +514,16 @@ def test_progress_line_without_tqdm(monkeypatch, capsys):
     assert capsys.readouterr().err == ""
 
 
+#: The grid on which auto and transient must agree (its verdicts are checked under ulp-moved loads
+#: and rtol +-1 % in test_robustness.py).
+AGREE_GRID = dict(normal_load=[8.0, 30.0, 70.0, 140.0], extra_axes={"mu": [0.2, 0.3, 0.4]}, progress=False, t_max=40.0)
+
+
 @requires_driver
 def test_auto_agrees_with_transient_where_the_transient_settles():
     # Issue 4: on a test grid, the regime of `auto` (cheapest model per point) equals the regime of
     # always integrating, at every point where the integration settled.
-    kw = dict(normal_load=[8.0, 30.0, 70.0, 140.0], extra_axes={"mu": [0.2, 0.3, 0.4]}, progress=False, t_max=40.0)
+    kw = AGREE_GRID
     auto = ts.sweep(method="auto", **kw)
     full = ts.sweep(method="transient", **kw)
     ra, rt = auto.regime.values.ravel(), full.regime.values.ravel()

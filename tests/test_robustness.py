@@ -1,0 +1,112 @@
+"""Single-trajectory verdicts of the suite, re-run with their inputs moved by a few ulps and rtol by 1 %.
+
+A test that asserts what ONE trajectory does (it decays, settles on a cycle, escapes) is only a
+test of the model if the verdict does not flip with the last bit of a float: a different libm or
+BLAS kernel, or another CPU, moves results by about that much. Each verdict asserted elsewhere in
+the suite is checked here under start states and parameters moved by +-1 and +-2 ulps
+(``np.nextafter``) and under rtol moved by +-1 %. A verdict that fails here belongs in a census
+(fractions with standard errors), not in a single-run assertion.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import tribosweep as ts
+
+ULPS = (1, -1, 2, -2)
+RTOL_FACTORS = (1.01, 0.99)
+
+
+def moved(x, k: int) -> np.ndarray:
+    """``x`` moved by ``k`` ulps (every component, towards +inf for k > 0)."""
+    x = np.asarray(x, dtype=np.float64)
+    for _ in range(abs(k)):
+        x = np.nextafter(x, np.inf if k > 0 else -np.inf)
+    return x
+
+
+def ulp_family(y0, mu):
+    """Start states and mu values: the original and its ulp-moved variants (moved together and apart)."""
+    ys, mus = [np.asarray(y0, dtype=np.float64)], [mu]
+    for k in ULPS:
+        ys += [moved(y0, k), np.asarray(y0, dtype=np.float64)]
+        mus += [mu, float(moved(mu, k))]
+    return np.array(ys), np.array(mus)
+
+
+def steady_outcomes(model, t_end, y0, mu, rtol, **kw):
+    """Outcome names and frequencies of the ulp family at ``rtol`` and at rtol moved by +-1 %."""
+    ys, mus = ulp_family(y0, mu)
+    names, omegas = [], []
+    for r in (rtol,) + tuple(rtol * f for f in RTOL_FACTORS):
+        ds = ts.ensemble(model, t_end, {"mu": mus}, y0=ys, steady=True, rtol=r, **kw)
+        names += [ts.OUTCOME_NAMES[int(o)] for o in ds.outcome.values]
+        omegas += ds.omega.values.tolist()
+    return names, np.array(omegas)
+
+
+def test_bouncing_cycle_from_just_outside_it(seed_values):
+    # test_simulate.py::test_unilateral_seed_reaches_bouncing_cycle
+    from test_simulate import bouncing_start
+
+    names, omega = steady_outcomes(ts.SliderModel(contact="unilateral"), 30.0, bouncing_start(), 0.215, 1e-9)
+    assert set(names) == {"periodic"}, names
+    np.testing.assert_allclose(omega, seed_values["unilateral_bouncing_cycle_seed"]["omega"], rtol=1e-3)
+
+
+def test_bilateral_decay_from_a_small_disturbance():
+    # test_simulate.py::test_bilateral_seed_decays_to_sliding_from_small_disturbance
+    names, _ = steady_outcomes(ts.SliderModel(), 60.0, [0.5e-6, 0, 0, 0, 0, 0], 0.215, 1e-8, decay_amplitude=0.2e-6)
+    assert set(names) == {"decayed"}, names
+
+
+def test_bilateral_escape_where_sliding_is_unstable():
+    # test_simulate.py::test_unstable_sliding_without_unilateral_contact_diverges
+    names, _ = steady_outcomes(ts.SliderModel(), 20.0, ts.DEFAULT_Y0, 0.35, 1e-8)
+    assert set(names) == {"diverged"}, names
+
+
+def test_followed_bouncing_cycle():
+    # test_frequency.py::test_unilateral_cycle_by_shooting_is_stable and the README's table row:
+    # the continuation's end point moves by no more than its own tolerance.
+    m = ts.SliderModel(contact="unilateral")
+    ref, _ = ts.follow_cycle(m)
+    for mu in (float(moved(0.215, k)) for k in ULPS):
+        orb, _ = ts.follow_cycle(m.replace(mu=mu))
+        assert bool(orb.stable) and float(orb.omega) == pytest.approx(float(ref.omega), rel=1e-9)
+    for f in RTOL_FACTORS:
+        orb, _ = ts.follow_cycle(m, rtol=1e-11 * f)
+        assert float(orb.omega) == pytest.approx(float(ref.omega), rel=1e-9)
+        assert float(orb.A1) == pytest.approx(float(ref.A1), rel=1e-7)
+
+
+def test_auto_and_transient_regimes():
+    # test_sweep.py::test_auto_agrees_with_transient_where_the_transient_settles: the regimes it
+    # compares, with the loads moved by ulps and rtol by 1 %.
+    from test_sweep import AGREE_GRID
+
+    def regimes(**kw):
+        args = dict(AGREE_GRID) | kw
+        return (ts.sweep(method="auto", census=False, **args).regime.values,
+                ts.sweep(method="transient", **args).regime.values)  # fmt: skip
+
+    ref = regimes()
+    loads = np.asarray(AGREE_GRID["normal_load"])
+    for k in (1, -2):
+        got = regimes(normal_load=moved(loads, k))
+        np.testing.assert_array_equal(got[0], ref[0])
+        np.testing.assert_array_equal(got[1], ref[1])
+    for f in RTOL_FACTORS:
+        got = regimes(rtol=1e-8 * f)
+        np.testing.assert_array_equal(got[0], ref[0])
+        np.testing.assert_array_equal(got[1], ref[1])
+
+
+def test_census_early_stop_point_returns_for_every_sample():
+    # test_sweep.py::test_a_returning_census_sample_stops_inside_the_saddle: at 130 N, 6.1 cm every
+    # disturbance returns, whatever the rtol.
+    for f in (1.0,) + RTOL_FACTORS:
+        ds = ts.sweep(normal_load=[130.0], arm_length=[0.061], progress=False, samples=8, rtol=1e-8 * f)
+        assert ds.basin_stability.item() == 1.0
