@@ -92,8 +92,11 @@ def _positive_int(text: str) -> int:
 # --- sweep -------------------------------------------------------------------------------------
 
 _CONFIG_KEYS = {"normal_load", "arm_length", "sliding_speed", "method", "output", "chunk_size", "threads", "plot",
-                "axes", "model", "solver", "wear_reference"}  # fmt: skip
+                "axes", "model", "solver", "census", "wear_reference"}  # fmt: skip
 _SOLVER_KEYS = {"t_max", "integrator", "rtol", "atol", "periodic_tol", "decay_amplitude", "disturbance"}
+#: [census] keys -> sweep() arguments.
+_CENSUS_KEYS = {"enabled": "census", "samples": "samples", "t_max": "census_t_max",
+                "disturbance_scale": "disturbance_scale"}  # fmt: skip
 
 
 def _load_config(path: str) -> dict:
@@ -114,12 +117,15 @@ def _load_config(path: str) -> dict:
     unknown = set(cfg) - _CONFIG_KEYS
     if unknown:
         raise UsageError(f"--config {path}: unknown keys {sorted(unknown)}; valid keys are {sorted(_CONFIG_KEYS)}")
-    for table in ("axes", "model", "solver", "wear_reference"):
+    for table in ("axes", "model", "solver", "census", "wear_reference"):
         if table in cfg and not isinstance(cfg[table], dict):
             raise UsageError(f"--config {path}: [{table}] must be a table")
     unknown = set(cfg.get("solver", {})) - _SOLVER_KEYS
     if unknown:
         raise UsageError(f"--config {path}: unknown [solver] keys {sorted(unknown)}; valid: {sorted(_SOLVER_KEYS)}")
+    unknown = set(cfg.get("census", {})) - set(_CENSUS_KEYS)
+    if unknown:
+        raise UsageError(f"--config {path}: unknown [census] keys {sorted(unknown)}; valid: {sorted(_CENSUS_KEYS)}")
     return cfg
 
 
@@ -148,6 +154,21 @@ def _add_sweep_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--chunk-size", type=_positive_int, metavar="N", help="points per saved chunk")
     p.add_argument("--plot", metavar="PNG", help="also write the regime map to this image")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    solver = p.add_argument_group("integration (also the [solver] table of --config)")
+    solver.add_argument("--t-max", type=float, metavar="S", help="longest transient run [s] (default 100)")
+    solver.add_argument("--integrator", choices=("dop853", "dopri5", "rodas4"), help="time integrator (default dop853)")
+    solver.add_argument("--rtol", type=float, metavar="R", help="relative tolerance (default 1e-8)")
+    census = p.add_argument_group(
+        "attractor census (also the [census] table of --config: enabled, samples, t_max, disturbance_scale)",
+        "auto: at stable points with a saddle cycle, K disturbances on the torsion and normal modes are each run to "
+        "their attractor; the sweep reports the fraction reaching sliding / a cycle / irregular motion / escape, with "
+        "standard errors. It is most of an auto sweep's cost (about K runs of up to --census-t-max seconds each).",
+    )
+    census.add_argument("--no-census", action="store_true", help="skip the census (fractions left empty)")
+    census.add_argument("--samples", type=_positive_int, metavar="K", help="disturbances per point (default 32)")
+    census.add_argument("--census-t-max", type=float, metavar="S", help="longest run of one disturbance [s] (default 30)")
+    census.add_argument("--disturbance-scale", type=float, metavar="X",
+                        help="largest modal amplitude of a disturbance in units of |z_st| (default 3)")
 
 
 def _run_sweep(args: argparse.Namespace) -> int:
@@ -177,6 +198,13 @@ def _run_sweep(args: argparse.Namespace) -> int:
     except TypeError as e:
         raise UsageError(f"config [model]: {e}") from None
     solver = dict(cfg.get("solver", {}))
+    solver.update({_CENSUS_KEYS[k]: v for k, v in cfg.get("census", {}).items()})
+    for flag, key in (("t_max", "t_max"), ("integrator", "integrator"), ("rtol", "rtol"), ("samples", "samples"),
+                      ("census_t_max", "census_t_max"), ("disturbance_scale", "disturbance_scale")):  # fmt: skip
+        if getattr(args, flag) is not None:
+            solver[key] = getattr(args, flag)
+    if args.no_census:
+        solver["census"] = False
     try:
         wear_reference = WearReference(**cfg["wear_reference"]) if "wear_reference" in cfg else None
     except TypeError as e:

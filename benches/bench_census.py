@@ -1,0 +1,68 @@
+"""Cost of the attractor census: one point at large K, and the default CLI sweep with K disturbances per point.
+
+Prints what it measured and the settings; ratios are against the same sweep without the census,
+run in the same process (the machines are shared: absolute seconds drift with their load).
+
+    python benches/bench_census.py                 # one point K = 1024, 2,000-point sweep at K = 16
+    python benches/bench_census.py --sweep-points 120 --samples 16 --threads 2
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import time
+
+import numpy as np
+
+import tribosweep as ts
+
+
+def one_point(k: int, threads: int | None) -> None:
+    m = ts.SliderModel(contact="unilateral")
+    t0 = time.perf_counter()
+    ds = ts.census(m, samples=k, threads=threads)
+    dt = time.perf_counter() - t0
+    p, se = ds.basin_fraction.values, ds.basin_fraction_se.values
+    frac = ", ".join(f"{n} {a:.3f}+-{b:.3f}" for n, a, b in zip(ts.ATTRACTOR_NAMES, p, se))
+    t_end = ds.t_end.values
+    print(f"seed census, K = {k}: {dt:.2f} s ({k / dt:.0f} disturbances/s), {frac}")
+    print(f"  simulated time per disturbance: mean {t_end.mean():.2f} s, max {t_end.max():.1f} s; "
+          f"rhs per disturbance {ds.n_rhs.values.mean():.0f}")  # fmt: skip
+
+
+def sweep(n_loads: int, n_arms: int, n_speeds: int, k: int, threads: int | None) -> None:
+    axes = dict(normal_load=np.linspace(10, 150, n_loads), arm_length=np.linspace(0.05, 0.127, n_arms),
+                sliding_speed=np.linspace(0.3, 0.6, n_speeds), progress=False, threads=threads)  # fmt: skip
+    t0 = time.perf_counter()
+    ts.sweep(census=False, **axes)
+    t_lean = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    ds = ts.sweep(samples=k, **axes)
+    t_full = time.perf_counter() - t0
+    n = int(ds.regime.size)
+    censused = int((ds.census_samples.values > 0).sum())
+    coexist = int((ds.bistable.values == 1).sum())
+    print(f"sweep {n} points ({n_loads} loads x {n_arms} arms x {n_speeds} speeds), K = {k}, threads {threads}: "
+          f"{t_full:.1f} s with the census ({n / t_full:.0f} points/s), {t_lean:.2f} s without "
+          f"({t_full / t_lean:.1f}x); census at {censused} points (shared across speeds: "
+          f"{censused // n_speeds} computed), coexisting attractors at {coexist}")  # fmt: skip
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--samples-one", type=int, default=1024)
+    ap.add_argument("--samples", type=int, default=16)
+    ap.add_argument("--sweep-points", type=int, choices=(120, 2000), default=2000)
+    ap.add_argument("--threads", type=int, default=None)
+    a = ap.parse_args()
+    print(f"cores {os.cpu_count()}, load average {os.getloadavg()[0]:.2f}")
+    one_point(a.samples_one, a.threads)
+    if a.sweep_points == 2000:
+        sweep(40, 10, 5, a.samples, a.threads)
+    else:
+        sweep(12, 10, 1, a.samples, a.threads)
+
+
+if __name__ == "__main__":
+    main()
