@@ -99,8 +99,9 @@ def model_cost(out_dir: os.PathLike, *, quick: bool = False, t_max: float = 30.0
         f"- auto vs transient: regime agreement {d['regime_agreement']:.0%} at the {d['settled_points']} points where "
         f"the transient settled; cycle amplitude error at most {d['cycle_amplitude_error_max']:.1%} over "
         f"{d['cycles_compared']} cycles; speed-up {d['speedup_auto_without_bistability']:.1f}x without the "
-        f"bistability check, {d['speedup_auto']:.1f}x with it (which finds {d['bistable_points']} bistable points and "
-        f"{d['sustained_points']} with sustained non-periodic motion that a small-disturbance transient cannot see).",
+        f"attractor census, {d['speedup_auto']:.1f}x with it (which finds {d['bistable_points']} points with coexisting "
+        f"attractors and {d['irregular_points']} where some disturbances sustain irregular motion, which a "
+        "small-disturbance transient cannot see).",
         "",
     ])
     return {"numbers": numbers, "markdown": md, "files": {"model_cost": png}}
