@@ -395,10 +395,8 @@ def _classify(summary: dict, stable: np.ndarray, t_max: float) -> tuple[np.ndarr
 def _static_penetration(full: Mapping[str, np.ndarray], sel: np.ndarray) -> np.ndarray:
     """Static penetration z_st [m] of the selected points (MODEL.md §3, cancellation-free form)."""
     n = max(np.size(v) for v in full.values())
-    k0 = np.broadcast_to(full["contact_stiffness"], (n,))[sel]
-    ka = np.broadcast_to(full["contact_quadratic"], (n,))[sel]
-    f = np.broadcast_to(full["normal_load"], (n,))[sel]
-    return -2.0 * f / (k0 + np.sqrt(k0 * k0 + 4.0 * ka * f))
+    sub = {k: np.broadcast_to(full[k], (n,))[sel] for k in ("contact_stiffness", "contact_quadratic", "normal_load")}
+    return _census._static(sub)[0]
 
 
 def _mode_start(full: Mapping[str, np.ndarray], friction_law: str, sel: np.ndarray, z_amp: np.ndarray,
