@@ -997,7 +997,7 @@ fn analyse(s: &Slider, y0: &State, t: f64, fl: &Flow, opts: &ShootingOptions, st
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::model::{ContactModel, Params};
     use crate::tidf::{SearchOptions, Tidf, Variant};
@@ -1168,7 +1168,7 @@ mod tests {
     /// there, then following the cycle down to mu = 0.215 in steps of 0.005 (natural-parameter
     /// continuation, each solve started from the last orbit). A single transient continued at
     /// 0.215 (MODEL.md §6's recipe) lands near a basin boundary: moved by one ulp, it can decay.
-    fn bouncing_cycle_start() -> (Slider, State) {
+    pub(crate) fn bouncing_cycle_start() -> (Slider, State) {
         let p = Params { contact: ContactModel::Unilateral, mu: 0.30, ..Params::seed() };
         let hot = Slider::new(p).unwrap();
         let (y1, r1) = run_watched(&hot, &State::new(0.1e-6, 0.0, 0.0, 0.0, 0.0, 0.0), 22.0, 1e-9);

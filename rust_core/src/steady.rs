@@ -108,7 +108,7 @@ impl Default for Extremes {
 
 impl Extremes {
     #[inline]
-    fn update(&mut self, s: &Slider, y: &State, mode: ContactMode) {
+    pub(crate) fn update(&mut self, s: &Slider, y: &State, mode: ContactMode) {
         let f = s.forces(y, mode);
         self.min_normal_force = self.min_normal_force.min(f.normal);
         self.max_gap = self.max_gap.max(s.gap(y));
@@ -132,10 +132,10 @@ pub struct RunResult {
     pub stats: Stats,
 }
 
-struct ExtremesObserver<'a, O> {
-    s: &'a Slider,
-    ext: Extremes,
-    inner: O,
+pub(crate) struct ExtremesObserver<'a, O> {
+    pub(crate) s: &'a Slider,
+    pub(crate) ext: Extremes,
+    pub(crate) inner: O,
 }
 
 impl<O: Observer<6, ContactMode>> Observer<6, ContactMode> for ExtremesObserver<'_, O> {
@@ -150,7 +150,7 @@ impl<O: Observer<6, ContactMode>> Observer<6, ContactMode> for ExtremesObserver<
     }
 }
 
-fn status_of(outcome: Outcome, escaped: bool) -> Status {
+pub(crate) fn status_of(outcome: Outcome, escaped: bool) -> Status {
     if outcome == Outcome::StoppedByEvent && escaped {
         Status::Diverged
     } else {
@@ -367,11 +367,11 @@ struct Crossing {
 }
 
 /// Watches the Poincare section and decides when the run has settled.
-struct SectionWatcher {
+pub(crate) struct SectionWatcher {
     ring: Vec<Crossing>,
     n_seen: usize,
-    peak_since: f64,
-    peaks_since: State,
+    pub(crate) peak_since: f64,
+    pub(crate) peaks_since: State,
     tol: f64,
     decay_amp: f64,
     window: usize,
@@ -491,9 +491,19 @@ impl SectionWatcher {
     }
 }
 
-struct SteadyObserver {
-    w: SectionWatcher,
-    decay_floor: f64,
+pub(crate) struct SteadyObserver {
+    pub(crate) w: SectionWatcher,
+    pub(crate) decay_floor: f64,
+}
+
+impl SteadyObserver {
+    /// The observer of a run to steady state of `s` under `opts`.
+    pub(crate) fn new(s: &Slider, opts: &SteadyOptions) -> Self {
+        SteadyObserver {
+            w: SectionWatcher::new(opts, s),
+            decay_floor: 1e-6 * opts.decay_amplitude.unwrap_or(1e-3 * s.z_st.abs()),
+        }
+    }
 }
 
 impl Observer<6, ContactMode> for SteadyObserver {
@@ -609,12 +619,13 @@ impl Observer<6, ContactMode> for PeriodObserver<'_> {
 /// Run `s` from `y0` until it decays, settles on a periodic state, escapes, or reaches `t_max`,
 /// and summarise the motion.
 pub fn run_to_steady(s: &Slider, y0: &State, opts: &SteadyOptions) -> Summary {
-    let obs = SteadyObserver {
-        w: SectionWatcher::new(opts, s),
-        decay_floor: 1e-6 * opts.decay_amplitude.unwrap_or(1e-3 * s.z_st.abs()),
-    };
-    let (r, obs) = run_observed(s, y0, opts.t_max, opts.method, &opts.tol, obs);
-    let w = obs.w;
+    let (r, obs) = run_observed(s, y0, opts.t_max, opts.method, &opts.tol, SteadyObserver::new(s, opts));
+    summarize(s, &r, &obs.w, opts)
+}
+
+/// The summary of a run to steady state that ended with `r`, watched by `w` (shared by the
+/// scalar driver and the lane-batched one).
+pub(crate) fn summarize(s: &Slider, r: &RunResult, w: &SectionWatcher, opts: &SteadyOptions) -> Summary {
     let mut sum = Summary::empty(r.status, SteadyOutcome::Failed);
     sum.t_end = r.t;
     sum.y_end = r.y;

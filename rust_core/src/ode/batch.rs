@@ -52,8 +52,8 @@ use crate::steady::{characteristic_sizes, options_for, Extremes, RunResult, Tole
 
 /// Trajectories per batch (SIMD lanes).
 pub const W: usize = 8;
-type L = [f64; W];
-type V6 = [L; 6];
+pub(crate) type L = [f64; W];
+pub(crate) type V6 = [L; 6];
 
 // Dormand–Prince 5(4) coefficients: the scalar stepper's, one table for both paths.
 use super::dopri5::{
@@ -62,10 +62,10 @@ use super::dopri5::{
 };
 
 // The PI controller of `controller.rs` for DOPRI5 (k = 5, beta = 0.04).
-const BETA: f64 = 0.04;
-const ALPHA: f64 = 1.0 / 5.0 - 0.75 * BETA;
-const LN_SAFETY: f64 = -0.105_360_515_657_826_3;
-const LN_ERR_FLOOR: f64 = -9.210_340_371_976_184;
+pub(crate) const BETA: f64 = 0.04;
+pub(crate) const ALPHA: f64 = 1.0 / 5.0 - 0.75 * BETA;
+pub(crate) const LN_SAFETY: f64 = -0.105_360_515_657_826_3;
+pub(crate) const LN_ERR_FLOOR: f64 = -9.210_340_371_976_184;
 
 /// Per-lane coefficients of the bilateral constant-`mu` right-hand side and the tolerances.
 #[derive(Clone, Copy)]
@@ -114,7 +114,7 @@ struct Lanes {
 }
 
 #[inline(always)]
-fn splat(x: f64) -> L {
+pub(crate) fn splat(x: f64) -> L {
     [x; W]
 }
 
@@ -148,6 +148,7 @@ macro_rules! each6 {
         }
     }};
 }
+pub(crate) use each6;
 
 /// Right-hand side of the eight lanes, and the dynamic law force `F_z` of each.
 #[inline(always)]
@@ -503,7 +504,7 @@ fn run_impl(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances) -> 
 /// `|r| <= ln 2 / 2`, Taylor to degree 12 (relative error below 1e-15). Arguments are clamped to
 /// `[-700, 700]` (the controller clips its factors far inside that).
 #[inline(always)]
-fn exp_lanes(x: &L) -> L {
+pub(crate) fn exp_lanes(x: &L) -> L {
     const MAGIC: f64 = 6755399441055744.0; // 1.5 * 2^52: adding it rounds to an integer
                                            // ln 2 split so that n * LN2_HI is exact (fdlibm's constants).
     const LN2_HI: f64 = f64::from_bits(0x3fe6_2e42_fee0_0000);
@@ -538,7 +539,7 @@ fn exp_lanes(x: &L) -> L {
 /// `x = 2^e m`, `m` in `[sqrt(1/2), sqrt 2)`, `ln m = 2 atanh s`, `s = (m - 1)/(m + 1)`, series to
 /// `s^21` (relative error below 1e-15).
 #[inline(always)]
-fn ln_lanes(x: &L) -> L {
+pub(crate) fn ln_lanes(x: &L) -> L {
     const TWO52: f64 = 4503599627370496.0;
     let mut out = [0.0; W];
     for l in 0..W {
@@ -568,7 +569,7 @@ fn ln_lanes(x: &L) -> L {
 }
 
 #[inline]
-fn lane_state(v: &V6, l: usize) -> State {
+pub(crate) fn lane_state(v: &V6, l: usize) -> State {
     State::from_fn(|i, _| v[i][l])
 }
 

@@ -43,12 +43,12 @@ pub(crate) const E5: f64 = -17253.0 / 339200.0;
 pub(crate) const E6: f64 = 22.0 / 525.0;
 pub(crate) const E7: f64 = -1.0 / 40.0;
 // Shampine's dense-output coefficients.
-const D1: f64 = -12715105075.0 / 11282082432.0;
-const D3: f64 = 87487479700.0 / 32700410799.0;
-const D4: f64 = -10690763975.0 / 1880347072.0;
-const D5: f64 = 701980252875.0 / 199316789632.0;
-const D6: f64 = -1453857185.0 / 822651844.0;
-const D7: f64 = 69997945.0 / 29380423.0;
+pub(crate) const D1: f64 = -12715105075.0 / 11282082432.0;
+pub(crate) const D3: f64 = 87487479700.0 / 32700410799.0;
+pub(crate) const D4: f64 = -10690763975.0 / 1880347072.0;
+pub(crate) const D5: f64 = 701980252875.0 / 199316789632.0;
+pub(crate) const D6: f64 = -1453857185.0 / 822651844.0;
+pub(crate) const D7: f64 = 69997945.0 / 29380423.0;
 
 /// The Dopri5 stepper: the seven stages of the last attempted step.
 pub(crate) struct Dopri5<const N: usize> {

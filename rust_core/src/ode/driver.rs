@@ -242,7 +242,7 @@ fn all_finite<const N: usize>(v: &SVector<f64, N>) -> bool {
 
 /// A sign change from `a` (nonzero) to `b` (other sign or exactly zero).
 #[inline]
-fn crosses(a: f64, b: f64) -> bool {
+pub(crate) fn crosses(a: f64, b: f64) -> bool {
     (a > 0.0 && b <= 0.0) || (a < 0.0 && b >= 0.0)
 }
 
@@ -498,26 +498,26 @@ where
 }
 
 /// How an accepted step ended, as the driver continues from it.
-struct StepEnd<const N: usize, M> {
+pub(crate) struct StepEnd<const N: usize, M> {
     /// End of the step as the observer saw it (an event time if truncated).
-    t1: f64,
-    y1: SVector<f64, N>,
+    pub(crate) t1: f64,
+    pub(crate) y1: SVector<f64, N>,
     /// Mode from here on.
-    new_mode: M,
+    pub(crate) new_mode: M,
     /// The run ends here.
-    end: Option<Outcome>,
+    pub(crate) end: Option<Outcome>,
     /// A `Switch` truncated the step: restart there.
-    switched: Option<Switched>,
+    pub(crate) switched: Option<Switched>,
 }
 
 /// What a restart after a `Switch` needs to set the pending events.
-struct Switched {
+pub(crate) struct Switched {
     /// The event that switched.
-    index: usize,
+    pub(crate) index: usize,
     /// Pending state of every event at the start of the truncated step.
-    pend_before: [Option<f64>; MAX_EVENTS],
+    pub(crate) pend_before: [Option<f64>; MAX_EVENTS],
     /// Check times of the events pending in that step (`-inf` for the others).
-    t_check: [f64; MAX_EVENTS],
+    pub(crate) t_check: [f64; MAX_EVENTS],
 }
 
 /// First interior point (of `opts.interior_checks` evenly spaced ones) of a step where an event
@@ -557,7 +557,7 @@ fn hidden_crossing<const N: usize, S: OdeSystem<N>, D: Dense<N>>(
 /// that loop small.
 #[inline(never)]
 #[allow(clippy::too_many_arguments)]
-fn step_events<const N: usize, S, O, D>(
+pub(crate) fn step_events<const N: usize, S, O, D>(
     sys: &S,
     obs: &mut O,
     opts: &Options<N>,

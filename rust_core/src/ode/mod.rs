@@ -17,6 +17,7 @@ pub mod controller;
 pub mod dop853;
 pub mod dopri5;
 pub mod driver;
+pub mod lanes;
 pub mod rodas;
 
 use nalgebra::{SMatrix, SVector};

@@ -1,0 +1,337 @@
+use super::*;
+use crate::model::Params;
+use crate::ode::Method;
+use crate::status::Status;
+use crate::steady::{run, run_observed, run_sampled, run_to_steady, SteadyOutcome};
+
+fn tol(rtol: f64) -> Tolerances {
+    Tolerances::new(rtol)
+}
+
+fn linspace(lo: f64, hi: f64, n: usize) -> Vec<f64> {
+    (0..n).map(|k| if n > 1 { lo + (hi - lo) * k as f64 / (n - 1) as f64 } else { 0.5 * (lo + hi) }).collect()
+}
+
+/// The scenes of the work-precision bench (`_workprecision.make_scenes`): sliders, start
+/// states and the simulated time.
+fn scenes(n: usize) -> Vec<(&'static str, Vec<Slider>, Vec<State>, f64)> {
+    let seed = Params::seed();
+    let uni = Params { contact: ContactModel::Unilateral, ..seed };
+    let stick = Params {
+        friction_law: FrictionLaw::Coulomb,
+        friction_regularization: 1e-5,
+        sliding_speed: 0.01,
+        mu_static: 0.3,
+        stribeck_velocity: 0.02,
+        ..seed
+    };
+    let z = |z0: f64, k: usize| vec![State::new(z0, 0.0, 0.0, 0.0, 0.0, 0.0); k];
+    let mk = |base: Params, name: &str, vals: Vec<f64>| -> Vec<Slider> {
+        vals.into_iter()
+            .map(|v| {
+                let mut p = base;
+                p.set(name, v).unwrap();
+                Slider::new(p).unwrap()
+            })
+            .collect()
+    };
+    vec![
+        ("seed", mk(seed, "mu", linspace(0.205, 0.225, n)), z(1e-6, n), 0.5),
+        ("unilateral", mk(uni, "mu", linspace(0.29, 0.31, n)), z(30e-6, n), 0.2),
+        ("stick_slip", mk(stick, "mu", linspace(0.21, 0.22, 2)), z(1e-6, 2), 0.2),
+        ("large_amplitude", mk(Params { mu: 0.35, ..uni }, "normal_load", linspace(145.0, 155.0, n)), z(40e-6, n), 0.2),
+    ]
+}
+
+fn bits(r: &LaneResult) -> Vec<u64> {
+    let mut v: Vec<u64> = r.run.y.iter().map(|x| x.to_bits()).collect();
+    v.push(r.run.t.to_bits());
+    let e = r.run.extremes;
+    v.extend([e.min_normal_force, e.max_gap, e.min_slip_velocity, e.max_abs_z].map(f64::to_bits));
+    v.extend([r.run.stats.n_rhs, r.run.stats.n_accept, r.run.stats.n_reject, r.run.stats.n_events]);
+    v.push(r.run.status.code() as u64);
+    for s in &r.samples {
+        v.extend(s.iter().map(|x| x.to_bits()));
+    }
+    if let Some(s) = &r.summary {
+        v.extend([s.omega, s.period, s.t_end, s.z_amp[0], s.fraction_off_disk].map(f64::to_bits));
+        v.push(s.outcome as u64);
+    }
+    for (i, t) in &r.events {
+        v.push(*i as u64);
+        v.push(t.to_bits());
+    }
+    v
+}
+
+/// Both paths against a tight DOP853 reference on every scene: the lane path's error is of the
+/// scalar path's size (it is the same method; the two differ by rounding per step), step counts
+/// agree to a few per cent, and the located events are the same ones at the same times.
+#[test]
+fn agrees_with_the_scalar_path_on_every_scene() {
+    for (name, s, y0, t_end) in scenes(12) {
+        for rtol in [1e-6, 1e-9] {
+            let lanes = run_lanes(&s, &y0, t_end, &tol(rtol), Task::Events);
+            let (mut worst_l, mut worst_s, mut steps_l, mut steps_s) = (0.0f64, 0.0f64, 0u64, 0u64);
+            for i in 0..s.len() {
+                let r = run(&s[i], &y0[i], t_end, Method::Dop853, &tol(1e-13));
+                let sc = run(&s[i], &y0[i], t_end, Method::Dopri5, &tol(rtol));
+                let b = &lanes[i].run;
+                assert_eq!(b.status, sc.status, "{name} #{i}");
+                assert_eq!(b.t, sc.t, "{name} #{i}");
+                let scale = r.extremes.max_abs_z;
+                let (e_l, e_s) = ((b.y[0] - r.y[0]).abs() / scale, (sc.y[0] - r.y[0]).abs() / scale);
+                worst_l = worst_l.max(e_l);
+                worst_s = worst_s.max(e_s);
+                assert!(e_l <= 10.0 * e_s + 10.0 * rtol, "{name} rtol {rtol} #{i}: lanes {e_l:e}, scalar {e_s:e}");
+                let (nl, ns) = (b.stats.n_accept + b.stats.n_reject, sc.stats.n_accept + sc.stats.n_reject);
+                assert!((nl as f64 - ns as f64).abs() <= 0.05 * ns as f64 + 3.0, "{name} #{i}: {nl} vs {ns} steps");
+                assert_eq!(b.stats.n_events, sc.stats.n_events, "{name} #{i}: events");
+                let (el, es) = (b.extremes, sc.extremes);
+                assert!((el.max_abs_z - es.max_abs_z).abs() <= 1e-3 * es.max_abs_z, "{name} #{i}");
+                assert!((el.min_normal_force - es.min_normal_force).abs() <= 1e-3 * s[i].p.normal_load, "{name} #{i}");
+                steps_l += nl;
+                steps_s += ns;
+            }
+            println!(
+                "{name} rtol {rtol:e}: max |z - z_ref|/max|z| lanes {worst_l:.2e}, scalar {worst_s:.2e}; steps lanes {steps_l}, scalar {steps_s}"
+            );
+        }
+    }
+}
+
+/// Scalar event log of one run.
+struct Log(Vec<(usize, f64)>);
+impl Observer<6, ContactMode> for Log {
+    fn on_event(&mut self, i: usize, t: f64, _y: &State, _b: ContactMode, _a: ContactMode) -> Control {
+        self.0.push((i, t));
+        Control::Continue
+    }
+}
+
+/// Every contact opening and closing of the unilateral scenes, located by both paths: the same
+/// events in the same order at times that agree to 1e-10 s.
+#[test]
+fn event_times_agree_to_1e_10_s() {
+    for (name, s, y0, t_end) in scenes(6) {
+        if name == "seed" || name == "stick_slip" {
+            continue;
+        }
+        let t = tol(1e-10);
+        let lanes = run_lanes(&s, &y0, t_end, &t, Task::Events);
+        let mut worst = 0.0f64;
+        let mut n = 0;
+        for i in 0..s.len() {
+            let (_, log) = run_observed(&s[i], &y0[i], t_end, Method::Dopri5, &t, Log(Vec::new()));
+            let ev = &lanes[i].events;
+            assert_eq!(ev.len(), log.0.len(), "{name} #{i}");
+            for (a, b) in ev.iter().zip(&log.0) {
+                assert_eq!(a.0, b.0, "{name} #{i}");
+                worst = worst.max((a.1 - b.1).abs());
+            }
+            n += ev.len();
+        }
+        println!("{name}: {n} events, largest time difference {worst:.2e} s");
+        assert!(n > 30 && worst < 1e-10, "{name}: {n} events, {worst:e} s");
+    }
+}
+
+#[test]
+fn samples_agree_with_the_scalar_path() {
+    let te: Vec<f64> = (0..=200).map(|k| k as f64 * 1e-3).collect();
+    for (name, s, y0, _) in scenes(6) {
+        if name == "stick_slip" {
+            continue;
+        }
+        let rtol = 1e-8;
+        let lanes = run_lanes(&s, &y0, 0.2, &tol(rtol), Task::Sampled(&te));
+        for i in 0..s.len() {
+            let (_, ys) = run_sampled(&s[i], &y0[i], 0.2, Method::Dopri5, &tol(rtol), &te);
+            let (_, yr) = run_sampled(&s[i], &y0[i], 0.2, Method::Dop853, &tol(1e-13), &te);
+            let scale = yr.iter().map(|y| y[0].abs()).fold(0.0, f64::max);
+            assert_eq!(lanes[i].samples.len(), te.len());
+            let worst_l = lanes[i].samples.iter().zip(&yr).map(|(a, b)| (a[0] - b[0]).abs()).fold(0.0, f64::max);
+            let worst_s = ys.iter().zip(&yr).map(|(a, b)| (a[0] - b[0]).abs()).fold(0.0, f64::max);
+            assert!(worst_l <= 10.0 * worst_s + 10.0 * rtol * scale, "{name} #{i}: {worst_l:e} vs {worst_s:e}");
+        }
+    }
+}
+
+/// The seed's unilateral bouncing cycle (MODEL.md §6: 640.371 rad/s, A1 23.646 um, 11.5 % of the
+/// period off the disk), reached on the lane path from 5 % outside the continued cycle.
+#[test]
+fn seed_bouncing_cycle_on_the_lane_path() {
+    let (s, y) = crate::shooting::tests::bouncing_cycle_start();
+    let opts = SteadyOptions { t_max: 10.0, tol: tol(1e-9), ..SteadyOptions::default() };
+    let starts = [y * 1.05, y * 1.02, y];
+    for st in &starts {
+        let sc = run_to_steady(&s, st, &SteadyOptions { t_max: 10.0, tol: tol(1e-9), ..SteadyOptions::default() });
+        println!("scalar: {:?} w {:.4} t {:.2}", sc.outcome, sc.omega, sc.t_end);
+    }
+    let sliders = [s; 3];
+    let r = run_lanes(&sliders, &starts, 0.0, &tol(1e-9), Task::Steady { opts: &opts, decay: None });
+    for (k, x) in r.iter().enumerate() {
+        let m = x.summary.expect("steady");
+        println!(
+            "start {k}: {:?} w {:.4} A1 {:.4e} off {:.4} t {:.2} steps {}",
+            m.outcome, m.omega, m.z_amp[0], m.fraction_off_disk, m.t_end, m.stats.n_accept
+        );
+        assert_eq!(m.outcome, SteadyOutcome::Periodic);
+        assert!((m.omega - 640.371).abs() < 0.01, "w = {}", m.omega);
+        assert!((m.z_amp[0] - 23.646e-6).abs() < 0.01e-6, "A1 {}", m.z_amp[0]);
+        assert!((m.fraction_off_disk - 0.115).abs() < 0.001, "off {}", m.fraction_off_disk);
+        let sc = run_to_steady(&s, &starts[k], &opts);
+        assert_eq!(sc.outcome, m.outcome);
+        assert!((sc.omega - m.omega).abs() < 1e-4 * m.omega);
+    }
+}
+
+/// Runs to steady state that decay, escape or settle, well inside their basins: the lane path
+/// gives the scalar path's outcome, frequency and amplitude.
+#[test]
+fn steady_outcomes_agree_with_the_scalar_path() {
+    let uni = Params { contact: ContactModel::Unilateral, ..Params::seed() };
+    let mut s = Vec::new();
+    let mut y0 = Vec::new();
+    for (k, mu) in [0.15, 0.18, 0.25, 0.30, 0.35].into_iter().enumerate() {
+        for contact in [ContactModel::Bilateral, ContactModel::Unilateral] {
+            s.push(Slider::new(Params { mu, contact, ..uni }).unwrap());
+            y0.push(State::new(1e-6 * (1 + k) as f64, 0.0, 0.0, 0.0, 0.0, 0.0));
+        }
+    }
+    let opts = SteadyOptions { t_max: 10.0, tol: tol(1e-8), ..SteadyOptions::default() };
+    // One call per contact model (a call shares the model).
+    let mut r: Vec<Option<LaneResult>> = vec![None; s.len()];
+    for k in 0..2 {
+        let idx: Vec<usize> = (k..s.len()).step_by(2).collect();
+        let sk: Vec<Slider> = idx.iter().map(|&i| s[i]).collect();
+        let yk: Vec<State> = idx.iter().map(|&i| y0[i]).collect();
+        for (j, x) in
+            run_lanes(&sk, &yk, 0.0, &tol(1e-8), Task::Steady { opts: &opts, decay: None }).into_iter().enumerate()
+        {
+            r[idx[j]] = Some(x);
+        }
+    }
+    let r: Vec<LaneResult> = r.into_iter().map(|x| x.unwrap()).collect();
+    let mut outcomes = Vec::new();
+    for i in 0..s.len() {
+        let m = r[i].summary.expect("steady");
+        let sc = run_to_steady(&s[i], &y0[i], &opts);
+        println!(
+            "mu {:.2} {:?}: lanes {:?} w {:.3} A1 {:.4e} t {:.3}; scalar {:?} w {:.3} A1 {:.4e} t {:.3}",
+            s[i].p.mu,
+            s[i].p.contact,
+            m.outcome,
+            m.omega,
+            m.z_amp[0],
+            m.t_end,
+            sc.outcome,
+            sc.omega,
+            sc.z_amp[0],
+            sc.t_end
+        );
+        assert_eq!(m.outcome, sc.outcome, "#{i}");
+        assert_eq!(m.status, sc.status, "#{i}");
+        if m.outcome == SteadyOutcome::Periodic {
+            assert!((m.omega - sc.omega).abs() < 1e-5 * sc.omega, "#{i}");
+            assert!((m.z_amp[0] - sc.z_amp[0]).abs() < 1e-4 * sc.z_amp[0], "#{i}");
+        }
+        outcomes.push(m.outcome);
+    }
+    // The set covers every way a run ends.
+    for o in [SteadyOutcome::Decayed, SteadyOutcome::Periodic, SteadyOutcome::Diverged] {
+        assert!(outcomes.contains(&o), "{o:?} missing: {outcomes:?}");
+    }
+}
+
+/// A trajectory's result does not depend on which others share its batch, their order, or the
+/// code path (portable vs the SIMD copy picked at run time): bitwise.
+#[test]
+fn results_do_not_depend_on_the_batch() {
+    let te: Vec<f64> = (0..50).map(|k| k as f64 * 2e-3).collect();
+    let opts = SteadyOptions { t_max: 0.5, tol: tol(1e-7), ..SteadyOptions::default() };
+    for (name, s, y0, _) in scenes(13) {
+        if name == "stick_slip" {
+            continue;
+        }
+        for task in [Task::Final, Task::Sampled(&te), Task::Steady { opts: &opts, decay: None }, Task::Events] {
+            let t = tol(1e-7);
+            let all = run_lanes(&s, &y0, 0.1, &t, task);
+            for i in (0..s.len()).step_by(4) {
+                let one = run_lanes(&s[i..i + 1], &y0[i..i + 1], 0.1, &t, task);
+                assert_eq!(bits(&one[0]), bits(&all[i]), "{name} #{i} alone");
+            }
+            let perm: Vec<usize> = (0..s.len()).map(|k| (k * 5 + 3) % s.len()).collect();
+            let sp: Vec<Slider> = perm.iter().map(|&k| s[k]).collect();
+            let yp: Vec<State> = perm.iter().map(|&k| y0[k]).collect();
+            let rp = run_lanes(&sp, &yp, 0.1, &t, task);
+            for (j, &k) in perm.iter().enumerate() {
+                assert_eq!(bits(&rp[j]), bits(&all[k]), "{name} permuted #{k}");
+            }
+            let portable = match (s[0].p.contact == ContactModel::Unilateral, s[0].p.friction_law) {
+                (true, _) => run_impl::<true, false>(&s, &y0, 0.1, &t, task),
+                (false, _) => run_impl::<false, false>(&s, &y0, 0.1, &t, task),
+            };
+            for i in 0..s.len() {
+                assert_eq!(bits(&portable[i]), bits(&all[i]), "{name} portable #{i}");
+            }
+        }
+    }
+}
+
+#[test]
+fn failures_and_trivial_runs() {
+    let uni = Slider::new(Params { contact: ContactModel::Unilateral, ..Params::seed() }).unwrap();
+    let mut y0 = vec![State::new(1e-6, 0.0, 0.0, 0.0, 0.0, 0.0); 4];
+    y0[1][3] = f64::NAN;
+    let r = run_lanes(&[uni; 4], &y0, 0.1, &tol(1e-6), Task::Final);
+    assert_eq!(r[1].run.status, Status::NonFinite);
+    assert!([0, 2, 3].iter().all(|&i| r[i].run.status == Status::Success && r[i].run.t == 0.1));
+    let r = run_lanes(&[uni], &y0[..1], 0.0, &tol(1e-6), Task::Final);
+    assert_eq!((r[0].run.status, r[0].run.stats.n_rhs), (Status::Success, 0));
+    assert!(run_lanes(&[], &[], 1.0, &tol(1e-6), Task::Final).is_empty());
+    // A step budget ends the run as on the scalar path.
+    let t = Tolerances { max_steps: Some(50), ..tol(1e-6) };
+    let r = run_lanes(&[uni], &y0[..1], 1.0, &t, Task::Final);
+    let sc = run(&uni, &y0[0], 1.0, Method::Dopri5, &t);
+    assert_eq!((r[0].run.status, sc.status), (Status::MaxSteps, Status::MaxSteps));
+    assert!((r[0].run.t - sc.t).abs() < 1e-9 * sc.t, "{} vs {}", r[0].run.t, sc.t);
+    assert_eq!(r[0].run.stats.n_accept + r[0].run.stats.n_reject, 50);
+}
+
+/// Throughput against the scalar driver in the same process, one thread, best of five:
+/// `cargo test --release -p tribosweep-core lanes::tests::throughput -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn throughput() {
+    use std::time::Instant;
+    let n = 512;
+    for (name, s, y0, t_end) in scenes(n) {
+        if name == "stick_slip" {
+            continue;
+        }
+        let t = tol(1e-6);
+        let time = |f: &dyn Fn()| {
+            let t0 = Instant::now();
+            f();
+            t0.elapsed().as_secs_f64()
+        };
+        let mut best = [f64::INFINITY; 2];
+        for _ in 0..5 {
+            best[0] = best[0].min(time(&|| {
+                std::hint::black_box(run_lanes(&s, &y0, t_end, &t, Task::Final));
+            }));
+            best[1] = best[1].min(time(&|| {
+                for i in 0..s.len() {
+                    std::hint::black_box(run(&s[i], &y0[i], t_end, Method::Dopri5, &t));
+                }
+            }));
+        }
+        println!(
+            "{name}: lanes {:.0} traj/s, scalar {:.0} traj/s ({:.2}x)",
+            n as f64 / best[0],
+            n as f64 / best[1],
+            best[1] / best[0]
+        );
+    }
+}
