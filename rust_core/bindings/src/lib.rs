@@ -13,6 +13,7 @@ use std::collections::HashMap;
 use tribosweep_core::ensemble::par_map;
 use tribosweep_core::linear::{self, LinearStability};
 use tribosweep_core::model::{ContactModel, FrictionLaw, Params, Slider, State, PARAM_NAMES};
+use tribosweep_core::ode::lanes::{self, LaneResult, Task};
 use tribosweep_core::ode::{Method, Stats};
 use tribosweep_core::shooting::{self, PeriodicOrbit, ShootingOptions};
 use tribosweep_core::status::Status;
@@ -308,49 +309,52 @@ fn ensemble<'py>(
     let t_eval: Option<Vec<f64>> = t_eval.map(|a| a.as_slice().map(|s| s.to_vec())).transpose()?;
     let items: Vec<(Params, State)> = params.into_iter().zip(y0s).collect();
     let d = PyDict::new(py);
+    let p0 = items.first().map(|it| it.0);
+    // The lane-batched Dormand-Prince paths: `ode::batch` for the bilateral constant-mu end state,
+    // `ode::lanes` for everything else it supports (unilateral contact, the Coulomb/Stribeck law,
+    // t_eval, runs to steady state). Same method and tolerances as the scalar driver, to
+    // integration accuracy; each trajectory's result does not depend on which others share its
+    // batch (tested in the core), so any grouping is deterministic for any thread count.
+    let lanes_ok = method == Method::Dopri5 && p0.is_some_and(|p| lanes::supports(&p));
     match kind {
         "final" | "sampled" => {
             if kind == "sampled" && t_eval.is_none() {
                 return Err(CoreError("kind = 'sampled' needs t_eval".into()).into());
             }
             let te = t_eval.unwrap_or_default();
-            let p0 = items.first().map(|it| it.0);
             let batchable = te.is_empty()
                 && !tol.has_limits()
                 && method == Method::Dopri5
                 && p0.is_some_and(|p| p.contact == ContactModel::Bilateral && p.friction_law == FrictionLaw::Constant);
-            if batchable {
-                // The lane-batched Dormand-Prince path (ode::batch): same method and tolerances, 8
-                // trajectories per SIMD batch. Each trajectory's result does not depend on which
-                // others share its batch (tested in ode::batch), so any grouping is deterministic for
-                // any thread count; a panic marks its whole group.
-                // Groups big enough to keep the 8 lanes busy (the last long runs of a small group
-                // leave lanes idle), small enough to spread over the threads.
-                let nthreads = threads.unwrap_or_else(tribosweep_core::ensemble::default_threads).max(1);
-                let group = (items.len() / (4 * nthreads)).clamp(64, 1024);
-                let groups: Vec<&[(Params, State)]> = items.chunks(group).collect();
-                let out: Vec<Vec<(RunResult, String)>> = py.detach(|| {
-                    par_map(
-                        &groups,
-                        threads,
-                        |g| {
-                            let sliders: Vec<Slider> =
-                                g.iter().map(|(p, _)| Slider::new(*p).expect("validated")).collect();
-                            let y0s: Vec<State> = g.iter().map(|(_, y)| *y).collect();
+            if batchable || lanes_ok {
+                let task = if te.is_empty() { Task::Final } else { Task::Sampled(&te) };
+                let out = py.detach(|| {
+                    grouped(&items, threads, |sliders, y0s, _| {
+                        if batchable {
                             // The batch locates an escape inside its step, as the scalar path does.
-                            tribosweep_core::ode::batch::run_bilateral_batch(&sliders, &y0s, t_end, &tol)
+                            tribosweep_core::ode::batch::run_bilateral_batch(sliders, y0s, t_end, &tol)
                                 .into_iter()
-                                .map(|r| (r, String::new()))
+                                .map(|run| LaneResult { run, samples: Vec::new(), summary: None, events: Vec::new() })
                                 .collect()
-                        },
-                        |msg| vec![(failed_run(Status::Panic), format!("panic: {msg}")); group],
-                    )
+                        } else {
+                            lanes::run_lanes(sliders, y0s, t_end, &tol, task)
+                        }
+                    })
                 });
-                let flat: Vec<(RunResult, String)> =
-                    out.into_iter().zip(&groups).flat_map(|(v, g)| v.into_iter().take(g.len())).collect();
-                let runs: Vec<RunResult> = flat.iter().map(|o| o.0).collect();
-                let reasons: Vec<String> = flat.iter().map(|o| o.1.clone()).collect();
+                let runs: Vec<RunResult> = out.iter().map(|o| o.0.run).collect();
+                let reasons: Vec<String> = out.iter().map(|o| o.1.clone()).collect();
                 runs_into(&d, &runs, &reasons)?;
+                if !te.is_empty() {
+                    let mut y = Array3::<f64>::from_elem((n, te.len(), 6), f64::NAN);
+                    for (i, o) in out.iter().enumerate() {
+                        for (j, s) in o.0.samples.iter().enumerate() {
+                            for c in 0..6 {
+                                y[(i, j, c)] = s[c];
+                            }
+                        }
+                    }
+                    d.set_item("y", y.into_pyarray(py))?;
+                }
                 return Ok(d);
             }
             let out: Vec<(RunResult, Vec<State>, String)> = py.detach(|| {
@@ -394,6 +398,20 @@ fn ensemble<'py>(
                 n_fourier,
                 ..SteadyOptions::default()
             };
+            if lanes_ok {
+                let out = py.detach(|| {
+                    grouped(&items, threads, |sliders, y0s, range| {
+                        let decay = decays.as_ref().map(|d| &d[range]);
+                        lanes::run_lanes(sliders, y0s, t_end, &tol, Task::Steady { opts: &opts, decay })
+                    })
+                });
+                let sums: Vec<(Summary, String)> = out
+                    .into_iter()
+                    .map(|(r, reason)| (r.summary.unwrap_or_else(|| Summary::failed(r.run.status)), reason))
+                    .collect();
+                summaries_into(&d, &sums)?;
+                return Ok(d);
+            }
             let rows: Vec<(usize, &(Params, State))> = items.iter().enumerate().collect();
             let out: Vec<(Summary, String)> = py.detach(|| {
                 par_map(
@@ -419,6 +437,40 @@ fn ensemble<'py>(
         }
     }
     Ok(d)
+}
+
+/// Run `f` on groups of the items in parallel (each group a slice of sliders and start states
+/// and its index range), one result per item in input order. Groups are big enough to keep the
+/// eight lanes busy (the last long runs of a small group leave lanes idle) and small enough to
+/// spread over the threads. A panic marks its whole group.
+fn grouped<F>(items: &[(Params, State)], threads: Option<usize>, f: F) -> Vec<(LaneResult, String)>
+where
+    F: Fn(&[Slider], &[State], std::ops::Range<usize>) -> Vec<LaneResult> + Sync,
+{
+    let nthreads = threads.unwrap_or_else(tribosweep_core::ensemble::default_threads).max(1);
+    let group = (items.len() / (4 * nthreads)).clamp(64, 1024);
+    let ranges: Vec<std::ops::Range<usize>> =
+        (0..items.len()).step_by(group).map(|a| a..(a + group).min(items.len())).collect();
+    let out: Vec<Vec<(LaneResult, String)>> = par_map(
+        &ranges,
+        threads,
+        |r| {
+            let g = &items[r.clone()];
+            let sliders: Vec<Slider> = g.iter().map(|(p, _)| Slider::new(*p).expect("validated")).collect();
+            let y0s: Vec<State> = g.iter().map(|(_, y)| *y).collect();
+            f(&sliders, &y0s, r.clone()).into_iter().map(|x| (x, String::new())).collect()
+        },
+        |msg| {
+            let failed = LaneResult {
+                run: failed_run(Status::Panic),
+                samples: Vec::new(),
+                summary: Some(Summary::failed(Status::Panic)),
+                events: Vec::new(),
+            };
+            vec![(failed, format!("panic: {msg}")); group]
+        },
+    );
+    out.into_iter().zip(&ranges).flat_map(|(v, r)| v.into_iter().take(r.len())).collect()
 }
 
 fn summaries_into(d: &Bound<'_, PyDict>, out: &[(Summary, String)]) -> PyResult<()> {
