@@ -120,9 +120,7 @@ def settings(
 
 
 def _count(name: str, value, low: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
-        raise ValueError(f"{name} = {value!r} is out of range: must be an integer >= {low}")
-    if value > 1_000_000:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not low <= value <= 1_000_000:
         raise ValueError(f"{name} = {value!r} is out of range: must be an integer in [{low}, 1000000]")
     return int(value)
 
