@@ -14,6 +14,12 @@ Stages (MODEL.md §4, §6):
 ``transient``
     A run to steady state in the Rust core (``tribosweep._core.ensemble(kind="steady")``), from
     a small disturbance, classified from its summary.
+``irregular`` (after a transient)
+    A run that stayed bounded but neither repeated nor decayed by ``t_max`` is sustained irregular
+    motion, an answer: ``tribosweep._irregular`` measures it from where it ended (the range and
+    dominant frequency of ``z`` over a window, the largest finite-time Lyapunov exponent with its
+    standard error), in batched core calls. A failed measurement leaves the point
+    ``unstable_undetermined`` (``failed`` where sliding is stable) with its failure status and reason.
 
 ``tidf``
     The triple-input describing function of the bilateral model (Rust, all roots in 150-3000
@@ -32,7 +38,8 @@ The sweep methods combine them, modelling no more than each point needs:
   is a predicted cycle (``self_excited``, decided by tidf, flagged as a prediction); otherwise
   ``unstable_undetermined``.
 - ``shooting``: as ``tidf``, then the orbit of every physical root (its stability and the DF error).
-- ``transient``: every point integrated from the disturbance ``y0``.
+- ``transient``: every point integrated from the disturbance ``y0`` (``irregular`` where it neither
+  repeats nor decays).
 - ``auto``: linear; at stable points the describing function; shooting only where the disturbance
   is within a factor ``SHOOT_MARGIN`` of the describing function's amplitude (there the DF's error
   matters); a transient only where those cannot decide: unstable sliding (the DF has no cycle

@@ -551,7 +551,9 @@ def sweep(
     xarray.Dataset
         Dimensions ``normal_load``, ``arm_length``, ``sliding_speed`` (+ extras); per point
         ``regime``, ``status``, ``reason``, ``decided_by``, ``bistable``, linear stability,
-        cycle summary, wear and cost variables (see ``tribosweep._chunk.POINT_VARIABLES``).
+        cycle summary, irregular motion (``irregular_z_min``, ``irregular_z_max``,
+        ``irregular_omega``, ``irregular_ftle``, ``irregular_ftle_se``; NaN elsewhere), wear and cost
+        variables (see ``tribosweep._chunk.POINT_VARIABLES``).
         With ``output`` the Dataset is opened lazily from the file.
 
     Raises
