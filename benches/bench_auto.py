@@ -56,7 +56,8 @@ def main(argv=None) -> int:
     full = ts.sweep(method="transient", **axes)
     t_full = time.perf_counter() - t0
     ra, rt = auto.regime.values.ravel(), full.regime.values.ravel()
-    settled = (full.status.values.ravel() == 0) & (rt != ts.REGIME_NAMES.index("unstable_undetermined"))
+    settled = (full.status.values.ravel() == 0) & ~np.isin(
+        rt, [ts.REGIME_NAMES.index("unstable_undetermined"), ts.REGIME_NAMES.index("irregular")])
     agree = (ra[settled] == rt[settled]).mean() if settled.any() else float("nan")
     decided = np.bincount(auto.decided_by.values.ravel(), minlength=4)
     print(f"auto vs transient over {n} points: regime agreement {agree:.1%} at the {settled.sum()} points where the "

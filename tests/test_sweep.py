@@ -260,8 +260,8 @@ def _summary(outcome, status="success", off=0.0, vmin=0.1, reason=""):
         (_summary("periodic", off=0.115, vmin=-0.01), False, "stick_slip", "transient"),
         (_summary("periodic", vmin=0.0), False, "stick_slip", "transient"),
         (_summary("diverged"), False, "diverged", "transient"),
-        (_summary("unsettled", status="not_converged"), False, "unstable_undetermined", "linear"),
-        (_summary("unsettled", status="not_converged"), True, "steady_sliding", "linear"),
+        (_summary("unsettled", status="not_converged"), False, "irregular", "transient"),
+        (_summary("unsettled", status="not_converged"), True, "irregular", "transient"),
         (_summary("failed", status="panic", reason="panic: boom"), False, "failed", "transient"),
         (_summary("failed", status="step_too_small"), True, "failed", "transient"),
     ],
@@ -270,13 +270,23 @@ def test_classification_of_transient_summaries(summary, stable, regime, decided_
     r, status, reason, decided = _chunk._classify(summary, np.array([stable]), 7.0)
     assert _chunk.REGIME_NAMES[r[0]] == regime
     assert _chunk.DECIDED_BY_NAMES[decided[0]] == decided_by
-    assert status[0] == summary["status"][0]
+    if regime == "irregular":
+        # Bounded, unsettled: an answer (status success), with what it is in the reason.
+        assert status[0] == ts.STATUS["success"]
+        assert "neither periodic nor decayed by t_max = 7 s" in reason[0]
+    else:
+        assert status[0] == summary["status"][0]
     if regime == "failed":
         assert ts.STATUS_NAMES[summary["status"][0]] in reason[0]
     if summary["reason"][0]:
         assert summary["reason"][0] in reason[0]
-    if decided_by == "linear":
-        assert "did not settle by t_max = 7 s" in reason[0]
+
+
+def test_an_unsettled_run_with_a_non_finite_end_is_a_failure_not_irregular():
+    s = _summary("unsettled", status="not_converged") | {"y_end": np.array([[np.nan, 0, 0, 0, 0, 0]])}
+    r, status, reason, _ = _chunk._classify(s, np.array([False]), 7.0)
+    assert _chunk.REGIME_NAMES[r[0]] == "failed"
+    assert status[0] != ts.STATUS["success"] and "unsettled" in reason[0]
 
 
 def test_a_failed_point_is_data_not_an_exception(monkeypatch):
@@ -300,13 +310,23 @@ def test_a_failed_point_is_data_not_an_exception(monkeypatch):
 
 
 @requires_driver
-def test_an_unsettled_run_leaves_the_regime_to_linear_stability():
+def test_an_unsettled_bounded_run_is_irregular_unless_it_is_sliding_still_decaying():
+    # 10 N: sliding unstable; the run is bounded and unsettled at t_max: irregular motion, measured.
+    # 50 N: sliding stable, the 1 um disturbance (< |z_st|/2) still decaying: sliding, by linear stability.
     ds = ts.sweep(normal_load=[10.0, 50.0], method="transient", t_max=1e-3, progress=False)
-    assert ds.regime.values.ravel().tolist() == [REGIME["unstable_undetermined"], REGIME["steady_sliding"]]
-    assert (ds.status.values == ts.STATUS["not_converged"]).all()
-    assert (ds.decided_by.values == _chunk.DECIDED_BY["linear"]).all()
-    assert "did not settle by t_max = 0.001 s" in ds.reason.values.ravel()[0]
+    assert ds.regime.values.ravel().tolist() == [REGIME["irregular"], REGIME["steady_sliding"]]
+    assert ds.status.values.ravel().tolist() == [ts.STATUS["success"], ts.STATUS["not_converged"]]
+    assert ds.decided_by.values.ravel().tolist() == [_chunk.DECIDED_BY["transient"], _chunk.DECIDED_BY["linear"]]
+    reason = ds.reason.values.ravel()
+    assert "neither periodic nor decayed by t_max = 0.001 s" in reason[0] and "FTLE" in reason[0]
+    assert "did not settle by t_max = 0.001 s" in reason[1] and "still decaying" in reason[1]
     assert (ds.n_rhs.values > 0).all()
+    irr = {k: ds[k].values.ravel() for k in ("irregular_z_min", "irregular_z_max", "irregular_omega", "irregular_ftle",
+                                             "irregular_ftle_se")}  # fmt: skip
+    assert all(np.isfinite(v[0]) and np.isnan(v[1]) for v in irr.values())
+    assert irr["irregular_z_min"][0] < irr["irregular_z_max"][0]
+    for k in irr:
+        assert ds[k].attrs["units"] and ds[k].attrs["long_name"]
 
 
 @requires_driver
@@ -527,7 +547,9 @@ def test_auto_agrees_with_transient_where_the_transient_settles():
     auto = ts.sweep(method="auto", **kw)
     full = ts.sweep(method="transient", **kw)
     ra, rt = auto.regime.values.ravel(), full.regime.values.ravel()
-    settled = (full.status.values.ravel() == ts.STATUS["success"]) & (rt != REGIME["unstable_undetermined"])
+    # Settled: the transient reached a cycle, sliding or an escape (irregular motion did not settle).
+    settled = (full.status.values.ravel() == ts.STATUS["success"]) & ~np.isin(
+        rt, [REGIME["unstable_undetermined"], REGIME["irregular"]])
     assert settled.sum() >= 8, settled
     assert np.array_equal(ra[settled], rt[settled]), (ra, rt)
     # auto decides many points without integrating, and without the bistability question (which
@@ -535,7 +557,8 @@ def test_auto_agrees_with_transient_where_the_transient_settles():
     assert (auto.decided_by.values != _chunk.DECIDED_BY["transient"]).sum() >= 4
     lean = ts.sweep(method="auto", census=False, **kw)
     assert np.array_equal(lean.regime.values, auto.regime.values)
-    cheap = (lean.decided_by.values.ravel() != _chunk.DECIDED_BY["transient"]) & (lean.regime.values.ravel() != REGIME["unstable_undetermined"])
+    cheap = (lean.decided_by.values.ravel() != _chunk.DECIDED_BY["transient"]) & ~np.isin(
+        lean.regime.values.ravel(), [REGIME["unstable_undetermined"], REGIME["irregular"]])
     assert np.all(lean.n_rhs.values.ravel()[cheap] == 0) and np.all(full.n_rhs.values.ravel()[cheap] > 10_000)
     assert lean.n_rhs.values.sum() < full.n_rhs.values.sum()
 

@@ -14,6 +14,12 @@ Stages (MODEL.md §4, §6):
 ``transient``
     A run to steady state in the Rust core (``tribosweep._core.ensemble(kind="steady")``), from
     a small disturbance, classified from its summary.
+``irregular`` (after a transient)
+    A run that stayed bounded but neither repeated nor decayed by ``t_max`` is sustained irregular
+    motion, an answer: ``tribosweep._irregular`` measures it from where it ended (the range and
+    dominant frequency of ``z`` over a window, the largest finite-time Lyapunov exponent with its
+    standard error), in batched core calls. A failed measurement leaves the point
+    ``unstable_undetermined`` (``failed`` where sliding is stable) with its failure status and reason.
 
 ``tidf``
     The triple-input describing function of the bilateral model (Rust, all roots in 150-3000
@@ -25,13 +31,15 @@ Stages (MODEL.md §4, §6):
 
 The sweep methods combine them, modelling no more than each point needs:
 
-- ``linear``: eigenvalues only; an unstable point is ``unstable_undetermined``.
+- ``linear``: eigenvalues only; an unstable point is ``unstable_undetermined`` (by choice: this
+  method simulates nothing, and says so in the point's reason).
 - ``tidf``: linear, then the describing function at every point. Stable points: steady sliding,
   with the saddle amplitude when there is a root. Unstable points: a root without contact opening
   is a predicted cycle (``self_excited``, decided by tidf, flagged as a prediction); otherwise
   ``unstable_undetermined``.
 - ``shooting``: as ``tidf``, then the orbit of every physical root (its stability and the DF error).
-- ``transient``: every point integrated from the disturbance ``y0``.
+- ``transient``: every point integrated from the disturbance ``y0`` (``irregular`` where it neither
+  repeats nor decays).
 - ``auto``: linear; at stable points the describing function; shooting only where the disturbance
   is within a factor ``SHOOT_MARGIN`` of the describing function's amplitude (there the DF's error
   matters); a transient only where those cannot decide: unstable sliding (the DF has no cycle
@@ -55,7 +63,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from . import _census, _core
+from . import _census, _core, _irregular
 from ._flags import OUTCOME_NAMES, STATUS, STATUS_NAMES
 
 #: Regime of a sweep point, in code order (the netCDF ``flag_values`` of ``regime``).
@@ -67,6 +75,7 @@ REGIME_NAMES: tuple[str, ...] = (
     "diverged",
     "failed",
     "unstable_undetermined",
+    "irregular",
 )
 #: One-line meaning of every regime, for documentation and the ``regime`` variable's ``comment``.
 REGIME_DOC: dict[str, str] = {
@@ -76,8 +85,10 @@ REGIME_DOC: dict[str, str] = {
     "stick_slip": "the sliding velocity reached zero (outside the constant-friction law)",
     "diverged": "|z| reached the escape limit",
     "failed": "the computation failed (see status and reason)",
-    "unstable_undetermined": "sliding unstable; the cycle was not computed (method=linear) or the run did not "
-    "settle by t_max",
+    "unstable_undetermined": "sliding unstable and the motion not determined: method=linear computes no motion (by "
+    "choice), or the run was bounded but its measurement failed numerically (see status and reason)",
+    "irregular": "sustained irregular motion: bounded, neither periodic nor decayed by t_max (quasi-periodic: "
+    "irregular_ftle about 0; chaotic: irregular_ftle > 0; see irregular_*)",
 }
 REGIME: dict[str, int] = {name: i for i, name in enumerate(REGIME_NAMES)}
 
@@ -100,6 +111,10 @@ WEAR_APPLICABILITY_NAMES: tuple[str, ...] = ("mild_wear_regime", "outside_mild_w
 #: Default longest simulated time of a transient run [s]: near a Hopf point the growth rate is
 #: small (0.07 1/s at 10 N and 7.6 cm), and a run costs about 2.5 ms of wall time per simulated second.
 T_MAX: float = 100.0
+
+#: A bounded run that did not settle, at a linearly stable point, whose z stays below this fraction
+#: of the static penetration |z_st| is taken for sliding's own mode still decaying (not irregular).
+SLOW_DECAY_FRACTION: float = 0.5
 
 #: Analysis methods of a sweep.
 METHODS: tuple[str, ...] = ("auto", "linear", "tidf", "shooting", "transient")
@@ -142,6 +157,7 @@ POINT_VARIABLES: dict[str, tuple[str, str | None, str]] = {
     "orbit_stable": ("i1", None, "stability of the shooting orbit (Floquet multipliers)"),
     "tidf_a1_error": ("f8", "1", "relative error of the describing function's A1 against the shooting orbit"),
     "newton_iterations": ("i8", "1", "Newton iterations of the TIDF and shooting stages (0: none run)"),
+    **_irregular.IRREGULAR_VARIABLES,
 }
 #: Optional per-point output (present only when configured).
 OPTIONAL_POINT_VARIABLES: dict[str, tuple[str, str | None, str]] = {
@@ -350,15 +366,16 @@ def empty_result(n: int, *, wear_rate: bool = False) -> dict[str, np.ndarray]:
 def _classify(summary: dict, stable: np.ndarray, t_max: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Regime, status, reason and deciding stage of transient runs from their steady-state summaries.
 
-    A run that did not settle by ``t_max`` (outcome ``unsettled``) leaves the regime to linear
-    stability: ``steady_sliding`` where sliding is stable, ``unstable_undetermined`` where it is
-    not (a slowly growing or slowly decaying motion near a Hopf point), with the transient's status
-    (``not_converged``) and a reason saying so. Only a failed integration makes a point ``failed``.
+    A run that stayed bounded (no escape, a finite end state) but neither repeated nor decayed by
+    ``t_max`` (outcome ``unsettled``) is an answer: sustained ``irregular`` motion, decided by the
+    transient, status ``success`` (its measurement, :mod:`tribosweep._irregular`, follows in
+    :func:`_dynamics`). Only a failed integration makes a point ``failed``.
     """
-    status = np.asarray(summary["status"], dtype=np.uint8)
+    status = np.asarray(summary["status"], dtype=np.uint8).copy()
     outcome = np.asarray(summary["outcome"], dtype=np.uint8)
     off = np.asarray(summary["fraction_off_disk"])
     vmin = np.asarray(summary["min_slip_velocity"])
+    y_end = summary.get("y_end")
     names = [OUTCOME_NAMES[o] for o in outcome]
     n = len(names)
     regime = np.full(n, REGIME["failed"], dtype=np.uint8)
@@ -366,18 +383,20 @@ def _classify(summary: dict, stable: np.ndarray, t_max: float) -> tuple[np.ndarr
     reason = np.asarray(summary["reason"], dtype=str).astype(object)
     for i, name in enumerate(names):
         st = STATUS_NAMES[status[i]] if status[i] < len(STATUS_NAMES) else str(status[i])
+        finite = y_end is None or bool(np.all(np.isfinite(np.asarray(y_end)[i])))
         if name == "diverged" or st == "diverged":
             regime[i] = REGIME["diverged"]
-        elif name == "unsettled":
-            decided[i] = DECIDED_BY["linear"]
-            if stable[i]:
-                regime[i] = REGIME["steady_sliding"]
-                reason[i] = f"the transient did not settle by t_max = {t_max:g} s; sliding is linearly stable"
-            else:
-                regime[i] = REGIME["unstable_undetermined"]
-                reason[i] = f"sliding unstable; the transient did not settle by t_max = {t_max:g} s"
-        elif st != "success" or name == "failed":
+        elif name == "unsettled" and st == "not_converged" and finite:
+            regime[i] = REGIME["irregular"]
+            status[i] = STATUS["success"]
+            reason[i] = f"bounded motion, neither periodic nor decayed by t_max = {t_max:g} s" + (
+                "" if not stable[i] else " (sliding is linearly stable: this motion coexists with it, or is a slow "
+                "transient)")  # fmt: skip
+        elif st != "success" or name in ("failed", "unsettled"):
             regime[i] = REGIME["failed"]
+            if st == "success":
+                status[i] = STATUS["non_finite"]
+                st = "non_finite"
             detail = f": {reason[i]}" if reason[i] else ""
             reason[i] = f"transient {name}, status {st}{detail}"
         elif name == "decayed":
@@ -390,6 +409,24 @@ def _classify(summary: dict, stable: np.ndarray, t_max: float) -> tuple[np.ndarr
             else:
                 regime[i] = REGIME["self_excited"]
     return regime, status, reason.astype(str), decided
+
+
+#: Sweep options of the irregular-motion measurement -> ``_irregular.settings`` argument.
+IRREGULAR_OPTIONS: dict[str, str] = {
+    "irregular_window": "window",
+    "irregular_sample_dt": "sample_dt",
+    "ftle_tau": "tau",
+    "ftle_segments": "segments",
+    "ftle_warmup": "warmup",
+    "ftle_d0": "d0",
+    "ftle_rtol": "rtol",
+}
+
+
+def irregular_settings(options: Mapping) -> dict:
+    """The measurement settings of a sweep's ``options`` (defaults where absent), checked."""
+    kw = {arg: options[opt] for opt, arg in IRREGULAR_OPTIONS.items() if opt in options}
+    return _irregular.settings(**kw, names={arg: opt for opt, arg in IRREGULAR_OPTIONS.items()})
 
 
 def _static_penetration(full: Mapping[str, np.ndarray], sel: np.ndarray) -> np.ndarray:
@@ -471,7 +508,8 @@ def _dynamics(model_values, contact, friction_law, point_params, method, options
     to_transient = np.zeros(n, dtype=bool)
 
     if method == "linear":
-        reason[out["regime"] == REGIME["unstable_undetermined"]] = REGIME_DOC["unstable_undetermined"]
+        reason[out["regime"] == REGIME["unstable_undetermined"]] = (
+            "sliding unstable; the motion was not computed (method=linear: eigenvalues only, by choice)")
     elif method == "transient":
         to_transient[:] = True
     else:
@@ -561,7 +599,8 @@ def _dynamics(model_values, contact, friction_law, point_params, method, options
         t1 = time.perf_counter()
         summary = _transient(model_values, contact, friction_law, point_params, sel, options, y0s)
         wall[sel] += (time.perf_counter() - t1) / sel.size
-        regime, status, why, decided = _classify(summary, stable[sel], float(options.get("t_max", T_MAX)))
+        t_max = float(options.get("t_max", T_MAX))
+        regime, status, why, decided = _classify(summary, stable[sel], t_max)
         out["regime"][sel] = regime
         out["status"][sel] = status
         reason[sel] = np.where(why != "", why, reason[sel].astype(str))
@@ -574,6 +613,47 @@ def _dynamics(model_values, contact, friction_law, point_params, method, options
         out["min_normal_force"][sel] = summary["min_normal_force"]
         out["min_slip_velocity"][sel] = summary["min_slip_velocity"]
         out["n_rhs"][sel] += np.asarray(summary["n_rhs"], dtype=np.int64)
+
+        # Stage 4b: what an irregular run measured (tribosweep._irregular), from where it ended:
+        # the range and dominant frequency of z over a window, and the largest finite-time
+        # Lyapunov exponent (about 0: quasi-periodic; > 0: chaotic). A failed measurement leaves
+        # the motion undetermined: a failure status and its reason.
+        irr = regime == REGIME["irregular"]
+        if irr.any():
+            pts = sel[irr]
+            t1 = time.perf_counter()
+            meas = _irregular.measure(
+                model_values, contact, friction_law, point_params, pts, np.asarray(summary["y_end"])[irr],
+                integrator=options.get("integrator", "dop853"), rtol=float(options.get("rtol", 1e-8)),
+                threads=threads, settings_=irregular_settings(options),
+            )  # fmt: skip
+            wall[pts] += (time.perf_counter() - t1) / pts.size
+            out["n_rhs"][pts] += meas["n_rhs"]
+            # At a linearly stable point, a motion that stays well inside the contact (|z| below
+            # SLOW_DECAY_FRACTION |z_st|: the law nearly linear, no opening) is sliding's own
+            # least-damped mode still decaying, at the linear rate (0.03 1/s near a Hopf load): too
+            # slow for t_max, not sustained motion. Sliding, as linear stability says.
+            amp = np.maximum(np.abs(meas["irregular_z_min"]), np.abs(meas["irregular_z_max"]))
+            slow = stable[pts] & (amp < SLOW_DECAY_FRACTION * np.abs(_static_penetration(full, pts)))
+            if slow.any():
+                q = pts[slow]
+                out["regime"][q] = REGIME["steady_sliding"]
+                out["decided_by"][q] = DECIDED_BY["linear"]
+                out["status"][q] = STATUS["not_converged"]
+                reason[q] = [f"the transient did not settle by t_max = {t_max:g} s; sliding is linearly stable and the "
+                             f"motion small (|z| <= {a:.3g} m, below {SLOW_DECAY_FRACTION:g} |z_st|): still decaying"
+                             for a in amp[slow]]  # fmt: skip
+            pts, meas = pts[~slow], {k: v[~slow] for k, v in meas.items()}
+            for key in _irregular.IRREGULAR_VARIABLES:
+                out[key][pts] = meas[key]
+            bad = meas["status"] != STATUS["success"]
+            if bad.any():
+                out["status"][pts[bad]] = meas["status"][bad]
+                out["regime"][pts[bad]] = np.where(stable[pts[bad]], REGIME["failed"], REGIME["unstable_undetermined"])
+                reason[pts[bad]] = [f"{a}; {b}" for a, b in zip(reason[pts[bad]], meas["reason"][bad])]
+            for j in np.flatnonzero(~bad):
+                f, se = meas["irregular_ftle"][j], meas["irregular_ftle_se"][j]
+                reason[pts[j]] += f"; largest FTLE {f:.3g} +- {se:.2g} 1/s"
 
     # Stage 5 (auto): the attractor census where a saddle cycle surrounds stable sliding: K
     # disturbances, each run to its attractor with the point's contact law; fractions with

@@ -49,7 +49,8 @@ def model_cost(out_dir: os.PathLike, *, quick: bool = False, t_max: float = 30.0
     ra, rt = auto.regime.values.ravel(), full.regime.values.ravel()
     from ._chunk import REGIME
 
-    settled = (full.status.values.ravel() == 0) & (rt != REGIME["unstable_undetermined"])
+    # Settled: a cycle, sliding or an escape (irregular motion has not settled; auto starts it elsewhere).
+    settled = (full.status.values.ravel() == 0) & ~np.isin(rt, [REGIME["unstable_undetermined"], REGIME["irregular"]])
     both_cycle = np.isfinite(lean.z1_amplitude.values.ravel()) & np.isfinite(full.z1_amplitude.values.ravel())
     amp_err = np.abs(lean.z1_amplitude.values.ravel()[both_cycle] / full.z1_amplitude.values.ravel()[both_cycle] - 1)
     numbers = {

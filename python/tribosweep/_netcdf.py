@@ -80,6 +80,17 @@ def point_specs(dims: tuple[str, ...], *, wear_rate: bool = False) -> list[VarSp
         "harmonic (z2_amplitude for n = 2), and z1_amplitude is small"
     )
     by_name["wall_time"].attrs["comment"] = "a measurement: differs between runs"
+    by_name["irregular_ftle"].attrs["comment"] = (
+        "only where regime is irregular (a bounded transient that neither repeated nor decayed by t_max), from where "
+        "it ended: Benettin's two-trajectory method, separation solver_ftle_d0 in units of the characteristic sizes "
+        "(|z_st|, |z_st| w_t, |z_st|, |z_st| w_t, |z_st|/L, |z_st| w_t/L), renormalised every solver_ftle_tau seconds, "
+        "mean of ln(d_k/d0)/tau over solver_ftle_segments segments after solver_ftle_warmup; about 0 (within a few "
+        "irregular_ftle_se): quasi-periodic, or still creeping onto a cycle; clearly > 0: chaotic"
+    )
+    by_name["irregular_omega"].attrs["comment"] = (
+        "peak of the Hann-windowed spectrum of z over solver_irregular_window seconds sampled every "
+        "solver_irregular_sample_dt, refined by a parabola through the log magnitudes of the peak bin and its neighbours"
+    )
     return out
 
 

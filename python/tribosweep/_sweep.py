@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from . import _apparatus, _census, _checks, _chunk, _netcdf, _wear
+from . import _apparatus, _census, _checks, _chunk, _irregular, _netcdf, _wear
 from ._model import PARAM_LONG_NAMES, PARAM_NAMES, PARAM_UNITS, SliderModel
 from ._simulate import DEFAULT_Y0
 
@@ -392,6 +392,12 @@ def _global_attrs(plan: _Plan, command: str, f_ref: float) -> dict:
     return attrs
 
 
+def _irregular_options(**given) -> dict:
+    """The irregular-motion settings as sweep options, checked (ValueError names the argument)."""
+    _chunk.irregular_settings(given)
+    return {k: (int(v) if k in ("ftle_segments", "ftle_warmup") else float(v)) for k, v in given.items()}
+
+
 def _samples(value) -> int:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not 1 <= value <= 100_000:
         raise ValueError(f"samples = {value!r} is out of range: must be an integer in [1, 100000] (disturbances per point)")
@@ -426,6 +432,13 @@ def sweep(
     census_t_max: float = _census.CENSUS_T_MAX,
     disturbance_scale: float = _census.DISTURBANCE_SCALE,
     unstable_disturbance: float = 1.0,
+    irregular_window: float = _irregular.WINDOW,
+    irregular_sample_dt: float = _irregular.SAMPLE_DT,
+    ftle_tau: float = _irregular.FTLE_TAU,
+    ftle_segments: int = _irregular.FTLE_SEGMENTS,
+    ftle_warmup: int = _irregular.FTLE_WARMUP,
+    ftle_d0: float = _irregular.FTLE_D0,
+    ftle_rtol: float = _irregular.FTLE_RTOL,
     check_bistability: bool | None = None,
     command: str | None = None,
 ) -> xr.Dataset:
@@ -482,8 +495,9 @@ def sweep(
     wear_calibration : WearCalibration, optional
         Adds the absolute ``wear_rate`` [kg/m].
     t_max : float, s
-        Longest simulated time of a transient run (100). A run that has not settled by then leaves
-        the regime to linear stability (``unstable_undetermined`` where sliding is unstable).
+        Longest simulated time of a transient run (100). A bounded run that has neither repeated
+        nor decayed by then is ``irregular`` (measured: ``irregular_*``); at a linearly stable point
+        a motion below ``|z_st|/2`` is sliding still decaying (``steady_sliding``, status ``not_converged``).
     integrator : {"dop853", "dopri5", "rodas4"}
         Time integrator of the transient runs. DOP853 by default: on the unilateral (impacting)
         transients it is about twice as fast as Dopri5 at rtol 1e-8 and about 7x more accurate
@@ -514,6 +528,21 @@ def sweep(
         ``|z| = unstable_disturbance |z_st|``.
     decay_amplitude : float, m, optional
         Amplitude below which a motion counts as decayed (default ``1e-3 |z_st|``).
+    irregular_window, irregular_sample_dt : float, s
+        A transient that stays bounded but neither repeats nor decays by ``t_max`` is regime
+        ``irregular``; from where it ended, ``z`` is sampled every ``irregular_sample_dt`` (1e-4)
+        over ``irregular_window`` (0.5) for ``irregular_z_min``, ``irregular_z_max`` and
+        ``irregular_omega`` (the spectral peak).
+    ftle_tau : float, s
+        Segment length of its largest finite-time Lyapunov exponent ``irregular_ftle`` (0.05:
+        about 5 torsion periods; see ``tribosweep._irregular``).
+    ftle_segments, ftle_warmup : int
+        Segments averaged (40, >= 2; the standard error ``irregular_ftle_se`` is their spread over
+        ``sqrt(ftle_segments)``) and run first without counting (4, >= 0).
+    ftle_d0 : float
+        Separation of the two trajectories in units of the characteristic sizes (1e-8).
+    ftle_rtol : float
+        Relative tolerance of the exponent's runs (1e-11: well below ``ftle_d0``).
     command : str, optional
         Command recorded in the ``history`` attribute (the CLI passes its command line).
 
@@ -522,7 +551,9 @@ def sweep(
     xarray.Dataset
         Dimensions ``normal_load``, ``arm_length``, ``sliding_speed`` (+ extras); per point
         ``regime``, ``status``, ``reason``, ``decided_by``, ``bistable``, linear stability,
-        cycle summary, wear and cost variables (see ``tribosweep._chunk.POINT_VARIABLES``).
+        cycle summary, irregular motion (``irregular_z_min``, ``irregular_z_max``,
+        ``irregular_omega``, ``irregular_ftle``, ``irregular_ftle_se``; NaN elsewhere), wear and cost
+        variables (see ``tribosweep._chunk.POINT_VARIABLES``).
         With ``output`` the Dataset is opened lazily from the file.
 
     Raises
@@ -591,6 +622,9 @@ def sweep(
         "census_t_max": _checks.positive("census_t_max", census_t_max),
         "disturbance_scale": _checks.positive("disturbance_scale", disturbance_scale),
         "unstable_disturbance": _checks.positive("unstable_disturbance", unstable_disturbance),
+        **_irregular_options(irregular_window=irregular_window, irregular_sample_dt=irregular_sample_dt,
+                             ftle_tau=ftle_tau, ftle_segments=ftle_segments, ftle_warmup=ftle_warmup, ftle_d0=ftle_d0,
+                             ftle_rtol=ftle_rtol),
         "y0": _disturbance(disturbance).tolist(),
         "wear": {
             "normal_load": wear_reference.normal_load,

@@ -158,6 +158,16 @@ def _add_sweep_arguments(p: argparse.ArgumentParser) -> None:
     solver.add_argument("--t-max", type=float, metavar="S", help="longest transient run [s] (default 100)")
     solver.add_argument("--integrator", choices=("dop853", "dopri5", "rodas4"), help="time integrator (default dop853)")
     solver.add_argument("--rtol", type=float, metavar="R", help="relative tolerance (default 1e-8)")
+    irregular = p.add_argument_group(
+        "irregular motion (also keys of the [solver] table: ftle_tau, ftle_segments, ftle_warmup, ftle_d0, ftle_rtol, "
+        "irregular_window, irregular_sample_dt)",
+        "a bounded run that neither repeats nor decays by --t-max is regime irregular, measured from where it ended: "
+        "z range and dominant frequency over a window, and the largest finite-time Lyapunov exponent (about 0: "
+        "quasi-periodic; > 0: chaotic) with its standard error.",
+    )
+    irregular.add_argument("--ftle-tau", type=float, metavar="S", help="segment of the exponent [s] (default 0.05)")
+    irregular.add_argument("--ftle-segments", type=int, metavar="M",
+                           help="segments averaged into the exponent (default 40, >= 2)")
     census = p.add_argument_group(
         "attractor census (also the [census] table of --config: enabled, samples, t_max, disturbance_scale)",
         "auto: at stable points with a saddle cycle, K disturbances on the torsion and normal modes are each run to "
@@ -200,7 +210,8 @@ def _run_sweep(args: argparse.Namespace) -> int:
     solver = dict(cfg.get("solver", {}))
     solver.update({_CENSUS_KEYS[k]: v for k, v in cfg.get("census", {}).items()})
     for flag, key in (("t_max", "t_max"), ("integrator", "integrator"), ("rtol", "rtol"), ("samples", "samples"),
-                      ("census_t_max", "census_t_max"), ("disturbance_scale", "disturbance_scale")):  # fmt: skip
+                      ("census_t_max", "census_t_max"), ("disturbance_scale", "disturbance_scale"),
+                      ("ftle_tau", "ftle_tau"), ("ftle_segments", "ftle_segments")):  # fmt: skip
         if getattr(args, flag) is not None:
             solver[key] = getattr(args, flag)
     if args.no_census:
@@ -266,6 +277,18 @@ def describe(ds, path: str | None = None) -> str:
         multi = np.isfinite(r) & (np.rint(np.where(np.isfinite(r), r, 0)) >= 2)
         if multi.any():
             lines.append(f"cycles of several mode periods (period doubling, subharmonic): {int(multi.sum())}")
+    if "irregular_ftle" in ds:
+        f = np.asarray(ds.irregular_ftle.values).ravel()
+        se = np.asarray(ds.irregular_ftle_se.values).ravel()
+        w = np.asarray(ds.irregular_omega.values).ravel()
+        has = np.isfinite(f)
+        if has.any():
+            f, se, w = f[has], se[has], w[has]
+            lines.append(f"irregular motion: {int(has.sum())} points measured; largest FTLE {f.min():.3g} .. "
+                         f"{f.max():.3g} 1/s (median {np.median(f):.3g}); chaotic (FTLE > 5 SE) "
+                         f"{int((f > 5 * se).sum())}, about 0 (within 3 SE: quasi-periodic, or slow) "
+                         f"{int((np.abs(f) <= 3 * se).sum())}; dominant frequency {np.nanmin(w):.4g} .. "
+                         f"{np.nanmax(w):.4g} rad/s")  # fmt: skip
     if "basin_fraction" in ds and "census_samples" in ds:
         k = np.asarray(ds.census_samples.values).ravel()
         if (k > 0).any():

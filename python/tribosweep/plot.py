@@ -23,6 +23,7 @@ REGIME_COLORS: dict[str, str] = {
     "diverged": "#000000",
     "failed": "#999999",
     "unstable_undetermined": "#F0E442",
+    "irregular": "#009E73",
 }
 _PREFERRED = ("normal_load", "arm_length", "sliding_speed")
 

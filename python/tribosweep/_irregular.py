@@ -1,0 +1,377 @@
+"""Sustained irregular motion: what a bounded run that neither repeats nor decays measured.
+
+A transient that stays bounded but has neither repeated (to ``periodic_tol``) nor decayed by
+``t_max`` is an answer, not a failure: the slider moves irregularly, quasi-periodically or
+chaotically. :func:`measure` characterises such motion from the run's end state, for many points
+at once (every core call is one batched ``_core.ensemble`` over all points):
+
+``irregular_z_min``, ``irregular_z_max``
+    The range of ``z`` over a measurement window of ``window`` seconds (sampled every
+    ``sample_dt``) that starts where the transient ended.
+``irregular_omega``
+    The dominant angular frequency of ``z`` over the window: the peak of the Hann-windowed
+    spectrum, refined by a parabola through the logarithms of the peak bin and its neighbours
+    (:func:`dominant_omega`).
+``irregular_ftle``, ``irregular_ftle_se``
+    The largest finite-time Lyapunov exponent [1/s] by the two-trajectory method of Benettin et
+    al. (1980) (:func:`benettin`): the end state of the window and a copy displaced by ``d0`` in
+    units of the characteristic sizes are run side by side for ``warmup + segments`` segments of
+    ``tau`` seconds; after each the copy is pulled back to distance ``d0`` along the separation.
+    The exponent is the mean of ``ln(d_k / d0) / tau`` over the last ``segments`` segments; its
+    standard error is the segments' standard deviation over ``sqrt(segments)``.
+
+How to read the exponent. On any bounded motion that is not an equilibrium, the direction along
+the flow has exponent 0, so the largest exponent is >= 0: about 0 (within a few standard errors)
+for a periodic or quasi-periodic motion, or one still creeping towards a cycle; clearly positive
+for chaos; clearly negative only for a motion still decaying towards an equilibrium.
+
+Why these defaults (seed apparatus, MODEL.md §3). The motion the slider self-excites is the
+torsion mode at about 98.75 Hz (period 10.1 ms; 640-650 rad/s under load). ``tau = 0.05 s`` is
+about 5 of its periods: long enough that the stretching within one cycle (which swings with the
+phase, by more than the exponent itself on a bouncing cycle) averages out inside a segment, short
+enough that a separation of ``d0 = 1e-8`` grows at most ``e^10`` (to 2e-4 of the characteristic
+size, still linear) at exponents up to 200 1/s. ``segments = 40`` (2 s) makes the standard error
+a fifth of the segment spread; ``warmup = 4`` segments (0.2 s) let the separation turn from its
+arbitrary start into the most unstable direction (the normal mode's transverse contraction,
+about 50 1/s, is gone after a segment; the torsion mode's, about 0.3-1 1/s, is not, which is why
+the estimate of a periodic motion scatters about 0 by its standard error). The separation is
+integrated at ``rtol = 1e-11``: the sweep's 1e-8 is as large as ``d0`` itself in the same units,
+and the two runs' independent step errors would then be the separation.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping
+
+import numpy as np
+
+from . import _checks, _core
+from ._flags import STATUS, STATUS_NAMES
+
+#: Length of the measurement window after the transient [s] (about 50 torsion periods: the
+#: spectrum's bins are 12.6 rad/s apart, the parabola refines the peak well within one).
+WINDOW: float = 0.5
+#: Sampling interval of the window [s] (about 100 samples per torsion period).
+SAMPLE_DT: float = 1e-4
+#: Length of one FTLE segment [s] (about 5 torsion periods at 98.75 Hz).
+FTLE_TAU: float = 0.05
+#: Segments averaged into the FTLE.
+FTLE_SEGMENTS: int = 40
+#: Segments run first and not averaged (the separation turns into the most unstable direction).
+FTLE_WARMUP: int = 4
+#: Separation of the two trajectories, in units of the characteristic sizes.
+FTLE_D0: float = 1e-8
+#: Relative tolerance of the FTLE runs (see the module docstring).
+FTLE_RTOL: float = 1e-11
+
+#: Per-point output: name -> (dtype, units, long name); NaN except at irregular points.
+IRREGULAR_VARIABLES: dict[str, tuple[str, str, str]] = {
+    "irregular_z_min": ("f8", "m", "minimum of z over the measurement window of irregular motion"),
+    "irregular_z_max": ("f8", "m", "maximum of z over the measurement window of irregular motion"),
+    "irregular_omega": ("f8", "rad s-1", "dominant angular frequency of z in irregular motion (spectral peak)"),
+    "irregular_ftle": ("f8", "s-1", "largest finite-time Lyapunov exponent of irregular motion"),
+    "irregular_ftle_se": ("f8", "s-1", "standard error of irregular_ftle (spread of its segments)"),
+}
+
+
+def settings(
+    *,
+    window: float = WINDOW,
+    sample_dt: float = SAMPLE_DT,
+    tau: float = FTLE_TAU,
+    segments: int = FTLE_SEGMENTS,
+    warmup: int = FTLE_WARMUP,
+    d0: float = FTLE_D0,
+    rtol: float = FTLE_RTOL,
+    names: Mapping[str, str] | None = None,
+) -> dict:
+    """Checked measurement settings (plain data, for a sweep's options).
+
+    ``names`` maps a setting to the name its caller knows it by (``tau`` -> ``ftle_tau`` in
+    :func:`tribosweep.sweep`), for the error messages.
+
+    Raises
+    ------
+    ValueError
+        An argument out of range (the message names it, its value and the valid range).
+    """
+    nm = {k: k for k in ("window", "sample_dt", "tau", "segments", "warmup", "d0", "rtol")} | dict(names or {})
+    try:
+        rt = _checks.rtol(rtol)
+    except ValueError as e:
+        raise ValueError(str(e).replace("rtol", nm["rtol"], 1)) from None
+    out = {
+        "window": _checks.positive(nm["window"], window),
+        "sample_dt": _checks.positive(nm["sample_dt"], sample_dt),
+        "tau": _checks.positive(nm["tau"], tau),
+        "segments": _count(nm["segments"], segments, 2),
+        "warmup": _count(nm["warmup"], warmup, 0),
+        "d0": _checks.positive(nm["d0"], d0),
+        "rtol": rt,
+    }
+    if not out["d0"] < 1e-3:
+        raise ValueError(f"{nm['d0']} = {d0!r} is out of range: must be in (0, 1e-3) (a separation small enough "
+                         "to stay linear)")  # fmt: skip
+    if out["window"] < 16 * out["sample_dt"]:
+        raise ValueError(f"{nm['window']} = {window!r} is out of range: must be at least 16 {nm['sample_dt']} = "
+                         f"{16 * out['sample_dt']:g} s (a spectrum needs samples)")  # fmt: skip
+    return out
+
+
+def _count(name: str, value, low: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not low <= value <= 1_000_000:
+        raise ValueError(f"{name} = {value!r} is out of range: must be an integer in [{low}, 1000000]")
+    return int(value)
+
+
+def characteristic_sizes(values: Mapping[str, np.ndarray | float]) -> np.ndarray:
+    """Characteristic size of each state component, ``(n, 6)`` [m, m/s, m, m/s, rad, rad/s].
+
+    As the core's ``steady::characteristic_sizes``: ``|z_st|`` for ``z`` and ``x``, ``|z_st|/L``
+    for ``phi`` (``|z_st|`` if ``L = 0``), those times the torsional frequency for the rates.
+    """
+    f = np.asarray(values["normal_load"], dtype=np.float64)
+    k0 = np.asarray(values["contact_stiffness"], dtype=np.float64)
+    ka = np.asarray(values["contact_quadratic"], dtype=np.float64)
+    arm = np.asarray(values["moment_arm"], dtype=np.float64)
+    w = np.asarray(values["omega_torsion"], dtype=np.float64)
+    z = np.abs(2.0 * f / (k0 + np.sqrt(k0 * k0 + 4.0 * ka * f)))  # MODEL.md §3, cancellation-free
+    z, arm, w = np.broadcast_arrays(np.atleast_1d(z), arm, w)
+    phi = np.where(arm > 0, z / np.where(arm > 0, arm, 1.0), z)
+    return np.column_stack([z, z * w, z, z * w, phi, phi * w])
+
+
+def dominant_omega(z: np.ndarray, dt: float) -> np.ndarray:
+    """Dominant angular frequency [rad/s] of each row of ``z`` sampled every ``dt`` seconds.
+
+    The mean is removed, the row is Hann-windowed, and the largest bin of its spectrum (DC
+    excluded) is refined by a parabola through the logarithms of the bin and its two neighbours
+    (exact for a Gaussian peak; for a Hann window the bias is below 2 % of a bin). A row with no
+    variation, or a peak at the edge of the spectrum, gives the unrefined bin or NaN.
+
+    Examples
+    --------
+    >>> t = np.arange(5000) * 1e-4
+    >>> w = float(dominant_omega(np.sin(640.37 * t)[None, :], 1e-4)[0])
+    >>> abs(w - 640.37) < 0.03 * 2 * np.pi / 0.5  # within 0.03 of a bin
+    True
+    """
+    z = np.atleast_2d(np.asarray(z, dtype=np.float64))
+    n = z.shape[1]
+    spec = np.abs(np.fft.rfft((z - z.mean(axis=1, keepdims=True)) * np.hanning(n), axis=1))
+    spec[:, 0] = 0.0
+    k = np.argmax(spec, axis=1)
+    out = np.full(z.shape[0], np.nan)
+    for i in range(z.shape[0]):
+        if not np.all(np.isfinite(z[i])) or spec[i, k[i]] <= 0:
+            continue
+        shift = 0.0
+        if 1 <= k[i] < spec.shape[1] - 1 and spec[i, k[i] - 1] > 0 and spec[i, k[i] + 1] > 0:
+            a, b, c = np.log(spec[i, k[i] - 1 : k[i] + 2])
+            den = a - 2.0 * b + c
+            shift = 0.5 * (a - c) / den if den < 0 else 0.0
+        out[i] = 2.0 * math.pi * (k[i] + shift) / (n * dt)
+    return out
+
+
+#: ``propagate(states (2 m, d), tau, rows (m,)) -> (states (2 m, d), ok (2 m,) bool)``: one batched run of
+#: length ``tau`` of the bases and copies of the points ``rows`` (indices into the start states).
+Propagator = Callable[[np.ndarray, float, np.ndarray], tuple[np.ndarray, np.ndarray]]
+
+
+def benettin(
+    propagate: Propagator,
+    y0: np.ndarray,
+    scale: np.ndarray,
+    *,
+    tau: float = FTLE_TAU,
+    segments: int = FTLE_SEGMENTS,
+    warmup: int = FTLE_WARMUP,
+    d0: float = FTLE_D0,
+) -> dict[str, np.ndarray]:
+    """Largest finite-time Lyapunov exponent of many trajectories by the two-trajectory method.
+
+    Each base state ``y0[i]`` and a copy displaced by ``d0`` (in units of ``scale[i]``, along the
+    fixed direction ``(1, -1, 1, -1, ...)/sqrt(d)``) are propagated together, all pairs of all
+    points in one ``propagate`` call per segment; after each segment the separation ``d_k``
+    (measured in units of ``scale``) is recorded and the copy pulled back to ``d0``.
+
+    Parameters
+    ----------
+    propagate : callable
+        ``propagate(states, tau, rows) -> (states, ok)`` for ``states`` of shape ``(2 m, d)``: the
+        bases of the points ``rows`` (indices into ``y0``), then their copies. A row with ``ok``
+        false ends its point.
+    y0 : array, (n, d)
+        Start states.
+    scale : array, (n, d) or (d,)
+        Characteristic size of each component (> 0).
+    tau, segments, warmup, d0
+        Segment length [time units of ``propagate``], averaged segments (>= 2), discarded first
+        segments (>= 0) and separation (see :func:`settings`).
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        ``ftle`` and ``ftle_se`` (NaN where a run failed) [1/time], ``rates`` ``(n, segments)``
+        (``ln(d_k/d0)/tau`` of each averaged segment), ``ok`` (bool) and ``y_end`` ``(n, d)``.
+    """
+    s = settings(tau=tau, segments=segments, warmup=warmup, d0=d0)
+    tau, segments, warmup, d0 = s["tau"], s["segments"], s["warmup"], s["d0"]
+    y = np.array(y0, dtype=np.float64, ndmin=2)
+    n, dim = y.shape
+    scale = np.broadcast_to(np.asarray(scale, dtype=np.float64), (n, dim))
+    if not np.all(scale > 0):
+        raise ValueError("scale must be > 0 in every component")
+    u = np.where(np.arange(dim) % 2 == 0, 1.0, -1.0) / math.sqrt(dim)
+    pert = y + d0 * scale * u
+    rates = np.full((n, segments), np.nan)
+    alive = np.all(np.isfinite(y), axis=1)
+    for k in range(warmup + segments):
+        idx = np.flatnonzero(alive)
+        if idx.size == 0:
+            break
+        states, ok = propagate(np.concatenate([y[idx], pert[idx]]), tau, idx)
+        states = np.asarray(states, dtype=np.float64)
+        ok = np.asarray(ok, dtype=bool)
+        base, copy = states[: idx.size], states[idx.size :]
+        sep = (copy - base) / scale[idx]
+        d = np.sqrt(np.sum(sep * sep, axis=1))
+        good = ok[: idx.size] & ok[idx.size :] & np.isfinite(d) & (d > 0)
+        alive[idx[~good]] = False
+        idx, base, sep, d = idx[good], base[good], sep[good], d[good]
+        if k >= warmup:
+            rates[idx, k - warmup] = np.log(d / d0) / tau
+        y[idx] = base
+        pert[idx] = base + (d0 / d)[:, None] * sep * scale[idx]
+    ftle = np.where(alive, rates.mean(axis=1), np.nan)
+    se = np.where(alive, rates.std(axis=1, ddof=1) / math.sqrt(segments), np.nan)
+    return {"ftle": ftle, "ftle_se": se, "rates": rates, "ok": alive, "y_end": y}
+
+
+def slider_propagator(
+    base: Mapping[str, float],
+    contact: str,
+    friction_law: str,
+    names: list[str],
+    values: np.ndarray,
+    *,
+    integrator: str,
+    rtol: float,
+    threads: int | None,
+    record: dict | None = None,
+) -> Propagator:
+    """A :data:`Propagator` of the slider at the points ``values`` (rows over ``names``).
+
+    ``record``, when given, accumulates ``n_rhs`` (array over the rows of ``values``) and the first
+    failure of each row (``record["failure"]``: row -> status name).
+    """
+    base = {k: float(v) for k, v in base.items()}
+    values = np.asarray(values, dtype=np.float64)
+
+    def propagate(states: np.ndarray, tau: float, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        rows = np.concatenate([rows, rows])
+        res = _core.ensemble(base, contact, friction_law, names, np.ascontiguousarray(values[rows]),
+                             np.ascontiguousarray(states, dtype=np.float64), float(tau), integrator, float(rtol),
+                             None, None, threads, "final")  # fmt: skip
+        status = np.asarray(res["status"])
+        ok = status == STATUS["success"]
+        if record is not None:
+            np.add.at(record["n_rhs"], rows, np.asarray(res["n_rhs"], dtype=np.int64))
+            for r, st in zip(rows[~ok], status[~ok]):
+                record["failure"].setdefault(int(r), STATUS_NAMES[int(st)])
+        return np.asarray(res["y_end"]), ok
+
+    return propagate
+
+
+def measure(
+    base: Mapping[str, float],
+    contact: str,
+    friction_law: str,
+    point_params: Mapping[str, np.ndarray],
+    sel: np.ndarray,
+    y_start: np.ndarray,
+    *,
+    integrator: str = "dop853",
+    rtol: float = 1e-8,
+    threads: int | None = None,
+    settings_: Mapping | None = None,
+) -> dict[str, np.ndarray]:
+    """Measure the irregular motion of the points ``sel`` from their states ``y_start``.
+
+    Parameters
+    ----------
+    base, contact, friction_law, point_params
+        As a sweep chunk's (``tribosweep._chunk.compute_chunk``).
+    sel : int array, (m,)
+        The points to measure.
+    y_start : array, (m, 6)
+        Their states where the transient ended.
+    integrator, rtol, threads
+        The window's integration (the FTLE runs use the settings' own ``rtol``, ``FTLE_RTOL``).
+    settings_ : mapping, optional
+        Measurement settings (:func:`settings`'s arguments: ``window``, ``sample_dt``, ``tau``,
+        ``segments``, ``warmup``, ``d0``, ``rtol``); defaults where absent.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray, each of length m
+        ``IRREGULAR_VARIABLES``, ``status`` (uint8: success, or the first failure), ``reason``
+        (empty or what failed) and ``n_rhs``.
+    """
+    s = settings(**dict(settings_ or {}))
+    sel = np.asarray(sel, dtype=np.int64)
+    m = sel.size
+    out = {k: np.full(m, np.nan) for k in IRREGULAR_VARIABLES}
+    out["status"] = np.full(m, STATUS["success"], dtype=np.uint8)
+    out["reason"] = np.full(m, "", dtype=object)
+    out["n_rhs"] = np.zeros(m, dtype=np.int64)
+    if m == 0:
+        out["reason"] = out["reason"].astype(str)
+        return out
+    names = sorted(point_params)
+    values = np.column_stack([np.asarray(point_params[k], dtype=np.float64)[sel] for k in names])
+    n_all = len(next(iter(point_params.values())))
+    full = {k: np.full(n_all, float(v)) for k, v in base.items()}
+    for k, a in point_params.items():
+        full[k] = np.asarray(a, dtype=np.float64)
+    scale = characteristic_sizes({k: np.asarray(v)[sel] for k, v in full.items()})
+
+    # The measurement window: z sampled from the transient's end state.
+    n_samples = int(math.floor(s["window"] / s["sample_dt"] + 1e-9)) + 1
+    t_eval = np.arange(n_samples) * s["sample_dt"]
+    win = _core.ensemble({k: float(v) for k, v in base.items()}, contact, friction_law, names, values,
+                         np.ascontiguousarray(y_start, dtype=np.float64), float(t_eval[-1]), integrator, float(rtol),
+                         None, np.ascontiguousarray(t_eval), threads, "sampled")  # fmt: skip
+    out["n_rhs"] += np.asarray(win["n_rhs"], dtype=np.int64)
+    w_status = np.asarray(win["status"])
+    z = np.asarray(win["y"])[:, :, 0]
+    ok = (w_status == STATUS["success"]) & np.all(np.isfinite(z), axis=1)
+    for i in np.flatnonzero(~ok):
+        out["status"][i] = w_status[i] if w_status[i] != STATUS["success"] else STATUS["non_finite"]
+        out["reason"][i] = f"irregular motion: the measurement window failed ({STATUS_NAMES[out['status'][i]]})"
+    if ok.any():
+        out["irregular_z_min"][ok] = z[ok].min(axis=1)
+        out["irregular_z_max"][ok] = z[ok].max(axis=1)
+        out["irregular_omega"][ok] = dominant_omega(z[ok], s["sample_dt"])
+
+    # The FTLE, from the end of the window, every point's pair in one call per segment.
+    idx = np.flatnonzero(ok)
+    if idx.size:
+        record = {"n_rhs": np.zeros(idx.size, dtype=np.int64), "failure": {}}
+        propagate = slider_propagator(base, contact, friction_law, names, values[idx], integrator=integrator,
+                                      rtol=s["rtol"], threads=threads, record=record)  # fmt: skip
+        res = benettin(propagate, np.asarray(win["y_end"])[idx], scale[idx], tau=s["tau"], segments=s["segments"],
+                       warmup=s["warmup"], d0=s["d0"])  # fmt: skip
+        out["irregular_ftle"][idx] = res["ftle"]
+        out["irregular_ftle_se"][idx] = res["ftle_se"]
+        out["n_rhs"][idx] += record["n_rhs"]
+        for r in np.flatnonzero(~res["ok"]):
+            j = idx[r]
+            st = record["failure"].get(int(r), "non_finite")
+            out["status"][j] = STATUS[st]
+            out["reason"][j] = f"irregular motion: the Lyapunov-exponent runs failed ({st})"
+    out["reason"] = out["reason"].astype(str)
+    return out
