@@ -39,6 +39,8 @@ def main(argv=None) -> int:
     ap.add_argument("--n", type=int, default=1000)
     ap.add_argument("--n-scipy", type=int, default=20)
     ap.add_argument("--json", type=pathlib.Path)
+    ap.add_argument("--threads", default="",
+                    help="comma-separated thread counts for a scaling table (e.g. 1,2,4,8,16); empty: none")
     args = ap.parse_args(argv)
 
     params_list, y0, t_end = baselines.seed_ensemble_params(args.n)
@@ -93,9 +95,69 @@ def main(argv=None) -> int:
         one = by[("rust", "dopri5", rtol, 1)]["per_s_core"]
         two = by[("rust", "dopri5", rtol, 2)]["per_s_core"]
         print(f"2-thread efficiency at rtol {rtol:.0e}: {two / one:.2f} (per-core rate, 2 threads / 1 thread)")
+    rows += paths_table(args, model, grid, y0, t_end, by)
+    if args.threads:
+        rows += scaling_table(args, model, grid, y0, t_end, [int(x) for x in args.threads.split(",")])
     if args.json:
         args.json.write_text(json.dumps(rows, indent=1))
     return 0
+
+
+def paths_table(args, model, grid, y0, t_end, by) -> list[dict]:
+    """Issue 10's paths at rtol 1e-6, one thread, against the numba DP5 end-state rate of this run:
+    the end state, t_eval = [t_end], t_eval of 501 points, and unilateral contact (all lane-batched)."""
+    rtol = 1e-6
+    atol = baselines.reference.default_atol(rtol)
+    nb = by[("numba", "dp5", rtol, 1)]["per_s_core"]
+    uni = model.replace(contact="unilateral")
+    ref_u = ts.ensemble(uni, t_end, grid, y0=y0, method="dop853", rtol=1e-13, atol=baselines.reference.default_atol(1e-13))
+    ref_b = ts.ensemble(model, t_end, grid, y0=y0, method="dop853", rtol=1e-13,
+                        atol=baselines.reference.default_atol(1e-13))
+    cases = [
+        ("bilateral end state", model, None, ref_b),
+        ("bilateral t_eval=[t_end]", model, np.array([t_end]), ref_b),
+        ("bilateral t_eval 501 points", model, np.linspace(0.0, t_end, 501), ref_b),
+        ("unilateral end state", uni, None, ref_u),
+    ]
+    out = []
+    print(f"\nlane-batched paths, rtol {rtol:.0e}, 1 thread ({args.n} trajectories; numba DP5 end state "
+          f"{nb:.0f} traj/s in this run)")
+    print(f"{'path':30} {'traj/s/core':>12} {'vs numba':>9} {'max err':>9} {'rhs/traj':>9}")
+    for name, m, te, ref in cases:
+        t, ds = best_of(lambda m=m, te=te: ts.ensemble(m, t_end, grid, y0=y0, rtol=rtol, atol=atol, t_eval=te,
+                                                       threads=1))
+        scale = np.maximum(np.abs(ref.max_abs_z.values), 1e-12)
+        err = float(np.max(np.abs(ds.z_end.values - ref.z_end.values) / scale))
+        r = dict(impl="rust", method=name, rtol=rtol, threads=1, per_s_core=args.n / t, err=err,
+                 n_rhs=float(ds.n_rhs.mean()), failed=int((ds.status != 0).sum()))
+        print(f"{name:30} {r['per_s_core']:12.0f} {r['per_s_core'] / nb:9.2f} {err:9.1e} {r['n_rhs']:9.0f}")
+        out.append(r)
+    return out
+
+
+def scaling_table(args, model, grid, y0, t_end, threads: list[int]) -> list[dict]:
+    """Trajectories per second, all threads together, bilateral and unilateral end states at rtol 1e-6
+    (the ensemble repeated to keep every thread busy)."""
+    rtol = 1e-6
+    atol = baselines.reference.default_atol(rtol)
+    reps = max(1, max(threads) * 2000 // args.n)
+    big = {k: np.tile(v, reps) for k, v in grid.items()}
+    yb = np.tile(y0, (reps, 1)) if np.ndim(y0) == 2 else y0
+    n = len(big["mu"])
+    print(f"\nscaling ({n} trajectories, rtol {rtol:.0e}; total trajectories/s over all threads)")
+    print(f"{'threads':>7} {'bilateral':>12} {'unilateral':>12}")
+    out = []
+    base = {}
+    for th in threads:
+        rates = []
+        for name, m in (("bilateral", model), ("unilateral", model.replace(contact="unilateral"))):
+            t, _ = best_of(lambda m=m, th=th: ts.ensemble(m, t_end, big, y0=yb, rtol=rtol, atol=atol, threads=th))
+            rates.append(n / t)
+            base.setdefault(name, n / t)
+            out.append(dict(impl="rust", method=f"{name} end state", rtol=rtol, threads=th, per_s_total=n / t))
+        print(f"{th:7d} {rates[0]:12.0f} {rates[1]:12.0f}   (x{rates[0] / base['bilateral']:.1f}, "
+              f"x{rates[1] / base['unilateral']:.1f} of 1 thread)")
+    return out
 
 
 if __name__ == "__main__":

@@ -310,12 +310,12 @@ fn ensemble<'py>(
     let items: Vec<(Params, State)> = params.into_iter().zip(y0s).collect();
     let d = PyDict::new(py);
     let p0 = items.first().map(|it| it.0);
-    // The lane-batched Dormand-Prince paths: `ode::batch` for the bilateral constant-mu end state,
-    // `ode::lanes` for everything else it supports (unilateral contact, the Coulomb/Stribeck law,
-    // t_eval, runs to steady state). Same method and tolerances as the scalar driver, to
+    // The lane-batched paths: `ode::batch` (DP5) for the bilateral constant-mu end state,
+    // `ode::lanes` (DP5 and DOP853) for everything else it supports (unilateral contact, the
+    // Coulomb/Stribeck law, t_eval, runs to steady state). Same method and tolerances as the scalar driver, to
     // integration accuracy; each trajectory's result does not depend on which others share its
     // batch (tested in the core), so any grouping is deterministic for any thread count.
-    let lanes_ok = method == Method::Dopri5 && p0.is_some_and(|p| lanes::supports(&p));
+    let lanes_ok = lanes::supports_method(method) && p0.is_some_and(|p| lanes::supports(&p));
     match kind {
         "final" | "sampled" => {
             if kind == "sampled" && t_eval.is_none() {
@@ -337,7 +337,7 @@ fn ensemble<'py>(
                                 .map(|run| LaneResult { run, samples: Vec::new(), summary: None, events: Vec::new() })
                                 .collect()
                         } else {
-                            lanes::run_lanes(sliders, y0s, t_end, &tol, task)
+                            lanes::run_lanes(sliders, y0s, t_end, method, &tol, task)
                         }
                     })
                 });
@@ -402,7 +402,7 @@ fn ensemble<'py>(
                 let out = py.detach(|| {
                     grouped(&items, threads, |sliders, y0s, range| {
                         let decay = decays.as_ref().map(|d| &d[range]);
-                        lanes::run_lanes(sliders, y0s, t_end, &tol, Task::Steady { opts: &opts, decay })
+                        lanes::run_lanes(sliders, y0s, t_end, method, &tol, Task::Steady { opts: &opts, decay })
                     })
                 });
                 let sums: Vec<(Summary, String)> = out

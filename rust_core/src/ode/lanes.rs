@@ -38,12 +38,17 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::batch::{each6, exp_lanes, lane_state, ln_lanes, splat, ALPHA, BETA, L, LN_ERR_FLOOR, LN_SAFETY, V6, W};
+use super::Method;
+
+/// The PI controller's exponent for DOP853 (error order 8, `beta = 0.04`).
+const ALPHA8: f64 = 1.0 / 8.0 - 0.75 * BETA;
 use super::controller::{initial_step, FAC_MAX, FAC_MIN, SAFETY};
+use super::dop853::*;
 use super::dopri5::{
     Dopri5Dense, A21, A31, A32, A41, A42, A43, A51, A52, A53, A54, A61, A62, A63, A64, A65, B1, B3, B4, B5, B6, D1, D3,
     D4, D5, D6, D7, E1, E3, E4, E5, E6, E7,
 };
-use super::driver::{crosses, step_events, StepEnd};
+use super::driver::{step_events, StepDense, StepEnd};
 use super::{Control, Observer, OdeSystem, Options, Outcome, Sampler, Stats, StepView, MAX_EVENTS};
 use crate::model::{event, idx, ContactMode, ContactModel, FrictionLaw, Params, Slider, State};
 use crate::steady::{
@@ -87,6 +92,11 @@ pub struct LaneResult {
 /// friction laws it knows).
 pub fn supports(p: &Params) -> bool {
     matches!(p.friction_law, FrictionLaw::Constant | FrictionLaw::Coulomb)
+}
+
+/// Whether [`run_lanes`] integrates with this method (the explicit Dormand–Prince pair and DOP853).
+pub fn supports_method(m: Method) -> bool {
+    matches!(m, Method::Dopri5 | Method::Dop853)
 }
 
 /// Per-lane coefficients of the right-hand side and the tolerances.
@@ -298,6 +308,10 @@ struct Lanes<'a> {
     rejected: [bool; W],
     n_acc: [u64; W],
     n_rej: [u64; W],
+    /// Right-hand sides of DOP853's interpolant built on the lanes (hidden-crossing checks).
+    n_extra: [u64; W],
+    /// The method is DOP853 (else DP5).
+    m8: bool,
     contact: [bool; W],
     g0: [L; NE],
     pend: [[bool; W]; NE],
@@ -319,7 +333,14 @@ struct Lanes<'a> {
 ///
 /// Precondition (the caller checks): all sliders share one contact model and one friction law,
 /// which [`supports`] accepts; `sliders.len() == y0s.len()`. Panics otherwise.
-pub fn run_lanes(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances, task: Task<'_>) -> Vec<LaneResult> {
+pub fn run_lanes(
+    sliders: &[Slider],
+    y0s: &[State],
+    t_end: f64,
+    method: Method,
+    tol: &Tolerances,
+    task: Task<'_>,
+) -> Vec<LaneResult> {
     assert_eq!(sliders.len(), y0s.len(), "run_lanes: one initial state per slider");
     let Some(first) = sliders.first() else { return Vec::new() };
     let (contact, law) = (first.p.contact, first.p.friction_law);
@@ -333,17 +354,23 @@ pub fn run_lanes(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances
     if let Task::Steady { decay: Some(d), .. } = task {
         assert_eq!(d.len(), sliders.len(), "run_lanes: one decay amplitude per slider");
     }
+    assert!(supports_method(method), "run_lanes: method {method:?} is not lane-batched");
     let uni = contact == ContactModel::Unilateral;
     let coul = law == FrictionLaw::Coulomb;
-    match (uni, coul) {
-        (false, false) => dispatch::<false, false>(sliders, y0s, t_end, tol, task),
-        (false, true) => dispatch::<false, true>(sliders, y0s, t_end, tol, task),
-        (true, false) => dispatch::<true, false>(sliders, y0s, t_end, tol, task),
-        (true, true) => dispatch::<true, true>(sliders, y0s, t_end, tol, task),
+    let m8 = method == Method::Dop853;
+    match (uni, coul, m8) {
+        (false, false, false) => dispatch::<false, false, false>(sliders, y0s, t_end, tol, task),
+        (false, true, false) => dispatch::<false, true, false>(sliders, y0s, t_end, tol, task),
+        (true, false, false) => dispatch::<true, false, false>(sliders, y0s, t_end, tol, task),
+        (true, true, false) => dispatch::<true, true, false>(sliders, y0s, t_end, tol, task),
+        (false, false, true) => dispatch::<false, false, true>(sliders, y0s, t_end, tol, task),
+        (false, true, true) => dispatch::<false, true, true>(sliders, y0s, t_end, tol, task),
+        (true, false, true) => dispatch::<true, false, true>(sliders, y0s, t_end, tol, task),
+        (true, true, true) => dispatch::<true, true, true>(sliders, y0s, t_end, tol, task),
     }
 }
 
-fn dispatch<const UNI: bool, const COUL: bool>(
+fn dispatch<const UNI: bool, const COUL: bool, const M8: bool>(
     sliders: &[Slider],
     y0s: &[State],
     t_end: f64,
@@ -354,38 +381,38 @@ fn dispatch<const UNI: bool, const COUL: bool>(
     {
         if std::is_x86_feature_detected!("avx512f") {
             // SAFETY: the CPU supports the features the function is compiled for.
-            return unsafe { run_avx512::<UNI, COUL>(sliders, y0s, t_end, tol, task) };
+            return unsafe { run_avx512::<UNI, COUL, M8>(sliders, y0s, t_end, tol, task) };
         }
         if std::is_x86_feature_detected!("avx2") {
             // SAFETY: as above.
-            return unsafe { run_avx2::<UNI, COUL>(sliders, y0s, t_end, tol, task) };
+            return unsafe { run_avx2::<UNI, COUL, M8>(sliders, y0s, t_end, tol, task) };
         }
     }
-    run_impl::<UNI, COUL>(sliders, y0s, t_end, tol, task)
+    run_impl::<UNI, COUL, M8>(sliders, y0s, t_end, tol, task)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
-unsafe fn run_avx512<const UNI: bool, const COUL: bool>(
+unsafe fn run_avx512<const UNI: bool, const COUL: bool, const M8: bool>(
     sliders: &[Slider],
     y0s: &[State],
     t_end: f64,
     tol: &Tolerances,
     task: Task<'_>,
 ) -> Vec<LaneResult> {
-    run_impl::<UNI, COUL>(sliders, y0s, t_end, tol, task)
+    run_impl::<UNI, COUL, M8>(sliders, y0s, t_end, tol, task)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn run_avx2<const UNI: bool, const COUL: bool>(
+unsafe fn run_avx2<const UNI: bool, const COUL: bool, const M8: bool>(
     sliders: &[Slider],
     y0s: &[State],
     t_end: f64,
     tol: &Tolerances,
     task: Task<'_>,
 ) -> Vec<LaneResult> {
-    run_impl::<UNI, COUL>(sliders, y0s, t_end, tol, task)
+    run_impl::<UNI, COUL, M8>(sliders, y0s, t_end, tol, task)
 }
 
 /// Everything the set-up and teardown of a lane needs.
@@ -399,7 +426,7 @@ struct Input<'a, 'b> {
 
 /// The portable path (the tests check that the SIMD copies agree bitwise).
 #[inline(always)]
-fn run_impl<const UNI: bool, const COUL: bool>(
+fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
     sliders: &[Slider],
     y0s: &[State],
     t_end: f64,
@@ -425,6 +452,8 @@ fn run_impl<const UNI: bool, const COUL: bool>(
         rejected: [false; W],
         n_acc: [0; W],
         n_rej: [0; W],
+        n_extra: [0; W],
+        m8: M8,
         contact: [true; W],
         g0: [splat(1.0); NE],
         pend: [[false; W]; NE],
@@ -452,9 +481,11 @@ fn run_impl<const UNI: bool, const COUL: bool>(
     let mut k5 = [zero; 6];
     let mut k6 = [zero; 6];
     let mut k7 = [zero; 6];
+    let mut kk = [[zero; 6]; 16];
     let mut ys = [zero; 6];
     let mut yn = [zero; 6];
     let mut fzl = zero;
+    let mut fzl_scratch = zero;
 
     while ln.side.iter().any(|s| s.is_some()) {
         let live: [bool; W] = std::array::from_fn(|l| ln.side[l].is_some());
@@ -499,72 +530,82 @@ fn run_impl<const UNI: bool, const COUL: bool>(
             continue;
         }
 
-        // ---- the step: six new right-hand sides per lane ----
         let c = &ln.c;
         let cm = &ln.contact;
         let y = &ln.y;
         let k1 = &ln.f;
-        each6!(i, {
-            for l in 0..W {
-                ys[i][l] = y[i][l] + hh[l] * (A21 * k1[i][l]);
-            }
-        });
-        rhs::<UNI, COUL>(c, cm, &ys, &mut k2, &mut fzl);
-        each6!(i, {
-            for l in 0..W {
-                ys[i][l] = y[i][l] + hh[l] * (A31 * k1[i][l] + A32 * k2[i][l]);
-            }
-        });
-        rhs::<UNI, COUL>(c, cm, &ys, &mut k3, &mut fzl);
-        each6!(i, {
-            for l in 0..W {
-                ys[i][l] = y[i][l] + hh[l] * (A41 * k1[i][l] + A42 * k2[i][l] + A43 * k3[i][l]);
-            }
-        });
-        rhs::<UNI, COUL>(c, cm, &ys, &mut k4, &mut fzl);
-        each6!(i, {
-            for l in 0..W {
-                ys[i][l] = y[i][l] + hh[l] * (A51 * k1[i][l] + A52 * k2[i][l] + A53 * k3[i][l] + A54 * k4[i][l]);
-            }
-        });
-        rhs::<UNI, COUL>(c, cm, &ys, &mut k5, &mut fzl);
-        each6!(i, {
-            for l in 0..W {
-                ys[i][l] = y[i][l]
-                    + hh[l] * (A61 * k1[i][l] + A62 * k2[i][l] + A63 * k3[i][l] + A64 * k4[i][l] + A65 * k5[i][l]);
-            }
-        });
-        rhs::<UNI, COUL>(c, cm, &ys, &mut k6, &mut fzl);
-        each6!(i, {
-            for l in 0..W {
-                yn[i][l] =
-                    y[i][l] + hh[l] * (B1 * k1[i][l] + B3 * k3[i][l] + B4 * k4[i][l] + B5 * k5[i][l] + B6 * k6[i][l]);
-            }
-        });
-        rhs::<UNI, COUL>(c, cm, &yn, &mut k7, &mut fzl);
+        // The error measure: the squared RMS norm for DP5 (`err <= 1` iff `err^2 <= 1`, no square
+        // root needed), Hairer's combined 5th/3rd-order norm for DOP853.
+        let (err, fin) = if M8 {
+            step853::<UNI, COUL>(c, cm, y, k1, &hh, rtol, &mut kk, &mut yn, &mut fzl)
+        } else {
+            // ---- the step: six new right-hand sides per lane ----
+            each6!(i, {
+                for l in 0..W {
+                    ys[i][l] = y[i][l] + hh[l] * (A21 * k1[i][l]);
+                }
+            });
+            rhs::<UNI, COUL>(c, cm, &ys, &mut k2, &mut fzl);
+            each6!(i, {
+                for l in 0..W {
+                    ys[i][l] = y[i][l] + hh[l] * (A31 * k1[i][l] + A32 * k2[i][l]);
+                }
+            });
+            rhs::<UNI, COUL>(c, cm, &ys, &mut k3, &mut fzl);
+            each6!(i, {
+                for l in 0..W {
+                    ys[i][l] = y[i][l] + hh[l] * (A41 * k1[i][l] + A42 * k2[i][l] + A43 * k3[i][l]);
+                }
+            });
+            rhs::<UNI, COUL>(c, cm, &ys, &mut k4, &mut fzl);
+            each6!(i, {
+                for l in 0..W {
+                    ys[i][l] = y[i][l] + hh[l] * (A51 * k1[i][l] + A52 * k2[i][l] + A53 * k3[i][l] + A54 * k4[i][l]);
+                }
+            });
+            rhs::<UNI, COUL>(c, cm, &ys, &mut k5, &mut fzl);
+            each6!(i, {
+                for l in 0..W {
+                    ys[i][l] = y[i][l]
+                        + hh[l] * (A61 * k1[i][l] + A62 * k2[i][l] + A63 * k3[i][l] + A64 * k4[i][l] + A65 * k5[i][l]);
+                }
+            });
+            rhs::<UNI, COUL>(c, cm, &ys, &mut k6, &mut fzl);
+            each6!(i, {
+                for l in 0..W {
+                    yn[i][l] = y[i][l]
+                        + hh[l] * (B1 * k1[i][l] + B3 * k3[i][l] + B4 * k4[i][l] + B5 * k5[i][l] + B6 * k6[i][l]);
+                }
+            });
+            rhs::<UNI, COUL>(c, cm, &yn, &mut k7, &mut fzl);
 
-        // ---- error norm and finiteness ----
-        let mut acc = zero;
-        let mut fin = [true; W];
-        each6!(i, {
+            // ---- error norm and finiteness ----
+            let mut acc = zero;
+            let mut fin = [true; W];
+            each6!(i, {
+                for l in 0..W {
+                    let h = hh[l];
+                    let e = (E1 * h) * k1[i][l]
+                        + (E3 * h) * k3[i][l]
+                        + (E4 * h) * k4[i][l]
+                        + (E5 * h) * k5[i][l]
+                        + (E6 * h) * k6[i][l]
+                        + (E7 * h) * k7[i][l];
+                    let sk = c.atol[i][l] + rtol * y[i][l].abs().max(yn[i][l].abs());
+                    let q = e / sk;
+                    acc[l] += q * q;
+                    fin[l] &= yn[i][l].is_finite() && k7[i][l].is_finite();
+                }
+            });
+            let mut e2 = zero;
             for l in 0..W {
-                let h = hh[l];
-                let e = (E1 * h) * k1[i][l]
-                    + (E3 * h) * k3[i][l]
-                    + (E4 * h) * k4[i][l]
-                    + (E5 * h) * k5[i][l]
-                    + (E6 * h) * k6[i][l]
-                    + (E7 * h) * k7[i][l];
-                let sk = c.atol[i][l] + rtol * y[i][l].abs().max(yn[i][l].abs());
-                let q = e / sk;
-                acc[l] += q * q;
-                fin[l] &= yn[i][l].is_finite() && k7[i][l].is_finite();
+                e2[l] = acc[l] / 6.0;
             }
-        });
-        let mut err = zero;
+            (e2, fin)
+        };
+        let fnew: &V6 = if M8 { &kk[12] } else { &k7 };
         let mut ok = [false; W];
         for l in 0..W {
-            err[l] = acc[l] / 6.0;
             ok[l] = err[l] <= 1.0 && fin[l] && live[l];
         }
 
@@ -573,7 +614,17 @@ fn run_impl<const UNI: bool, const COUL: bool>(
         events_lanes(c, &yn, &fzl, &mut g1);
         let mut hidden = zero; // theta of the interior point to end a redone step at (0: none)
         if UNI {
-            hidden_crossings(c, y, &yn, [k1, &k3, &k4, &k5, &k6, &k7], &hh, &ln.g0, &g1, &ln.pend, &ok, &mut hidden);
+            // The interpolant at three interior points: DP5's from its stages, DOP853's needs
+            // three more right-hand sides (its 7th-order dense output), counted as work.
+            let dense = if M8 {
+                for l in 0..W {
+                    ln.n_extra[l] += 3 * ok[l] as u64;
+                }
+                dense853::<UNI, COUL>(c, cm, y, &yn, k1, &hh, &kk, &mut fzl_scratch)
+            } else {
+                dense5(y, &yn, [k1, &k3, &k4, &k5, &k6, &k7], &hh)
+            };
+            hidden_crossings(c, y, &dense, &ln.g0, &g1, &ln.pend, &ok, &mut hidden);
         }
 
         // ---- accept or reject, the controller (branch-free) ----
@@ -582,13 +633,16 @@ fn run_impl<const UNI: bool, const COUL: bool>(
             lnx[l] = err[l].max(1e-300);
         }
         let mut ln_err = ln_lanes(&lnx);
-        for v in ln_err.iter_mut() {
-            *v *= 0.5;
+        if !M8 {
+            for v in ln_err.iter_mut() {
+                *v *= 0.5;
+            }
         }
+        let alpha = if M8 { ALPHA8 } else { ALPHA };
         let mut arg = zero;
         for l in 0..W {
             arg[l] =
-                if ok[l] { -(ALPHA * ln_err[l] - BETA * ln.ln_err_old[l] - LN_SAFETY) } else { -ALPHA * ln_err[l] };
+                if ok[l] { -(alpha * ln_err[l] - BETA * ln.ln_err_old[l] - LN_SAFETY) } else { -alpha * ln_err[l] };
         }
         let r = exp_lanes(&arg);
         let t_start = ln.t;
@@ -621,23 +675,26 @@ fn run_impl<const UNI: bool, const COUL: bool>(
         // ---- which accepted lanes need the cold path ----
         let mut busy = [false; W];
         let mut attn = [false; W];
-        for l in 0..W {
-            let mut b = false;
-            for e in 0..NE {
-                b |= ln.pend[e][l] || crosses(ln.g0[e][l], g1[e][l]);
+        for e in 0..NE {
+            for l in 0..W {
+                busy[l] |= ln.pend[e][l] | cross(ln.g0[e][l], g1[e][l]);
             }
-            busy[l] = b;
-            let mut a = b || last[l];
+        }
+        for l in 0..W {
+            let mut a = busy[l] | last[l];
             if steady {
-                let section = ln.y[idx::ZD][l] > 0.0 && yn[idx::ZD][l] <= 0.0;
+                let section = (ln.y[idx::ZD][l] > 0.0) & (yn[idx::ZD][l] <= 0.0);
                 let pk = ln.peak[l].max(yn[idx::Z][l].abs());
-                let at_rest = pk < ln.rest[l] || (0..6).all(|i| yn[i][l] == 0.0);
-                a |= section || at_rest;
+                let mut rest = true;
+                for i in 0..6 {
+                    rest &= yn[i][l] == 0.0;
+                }
+                a |= section | (pk < ln.rest[l]) | rest;
             }
             if sampled {
                 a |= t_new[l] >= ln.next_sample[l];
             }
-            attn[l] = a && acc_ok[l];
+            attn[l] = a & acc_ok[l];
         }
         // A step end where the floor of the step rejects (the scalar driver's check after a
         // rejection): the lane ends with StepTooSmall / NonFinite.
@@ -660,7 +717,7 @@ fn run_impl<const UNI: bool, const COUL: bool>(
         each6!(i, {
             for l in 0..W {
                 ln.y[i][l] = if plain[l] { yn[i][l] } else { ln.y[i][l] };
-                ln.f[i][l] = if plain[l] { k7[i][l] } else { ln.f[i][l] };
+                ln.f[i][l] = if plain[l] { fnew[i][l] } else { ln.f[i][l] };
             }
         });
         for e in 0..NE {
@@ -694,12 +751,20 @@ fn run_impl<const UNI: bool, const COUL: bool>(
 
         // ---- the cold path: events, observers, the end of a run ----
         if attn.iter().any(|&a| a) {
-            let stages = [&ln.f, &k2, &k3, &k4, &k5, &k6, &k7];
-            let ks: [[State; 7]; W] = std::array::from_fn(|l| {
+            let stages: [&V6; 13] = if M8 {
+                let mut a = [&ln.f; 13];
+                for j in 1..13 {
+                    a[j] = &kk[j];
+                }
+                a
+            } else {
+                [&ln.f, &k2, &k3, &k4, &k5, &k6, &k7, &k7, &k7, &k7, &k7, &k7, &k7]
+            };
+            let ks: [[State; 13]; W] = std::array::from_fn(|l| {
                 if attn[l] {
                     std::array::from_fn(|j| lane_state(stages[j], l))
                 } else {
-                    [State::zeros(); 7]
+                    [State::zeros(); 13]
                 }
             });
             for l in 0..W {
@@ -710,42 +775,25 @@ fn run_impl<const UNI: bool, const COUL: bool>(
                 let y1 = lane_state(&yn, l);
                 let g0: [f64; MAX_EVENTS] = std::array::from_fn(|e| if e < NE { ln.g0[e][l] } else { 0.0 });
                 let g1l: [f64; MAX_EVENTS] = std::array::from_fn(|e| if e < NE { g1[e][l] } else { 0.0 });
-                let dense = Dopri5Dense::from_stages(&ks[l], &y0, &y1, t_start[l], hh[l]);
                 let ln_ref = &mut ln;
-                let ev: StepEnd<6, ContactMode> = {
-                    let sd = ln_ref.side[l].as_mut().expect("attention only on live lanes");
-                    sync_to_side(&ln_ref.min_n, &ln_ref.max_gap, &ln_ref.min_vr, &ln_ref.max_z, l, sd);
-                    if steady {
-                        if let Watch::Steady(o, _) = &mut sd.obs.inner {
-                            o.w.peak_since = ln_ref.peak[l];
-                            o.w.peaks_since = lane_state(&ln_ref.peaks, l);
-                        }
+                let sd = ln_ref.side[l].as_mut().expect("attention only on live lanes");
+                sync_to_side(&ln_ref.min_n, &ln_ref.max_gap, &ln_ref.min_vr, &ln_ref.max_z, l, sd);
+                if steady {
+                    if let Watch::Steady(o, _) = &mut sd.obs.inner {
+                        o.w.peak_since = ln_ref.peak[l];
+                        o.w.peaks_since = lane_state(&ln_ref.peaks, l);
                     }
-                    let mode = sd.mode;
-                    if busy[l] {
-                        step_events(
-                            sd.s,
-                            &mut sd.obs,
-                            &sd.opts,
-                            &mut sd.stats,
-                            &dense,
-                            mode,
-                            (t_start[l], &y0),
-                            (t_new[l], &y1),
-                            NE,
-                            &g0,
-                            &g1l,
-                            &mut sd.pend,
-                        )
-                    } else {
-                        let view = StepView { t0: t_start[l], t1: t_new[l], y0: &y0, y1: &y1, mode, dense: &dense };
-                        let end = if sd.obs.on_step(&view) == Control::Stop {
-                            Some(Outcome::StoppedByObserver)
-                        } else {
-                            None
-                        };
-                        StepEnd { t1: t_new[l], y1, new_mode: mode, end, switched: None }
-                    }
+                }
+                let span = ((t_start[l], &y0), (t_new[l], &y1));
+                let ev: StepEnd<6, ContactMode> = if M8 {
+                    let dense = Dop853Dense::from_stages(sd.s, sd.mode, &ks[l], &y0, &y1, t_start[l], hh[l]);
+                    let ev = cold_step(sd, &dense, busy[l], span, &g0, &g1l);
+                    sd.stats.n_rhs += dense.extra_rhs();
+                    ev
+                } else {
+                    let k7s: &[State; 7] = ks[l][..7].try_into().expect("seven stages");
+                    let dense = Dopri5Dense::from_stages(k7s, &y0, &y1, t_start[l], hh[l]);
+                    cold_step(sd, &dense, busy[l], span, &g0, &g1l)
                 };
                 sync_from_side(&mut ln, l, steady, sampled);
                 if let Some(outcome) = ev.end {
@@ -790,7 +838,7 @@ fn run_impl<const UNI: bool, const COUL: bool>(
                 } else {
                     for i in 0..6 {
                         ln.y[i][l] = y1[i];
-                        ln.f[i][l] = k7[i][l];
+                        ln.f[i][l] = fnew[i][l];
                     }
                     ln.t[l] = t_new[l];
                     let sd = ln.side[l].as_mut().expect("live");
@@ -810,6 +858,40 @@ fn run_impl<const UNI: bool, const COUL: bool>(
         }
     }
     out.into_iter().map(|r| r.expect("every trajectory has a result")).collect()
+}
+
+/// The scalar driver's handling of one accepted step of one lane: its events (located on the
+/// step's interpolant, acted on in time order) or, without any, the observer's look at the step.
+#[inline(never)]
+fn cold_step<D: StepDense<6>>(
+    sd: &mut Side<'_>,
+    dense: &D,
+    busy: bool,
+    ((t0, y0), (t1, y1)): ((f64, &State), (f64, &State)),
+    g0: &[f64; MAX_EVENTS],
+    g1: &[f64; MAX_EVENTS],
+) -> StepEnd<6, ContactMode> {
+    let mode = sd.mode;
+    if busy {
+        step_events(
+            sd.s,
+            &mut sd.obs,
+            &sd.opts,
+            &mut sd.stats,
+            dense,
+            mode,
+            (t0, y0),
+            (t1, y1),
+            NE,
+            g0,
+            g1,
+            &mut sd.pend,
+        )
+    } else {
+        let view = StepView { t0, t1, y0, y1, mode, dense };
+        let end = if sd.obs.on_step(&view) == Control::Stop { Some(Outcome::StoppedByObserver) } else { None };
+        StepEnd { t1, y1: *y1, new_mode: mode, end, switched: None }
+    }
 }
 
 fn sync_to_side(min_n: &L, max_gap: &L, min_vr: &L, max_z: &L, l: usize, sd: &mut Side<'_>) {
@@ -840,41 +922,59 @@ fn sync_from_side(ln: &mut Lanes<'_>, l: usize, steady: bool, sampled: bool) {
     }
 }
 
-/// The scalar driver's hidden-crossing check on all lanes at once: at the three interior points
-/// `theta = 1/4, 1/2, 3/4` of each accepted step's interpolant, an event function that is not
-/// pending and differs in sign from the step start while the step end does not. `hidden[l]`
-/// becomes the first such `theta` (0 where none).
+/// A step's interpolant on the lanes, for the five components the event functions read (z, zd,
+/// xd, phi, phid).
+struct LaneDense {
+    y0: [L; 5],
+    /// DP5: `dy, bspl, r4, r5` (`y0 + (dy + (bspl + (r4 + r5 (1-x)) x) (1-x)) x`);
+    /// DOP853: `c0..c6` (Hairer's `contd8` polynomial).
+    c: [[L; 5]; 7],
+    eight: bool,
+}
+
+const EV_COMPS: [usize; 5] = [idx::Z, idx::ZD, idx::XD, idx::PHI, idx::PHID];
+
+impl LaneDense {
+    #[inline(always)]
+    fn eval(&self, x: f64) -> [L; 5] {
+        let x1 = 1.0 - x;
+        let c = &self.c;
+        let mut v = [[0.0; W]; 5];
+        for j in 0..5 {
+            for l in 0..W {
+                v[j][l] = if self.eight {
+                    let mut p = c[6][j][l] * x;
+                    p = (c[5][j][l] + p) * x1;
+                    p = (c[4][j][l] + p) * x;
+                    p = (c[3][j][l] + p) * x1;
+                    p = (c[2][j][l] + p) * x;
+                    p = (c[1][j][l] + p) * x1;
+                    p = (c[0][j][l] + p) * x;
+                    self.y0[j][l] + p
+                } else {
+                    self.y0[j][l] + (c[0][j][l] + (c[1][j][l] + (c[2][j][l] + c[3][j][l] * x1) * x) * x1) * x
+                };
+            }
+        }
+        v
+    }
+}
+
+/// The DP5 interpolant of each lane's step.
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn hidden_crossings(
-    c: &Coef,
-    y0: &V6,
-    y1: &V6,
-    k: [&V6; 6],
-    hh: &L,
-    g0: &[L; NE],
-    g1: &[L; NE],
-    pend: &[[bool; W]; NE],
-    ok: &[bool; W],
-    hidden: &mut L,
-) {
+fn dense5(y0: &V6, y1: &V6, k: [&V6; 6], hh: &L) -> LaneDense {
     let [k1, k3, k4, k5, k6, k7] = k;
-    // The Dormand–Prince interpolant `y0 + (dy + (bspl + (r4 + r5 (1-th)) th) (1-th)) th` of the
-    // components the event functions read (z, zd, xd, phi, phid).
-    let comps = [idx::Z, idx::ZD, idx::XD, idx::PHI, idx::PHID];
-    let mut dy = [[0.0; W]; 5];
-    let mut bs = [[0.0; W]; 5];
-    let mut r4 = [[0.0; W]; 5];
-    let mut r5 = [[0.0; W]; 5];
-    for (j, &i) in comps.iter().enumerate() {
+    let mut d = LaneDense { y0: [[0.0; W]; 5], c: [[[0.0; W]; 5]; 7], eight: false };
+    for (j, &i) in EV_COMPS.iter().enumerate() {
         for l in 0..W {
             let h = hh[l];
-            let d = y1[i][l] - y0[i][l];
-            let b = k1[i][l] * h - d;
-            dy[j][l] = d;
-            bs[j][l] = b;
-            r4[j][l] = d - k7[i][l] * h - b;
-            r5[j][l] = (D1 * h) * k1[i][l]
+            let dy = y1[i][l] - y0[i][l];
+            let b = k1[i][l] * h - dy;
+            d.y0[j][l] = y0[i][l];
+            d.c[0][j][l] = dy;
+            d.c[1][j][l] = b;
+            d.c[2][j][l] = dy - k7[i][l] * h - b;
+            d.c[3][j][l] = (D1 * h) * k1[i][l]
                 + (D3 * h) * k3[i][l]
                 + (D4 * h) * k4[i][l]
                 + (D5 * h) * k5[i][l]
@@ -882,29 +982,228 @@ fn hidden_crossings(
                 + (D7 * h) * k7[i][l];
         }
     }
+    d
+}
+
+/// `out = y + h (a_1 k_1 + ... + a_K k_K)` on the lanes.
+#[inline(always)]
+fn comb<const K: usize>(y: &V6, hh: &L, a: [f64; K], ks: [&V6; K], out: &mut V6) {
+    for i in 0..6 {
+        for l in 0..W {
+            let mut s = 0.0;
+            for j in 0..K {
+                s += a[j] * ks[j][i][l];
+            }
+            out[i][l] = y[i][l] + hh[l] * s;
+        }
+    }
+}
+
+/// One DOP853 attempt on the lanes: the twelve stages into `kk[1..12]`, the new state `yn`, the
+/// derivative there into `kk[12]` (and the law force there into `fzl`); returns Hairer's error
+/// measure and whether the state and derivative are finite.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn step853<const UNI: bool, const COUL: bool>(
+    c: &Coef,
+    cm: &[bool; W],
+    y: &V6,
+    k1: &V6,
+    hh: &L,
+    rtol: f64,
+    kk: &mut [V6; 16],
+    yn: &mut V6,
+    fzl: &mut L,
+) -> (L, [bool; W]) {
+    let mut ys = [[0.0; W]; 6];
+    let mut t = [[0.0; W]; 6];
+    macro_rules! stage {
+        ($j:expr, $a:expr, $ks:expr) => {{
+            comb(y, hh, $a, $ks, &mut ys);
+            rhs::<UNI, COUL>(c, cm, &ys, &mut t, fzl);
+            kk[$j] = t;
+        }};
+    }
+    stage!(1, [A2_1], [k1]);
+    stage!(2, [A3_1, A3_2], [k1, &kk[1]]);
+    stage!(3, [A4_1, A4_3], [k1, &kk[2]]);
+    stage!(4, [A5_1, A5_3, A5_4], [k1, &kk[2], &kk[3]]);
+    stage!(5, [A6_1, A6_4, A6_5], [k1, &kk[3], &kk[4]]);
+    stage!(6, [A7_1, A7_4, A7_5, A7_6], [k1, &kk[3], &kk[4], &kk[5]]);
+    stage!(7, [A8_1, A8_4, A8_5, A8_6, A8_7], [k1, &kk[3], &kk[4], &kk[5], &kk[6]]);
+    stage!(8, [A9_1, A9_4, A9_5, A9_6, A9_7, A9_8], [k1, &kk[3], &kk[4], &kk[5], &kk[6], &kk[7]]);
+    stage!(9, [A10_1, A10_4, A10_5, A10_6, A10_7, A10_8, A10_9], [k1, &kk[3], &kk[4], &kk[5], &kk[6], &kk[7], &kk[8]]);
+    stage!(
+        10,
+        [A11_1, A11_4, A11_5, A11_6, A11_7, A11_8, A11_9, A11_10],
+        [k1, &kk[3], &kk[4], &kk[5], &kk[6], &kk[7], &kk[8], &kk[9]]
+    );
+    stage!(
+        11,
+        [A12_1, A12_4, A12_5, A12_6, A12_7, A12_8, A12_9, A12_10, A12_11],
+        [k1, &kk[3], &kk[4], &kk[5], &kk[6], &kk[7], &kk[8], &kk[9], &kk[10]]
+    );
+    let used = [k1, &kk[5], &kk[6], &kk[7], &kk[8], &kk[9], &kk[10], &kk[11]];
+    comb(y, hh, [A13_1, A13_6, A13_7, A13_8, A13_9, A13_10, A13_11, A13_12], used, yn);
+    let mut s5 = [0.0; W];
+    let mut s3 = [0.0; W];
+    for i in 0..6 {
+        for l in 0..W {
+            let mut e5 = 0.0;
+            let mut e3 = 0.0;
+            let er = [ER_1, ER_6, ER_7, ER_8, ER_9, ER_10, ER_11, ER_12];
+            let e3c = [E3_1, A13_6, A13_7, A13_8, E3_9, A13_10, A13_11, E3_12];
+            for j in 0..8 {
+                e5 += er[j] * used[j][i][l];
+                e3 += e3c[j] * used[j][i][l];
+            }
+            let sk = c.atol[i][l] + rtol * y[i][l].abs().max(yn[i][l].abs());
+            let (q5, q3) = (e5 / sk, e3 / sk);
+            s5[l] += q5 * q5;
+            s3[l] += q3 * q3;
+        }
+    }
+    rhs::<UNI, COUL>(c, cm, yn, &mut t, fzl);
+    kk[12] = t;
+    let mut err = [0.0; W];
+    let mut fin = [true; W];
+    for l in 0..W {
+        let den = s5[l] + 0.01 * s3[l];
+        let e = hh[l].abs() * s5[l] / (den * 6.0).sqrt();
+        err[l] = if den > 0.0 {
+            e
+        } else if den == 0.0 {
+            0.0
+        } else {
+            f64::NAN
+        };
+    }
+    for i in 0..6 {
+        for l in 0..W {
+            fin[l] &= yn[i][l].is_finite() & kk[12][i][l].is_finite();
+        }
+    }
+    (err, fin)
+}
+
+/// The DOP853 interpolant of each lane's step: the three extra stages, then the seven
+/// coefficients of the components the event functions read.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn dense853<const UNI: bool, const COUL: bool>(
+    c: &Coef,
+    cm: &[bool; W],
+    y: &V6,
+    y1: &V6,
+    k1: &V6,
+    hh: &L,
+    kk: &[V6; 16],
+    fzl: &mut L,
+) -> LaneDense {
+    let mut ys = [[0.0; W]; 6];
+    let mut k14 = [[0.0; W]; 6];
+    let mut k15 = [[0.0; W]; 6];
+    let mut k16 = [[0.0; W]; 6];
+    let k = |j: usize| &kk[j - 1];
+    comb(
+        y,
+        hh,
+        [A14_1, A14_7, A14_8, A14_9, A14_10, A14_11, A14_12, A14_13],
+        [k1, k(7), k(8), k(9), k(10), k(11), k(12), k(13)],
+        &mut ys,
+    );
+    rhs::<UNI, COUL>(c, cm, &ys, &mut k14, fzl);
+    comb(
+        y,
+        hh,
+        [A15_1, A15_6, A15_7, A15_8, A15_11, A15_12, A15_13, A15_14],
+        [k1, k(6), k(7), k(8), k(11), k(12), k(13), &k14],
+        &mut ys,
+    );
+    rhs::<UNI, COUL>(c, cm, &ys, &mut k15, fzl);
+    comb(
+        y,
+        hh,
+        [A16_1, A16_6, A16_7, A16_8, A16_9, A16_13, A16_14, A16_15],
+        [k1, k(6), k(7), k(8), k(9), k(13), &k14, &k15],
+        &mut ys,
+    );
+    rhs::<UNI, COUL>(c, cm, &ys, &mut k16, fzl);
+    let st = [k1, k(6), k(7), k(8), k(9), k(10), k(11), k(12), k(13), &k14, &k15, &k16];
+    let rows = [
+        [D4_1, D4_6, D4_7, D4_8, D4_9, D4_10, D4_11, D4_12, D4_13, D4_14, D4_15, D4_16],
+        [D5_1, D5_6, D5_7, D5_8, D5_9, D5_10, D5_11, D5_12, D5_13, D5_14, D5_15, D5_16],
+        [D6_1, D6_6, D6_7, D6_8, D6_9, D6_10, D6_11, D6_12, D6_13, D6_14, D6_15, D6_16],
+        [D7_1, D7_6, D7_7, D7_8, D7_9, D7_10, D7_11, D7_12, D7_13, D7_14, D7_15, D7_16],
+    ];
+    let mut d = LaneDense { y0: [[0.0; W]; 5], c: [[[0.0; W]; 5]; 7], eight: true };
+    for (j, &i) in EV_COMPS.iter().enumerate() {
+        for l in 0..W {
+            let h = hh[l];
+            let dy = y1[i][l] - y[i][l];
+            d.y0[j][l] = y[i][l];
+            d.c[0][j][l] = dy;
+            d.c[1][j][l] = k1[i][l] * h - dy;
+            d.c[2][j][l] = dy * 2.0 - (k1[i][l] + k(13)[i][l]) * h;
+            for (r, row) in rows.iter().enumerate() {
+                let mut s = 0.0;
+                for m in 0..12 {
+                    s += (row[m] * h) * st[m][i][l];
+                }
+                d.c[3 + r][j][l] = s;
+            }
+        }
+    }
+    d
+}
+
+/// The scalar driver's hidden-crossing check on all lanes at once: at the three interior points
+/// `x = 1/4, 1/2, 3/4` of each accepted step's interpolant, an event function that is not pending
+/// and differs in sign from the step start while the step end does not. `hidden[l]` becomes the
+/// first such `x` (0 where none).
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn hidden_crossings(
+    c: &Coef,
+    _y0: &V6,
+    dense: &LaneDense,
+    g0: &[L; NE],
+    g1: &[L; NE],
+    pend: &[[bool; W]; NE],
+    ok: &[bool; W],
+    hidden: &mut L,
+) {
     let mut found = [false; W];
     for q in 1..=3 {
         let th = q as f64 / 4.0;
-        let th1 = 1.0 - th;
-        let mut v = [[0.0; W]; 5];
-        for (j, &i) in comps.iter().enumerate() {
-            for l in 0..W {
-                v[j][l] = y0[i][l] + (dy[j][l] + (bs[j][l] + (r4[j][l] + r5[j][l] * th1) * th) * th1) * th;
-            }
-        }
+        let v = dense.eval(th);
+        let mut g = [[0.0; W]; NE];
         for l in 0..W {
             let (z, zd, xd, ph, phd) = (v[0][l], v[1][l], v[2][l], v[3][l], v[4][l]);
             let fz = -c.ks[l] * z + c.ka[l] * z * z - c.c[l] * zd + c.kphi[l] * ph;
-            let g = [c.zst[l] + z, c.fst[l] + fz, c.v[l] - (xd + c.sl[l] * phd), c.esc[l] - z.abs()];
-            let mut hit = false;
-            for e in 0..NE {
-                hit |= !pend[e][l] && crosses(g0[e][l], g[e]) && !crosses(g0[e][l], g1[e][l]);
+            g[event::GAP][l] = c.zst[l] + z;
+            g[event::NORMAL][l] = c.fst[l] + fz;
+            g[event::SLIP][l] = c.v[l] - (xd + c.sl[l] * phd);
+            g[event::ESCAPE][l] = c.esc[l] - z.abs();
+        }
+        let mut hit = [false; W];
+        for e in 0..NE {
+            for l in 0..W {
+                hit[l] |= !pend[e][l] & cross(g0[e][l], g[e][l]) & !cross(g0[e][l], g1[e][l]);
             }
-            let take = hit && ok[l] && !found[l];
+        }
+        for l in 0..W {
+            let take = hit[l] & ok[l] & !found[l];
             hidden[l] = if take { th } else { hidden[l] };
             found[l] |= take;
         }
     }
+}
+
+/// `driver::crosses` without short-circuit evaluation, so that loops over lanes vectorise.
+#[inline(always)]
+fn cross(a: f64, b: f64) -> bool {
+    ((a > 0.0) & (b <= 0.0)) | ((a < 0.0) & (b >= 0.0))
 }
 
 /// Write lane `l`'s result (ended at `(t, y)` with `outcome`) and mark it idle.
@@ -919,7 +1218,9 @@ fn finish(ln: &mut Lanes<'_>, l: usize, t: f64, y: State, outcome: Outcome, out:
     };
     let steps = ln.n_acc[l] + ln.n_rej[l];
     let mut stats = sd.stats;
-    stats.n_rhs += 6 * steps;
+    // DP5: six new stages per attempt (FSAL); DOP853: eleven per attempt and the derivative at
+    // each accepted step's end, plus its interpolants' extra stages.
+    stats.n_rhs += if ln.m8 { 11 * steps + ln.n_acc[l] + ln.n_extra[l] } else { 6 * steps };
     stats.n_accept = ln.n_acc[l];
     stats.n_reject = ln.n_rej[l];
     let escaped = y[idx::Z].abs() >= sd.s.p.escape_limit * (1.0 - 1e-9);
@@ -1019,7 +1320,8 @@ fn refill<'a>(ln: &mut Lanes<'a>, l: usize, next: &mut usize, inp: &Input<'a, '_
             continue;
         }
         let mut n_rhs = 1;
-        let h0 = initial_step(s, mode, 0.0, &y0, &f0, t_end, 5, &opts.atol, opts.rtol, f64::INFINITY, &mut n_rhs);
+        let order = if ln.m8 { 8 } else { 5 };
+        let h0 = initial_step(s, mode, 0.0, &y0, &f0, t_end, order, &opts.atol, opts.rtol, f64::INFINITY, &mut n_rhs);
         sd.stats.n_rhs = n_rhs;
         let mut g = [0.0; MAX_EVENTS];
         s.events(0.0, &y0, mode, &mut g);
@@ -1042,6 +1344,7 @@ fn refill<'a>(ln: &mut Lanes<'a>, l: usize, next: &mut usize, inp: &Input<'a, '_
         ln.rejected[l] = false;
         ln.n_acc[l] = 0;
         ln.n_rej[l] = 0;
+        ln.n_extra[l] = 0;
         ln.contact[l] = mode == ContactMode::Contact;
         let e = sd.obs.ext;
         ln.min_n[l] = e.min_normal_force;
