@@ -10,8 +10,11 @@
 //! S = I + (f+ - f-) n^T / (n^T f-)          n = grad h, h the switching function
 //! ```
 //!
-//! (`h = zc` for the gap event, `h = N_law` for the normal-force event), and the run restarts in the
-//! new mode. The Newton matrix is `[Phi(T) - I]` without the `zd` column, plus the column `f(y(T))`
+//! (`h = zc` for the gap event, `h = N_law` for the normal-force event; for the switch friction
+//! law `h = v_r -+ eta` at the stick band's edges and `h = mu_s N - |F_req|` at the stick bound),
+//! and the run restarts in the new mode. Entering stick, the saltation matrix projects every
+//! perturbation onto the band edge (the stick field has `d v_r/dt = 0`), so a stick-slip cycle has
+//! a zero multiplier besides the trivial one. The Newton matrix is `[Phi(T) - I]` without the `zd` column, plus the column `f(y(T))`
 //! for `T`. The Floquet multipliers are the eigenvalues of `Phi(T)` at the converged orbit, sorted
 //! by modulus; one of them is the trivial 1 of an autonomous system, and the orbit is stable when
 //! every other one has modulus below `1 - stability_tol`.
@@ -121,6 +124,9 @@ pub fn saltation(s: &Slider, y: &State, before: ContactMode, after: ContactMode,
             n[idx::ZD] = -p.contact_damping;
             n[idx::PHI] = p.twist_coupling;
         }
+        // Switch law: band edges `v_r = +-eta` and the stick bound `mu_s N - |F_req| = 0`.
+        event::BAND_HI | event::BAND_LO => n = s.slip_velocity_gradient(),
+        event::STICK => n = s.stick_margin_gradient(y),
         _ => return Jacobian::identity(),
     }
     if before == after {
@@ -157,7 +163,7 @@ fn missed_crossing<const N: usize>(s: &Slider, st: &StepView<'_, N, ContactMode>
             }
             let relevant = match e {
                 0 => unilateral || gap_always,
-                _ => unilateral && (st.mode == ContactMode::Contact || s.gap(&yk) <= 0.0),
+                _ => unilateral && (st.mode.in_contact() || s.gap(&yk) <= 0.0),
             };
             if relevant {
                 return Some(h);
