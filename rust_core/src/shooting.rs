@@ -1032,6 +1032,34 @@ mod tests {
     }
 
     #[test]
+    fn saltation_into_stick_projects_onto_the_band_edge() {
+        use crate::model::{FrictionLaw, Params};
+        let s = Slider::new(Params {
+            friction_law: FrictionLaw::Switch,
+            mu_static: 0.3,
+            stribeck_velocity: 0.02,
+            sliding_speed: 0.01,
+            ..Params::seed()
+        })
+        .unwrap();
+        // On the upper band edge, slipping inwards.
+        let eta = s.p.stick_band;
+        let phid = 0.01;
+        let xd = s.p.sliding_speed - eta - s.p.torsion_sign * s.p.moment_arm * phid;
+        let y = State::new(1e-6, 0.0, 2e-5, xd, 1e-4, phid);
+        assert!((s.slip_velocity(&y) - eta).abs() < 1e-15);
+        let sm = saltation(&s, &y, ContactMode::Contact, ContactMode::Stick, event::BAND_HI);
+        // Every perturbation leaves v_r on the edge: n^T S = 0 (a zero Floquet multiplier).
+        let n = s.slip_velocity_gradient();
+        let row = n.transpose() * sm;
+        assert!(row.amax() < 1e-12, "{row}");
+        // Leaving stick for slip at the bound: S maps the stick field onto the slip field.
+        let sm = saltation(&s, &y, ContactMode::Stick, ContactMode::Contact, event::STICK);
+        let (fm, fp) = (s.rhs(&y, ContactMode::Stick), s.rhs(&y, ContactMode::Contact));
+        assert!((sm * fm - fp).amax() <= 1e-9 * fp.amax());
+    }
+
+    #[test]
     fn monodromy_matches_finite_differences() {
         // Bilateral (smooth): Phi(T) against central differences of the flow.
         let s = Slider::seed();
