@@ -1112,10 +1112,12 @@ mod tests {
         assert_eq!(sol.outcome, crate::ode::Outcome::Finished);
         let switches: Vec<_> = log.0.iter().filter(|e| e.2 != e.3).collect();
         assert!(switches.len() >= 4, "{switches:?}");
+        // A located edge is inside the band by |dv_r/dt| x event_tol (1e-13 s): about 1e-11 m/s,
+        // 1e-6 of this eta; 1e-4 of eta says "on the edge" with a hundredfold margin.
         for &&(i, v, b, a) in &switches {
             match i {
-                event::BAND_HI => assert!((v - eta).abs() <= 1e-6 * eta, "{v}"),
-                event::BAND_LO => assert!((v + eta).abs() <= 1e-6 * eta, "{v}"),
+                event::BAND_HI => assert!((v - eta).abs() <= 1e-4 * eta, "{v}"),
+                event::BAND_LO => assert!((v + eta).abs() <= 1e-4 * eta, "{v}"),
                 event::STICK => assert!(b == ContactMode::Stick || a == ContactMode::Stick, "{b:?} -> {a:?}"),
                 _ => {}
             }
