@@ -192,3 +192,26 @@ def test_load_mu_map_marks_the_escape():
     assert STATUS_NAMES[int(st.sel(normal_load=20.0, mu=0.35))] == "diverged"
     assert int(st.sel(normal_load=84.46, mu=0.215)) == 0
     assert fm._failing_cells(ds) == ["dop853: diverged at normal_load 20, mu 0.35"]
+
+
+def test_law_comparison_on_synthetic_lines():
+    (scene,) = wp.make_scenes(names=["stick_slip"], n=1)
+    assert scene.variants["switch"].friction_law == "switch"
+    assert scene.variant("switch").model.friction_law == "switch" and scene.variant("switch").variants == {}
+
+    def row(impl, method, rtol, err, t, rhs):
+        return {"scene": "stick_slip", "impl": impl, "method": method, "label": f"{impl} {method}", "rtol": rtol,
+                "error": err, "seconds_per_traj": t, "n_rhs": rhs, "failed": False}
+
+    rows = [row("rust", "dopri5", 1e-4, 1e-3, 1.0, 1e6), row("rust", "dopri5", 1e-8, 1e-9, 2.0, 2e6),
+            row("switch", "dopri5", 1e-4, 1e-3, 0.01, 1e4), row("switch", "dopri5", 1e-8, 1e-9, 0.04, 4e4),
+            row("rust", "rodas4", 1e-4, 1e-3, 0.1, 1e4), row("rust", "rodas4", 1e-8, 1e-9, 1.0, 1e5),
+            row("switch", "rodas4", 1e-4, 1e-3, 0.2, 2e4), row("switch", "rodas4", 1e-8, 1e-9, 0.4, 4e4)]
+    scenes = [{"name": "stick_slip", "variants": {"switch": {}}}]
+    got = {(q["method"], q["error"]): q for q in wp.law_comparison(rows, scenes, targets=(1e-6,))}
+    # 1e-6 is half-way (in log) between the rungs: geometric means.
+    assert got[("dopri5", 1e-6)]["rhs_ratio"] == pytest.approx(math.sqrt(2e12) / math.sqrt(4e8), rel=1e-12)
+    assert got[("rodas4", 1e-6)]["time_ratio"] == pytest.approx(math.sqrt(0.1) / math.sqrt(0.08), rel=1e-12)
+    best = got[("best of each", 1e-6)]
+    assert best["base_rhs"] == pytest.approx(math.sqrt(1e9), rel=1e-12)
+    assert best["variant_rhs"] == pytest.approx(math.sqrt(4e8), rel=1e-12)

@@ -191,8 +191,9 @@ def jacobians(values: Mapping[str, np.ndarray | float], friction_law: str = "con
     ----------
     values : mapping of str to float or 1-D array
         Every real SliderModel field (SI units); arrays of one length ``n`` and scalars broadcast.
-    friction_law : {"constant", "coulomb"}
-        Friction law (the Coulomb law adds the Stribeck slope and the tanh regularisation).
+    friction_law : {"constant", "coulomb", "switch"}
+        Friction law (the Coulomb law adds the Stribeck slope and the tanh regularisation; the
+        switch law the Stribeck slope).
 
     Returns
     -------
@@ -212,20 +213,21 @@ def jacobians(values: Mapping[str, np.ndarray | float], friction_law: str = "con
     s, arm = v["torsion_sign"], v["moment_arm"]
     if friction_law == "constant":
         dfx = dfz * v["mu"][:, None]
-    elif friction_law == "coulomb":
-        # F_x = mu(v_r) N tanh(v_r/eps) - mu(V) F_st, v_r = V - xd - s L phid (MODEL.md §2).
+    elif friction_law in ("coulomb", "switch"):
+        # F_x = mu(v_r) N tanh(v_r/eps) - mu(V) F_st, v_r = V - xd - s L phid (MODEL.md §2); the
+        # switch law slips at y = 0 (V > eta) with sign(v_r) = 1 in place of the tanh.
         vel, vs, mus, eps = v["sliding_speed"], v["stribeck_velocity"], v["mu_static"], v["friction_regularization"]
         e = np.exp(-vel / vs)
         mu_k = (v["mu"] - mus * e) / (1.0 - e)
         mu_v = mu_k + (mus - mu_k) * e
-        th = np.tanh(vel / eps)
+        th = np.tanh(vel / eps) if friction_law == "coulomb" else np.ones_like(vel)
         dmu = -(mus - mu_k) / vs * e
         dg = dmu * th + mu_v * (1.0 - th * th) / eps
         dfx = dfz * (mu_v * th)[:, None]
         dfx[:, 3] -= f * dg
         dfx[:, 5] -= f * dg * s * arm
     else:
-        raise ValueError(f"friction_law = {friction_law!r} is not valid: must be 'constant' or 'coulomb'")
+        raise ValueError(f"friction_law = {friction_law!r} is not valid: must be 'constant', 'coulomb' or 'switch'")
     m = v["mass"]
     wz, wx, wt = v["omega_normal"], v["omega_friction"], v["omega_torsion"]
     j = np.zeros((n, 6, 6))
@@ -272,7 +274,7 @@ def linear_stability(values: Mapping[str, np.ndarray | float], friction_law: str
     ----------
     values : mapping of str to float or 1-D array
         Every real SliderModel field (SI units).
-    friction_law : {"constant", "coulomb"}
+    friction_law : {"constant", "coulomb", "switch"}
         Friction law.
 
     Returns
@@ -715,7 +717,7 @@ def compute_chunk(
         Base parameters (``SliderModel.values()``, SI units).
     contact : {"bilateral", "unilateral"}
         Contact model of the transient runs.
-    friction_law : {"constant", "coulomb"}
+    friction_law : {"constant", "coulomb", "switch"}
         Friction law.
     point_params : dict of str to 1-D numpy.ndarray
         Per-point overrides of real SliderModel fields, all of length ``n``.

@@ -1,11 +1,16 @@
 """Type stubs of the compiled core (private; use the tribosweep package)."""
 
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 import numpy.typing as npt
 
 __version__: str
+
+#: Friction laws the core parses (anything else raises ValueError naming the argument and the valid names).
+FrictionLawName = Literal["constant", "coulomb", "switch"]
+#: Contact models the core parses.
+ContactName = Literal["bilateral", "unilateral"]
 
 def param_names() -> list[str]: ...
 def seed_params() -> dict[str, float]: ...
@@ -13,12 +18,12 @@ def status_names() -> list[str]: ...
 def method_names() -> list[str]: ...
 def steady_outcome_names() -> list[str]: ...
 def instability_names() -> list[str]: ...
-def validate_params(values: dict[str, float], contact: str, friction_law: str) -> None: ...
+def validate_params(values: dict[str, float], contact: str, friction_law: FrictionLawName) -> None: ...
 def static_point(values: dict[str, float]) -> tuple[float, float]: ...
 def simulate(
     values: dict[str, float],
     contact: str,
-    friction_law: str,
+    friction_law: FrictionLawName,
     y0: npt.NDArray[np.float64],
     t_end: float,
     method: str,
@@ -31,7 +36,7 @@ def simulate(
 def ensemble(
     base: dict[str, float],
     contact: str,
-    friction_law: str,
+    friction_law: FrictionLawName,
     names: list[str],
     values: npt.NDArray[np.float64],
     y0: npt.NDArray[np.float64],
@@ -52,18 +57,18 @@ def ensemble(
 def linear_stability(
     base: dict[str, float],
     contact: str,
-    friction_law: str,
+    friction_law: FrictionLawName,
     names: list[str],
     values: npt.NDArray[np.float64],
     threads: int | None = None,
 ) -> dict[str, Any]: ...
 def hopf_loads(
-    values: dict[str, float], friction_law: str, load_min: float, load_max: float, n_grid: int
+    values: dict[str, float], friction_law: FrictionLawName, load_min: float, load_max: float, n_grid: int
 ) -> list[dict[str, Any]]: ...
 def describing_function(
     base: dict[str, float],
     contact: str,
-    friction_law: str,
+    friction_law: FrictionLawName,
     names: list[str],
     values: npt.NDArray[np.float64],
     variant: str = "consistent",
@@ -75,7 +80,7 @@ def describing_function(
 def periodic_orbit(
     values: dict[str, float],
     contact: str,
-    friction_law: str,
+    friction_law: FrictionLawName,
     y0: npt.NDArray[np.float64] | None = None,
     period: float | None = None,
     root: npt.NDArray[np.float64] | None = None,
@@ -87,7 +92,7 @@ def periodic_orbit(
 def periodic_orbits(
     base: dict[str, float],
     contact: str,
-    friction_law: str,
+    friction_law: FrictionLawName,
     names: list[str],
     values: npt.NDArray[np.float64],
     roots: npt.NDArray[np.float64] | None = None,
@@ -101,7 +106,7 @@ def periodic_orbits(
 ) -> dict[str, Any]: ...
 def tidf_solve(
     values: dict[str, float],
-    friction_law: str,
+    friction_law: FrictionLawName,
     guesses: npt.NDArray[np.float64],
     variant: str = "consistent",
     threads: int | None = None,

@@ -9,7 +9,7 @@ from . import _core
 
 _SEED = _core.seed_params()
 _CONTACTS = ("bilateral", "unilateral")
-_FRICTION_LAWS = ("constant", "coulomb")
+_FRICTION_LAWS = ("constant", "coulomb", "switch")
 
 #: Units of every real parameter, for output attributes.
 PARAM_UNITS: dict[str, str] = {
@@ -34,6 +34,7 @@ PARAM_UNITS: dict[str, str] = {
     "mu_static": "1",
     "stribeck_velocity": "m s-1",
     "escape_limit": "m",
+    "stick_band": "m s-1",
 }
 
 #: Long names of the real parameters.
@@ -59,6 +60,7 @@ PARAM_LONG_NAMES: dict[str, str] = {
     "mu_static": "static friction coefficient of the Stribeck curve",
     "stribeck_velocity": "Stribeck velocity",
     "escape_limit": "|z| beyond which a run is declared diverged",
+    "stick_band": "half-width eta of the stick band |v_r| <= eta of the switch friction law",
 }
 
 PARAM_NAMES: tuple[str, ...] = tuple(_core.param_names())
@@ -102,10 +104,14 @@ class SliderModel:
     contact : {"bilateral", "unilateral"}
         ``bilateral``: the law everywhere (the report's model); ``unilateral``: no force off the
         disk and no tension (the physical one).
-    friction_law : {"constant", "coulomb"}
+    friction_law : {"constant", "coulomb", "switch"}
         ``constant``: the report's ``F_x = mu F_z``, valid while the sliding velocity stays
         positive; ``coulomb``: regularised ``mu(v_r) N tanh(v_r/eps)`` with a Stribeck curve
-        through ``mu`` at ``V``, for stick-slip scenes.
+        through ``mu`` at ``V``, for stick-slip scenes; ``switch``: event-driven stick-slip (the
+        switch model of Leine et al. 1998) on the same Stribeck curve: slip ``mu(v_r) N sign(v_r)``
+        outside the band ``|v_r| <= stick_band``, inside it stick (the force that holds ``v_r``,
+        up to ``mu_static N``) or the static bound. Not stiff: far fewer right-hand-side calls
+        than a small ``eps``. Needs ``mu_static >= mu`` and ``stick_band < sliding_speed``.
     friction_regularization : float, m/s
         ``eps`` of the tanh regularisation (1e-3).
     mu_static : float or None
@@ -114,6 +120,10 @@ class SliderModel:
         Stribeck velocity ``v_s`` (0.1).
     escape_limit : float, m
         ``|z|`` at which a run is declared diverged (1e-3, well past the static saddle at 256.7 um).
+    stick_band : float, m/s
+        Half-width ``eta`` of the switch law's stick band (1e-6). While stuck the pin creeps at
+        ``|v_r| <= eta`` instead of 0, so the band only needs to be small against the motion's
+        velocities and well above the rounding of ``v_r`` (about 1e-16 ``V``).
 
     Examples
     --------
@@ -146,6 +156,7 @@ class SliderModel:
     mu_static: float | None = None
     stribeck_velocity: float = _SEED["stribeck_velocity"]
     escape_limit: float = _SEED["escape_limit"]
+    stick_band: float = _SEED["stick_band"]
 
     def __post_init__(self) -> None:
         for name in PARAM_NAMES:

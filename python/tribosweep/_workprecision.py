@@ -103,6 +103,10 @@ class Scene:
         Initial states (m, m/s, m, m/s, rad, rad/s) from the static point.
     description : str
         What the scene exercises, for the summary.
+    variants : dict of str to SliderModel
+        Other models of the same physics (e.g. ``{"switch": ...}``, another friction law) run on the
+        same batch with the Rust methods; their rows get ``impl`` = the key, their errors are
+        against their own reference (the Rust DOP853 at ``REF_RTOL`` on that model).
     """
 
     name: str
@@ -112,6 +116,11 @@ class Scene:
     params: dict
     y0: np.ndarray
     description: str = ""
+    variants: dict = field(default_factory=dict)
+
+    def variant(self, key: str) -> Scene:
+        """The scene with the model of variant ``key`` (and no variants)."""
+        return dataclasses.replace(self, model=self.variants[key], variants={})
 
     @property
     def n(self) -> int:
@@ -173,6 +182,9 @@ def _y0(n: int, z0: float) -> np.ndarray:
 STICK_SLIP_MODEL = SliderModel(
     friction_law="coulomb", friction_regularization=1e-5, sliding_speed=0.01, mu_static=0.3, stribeck_velocity=0.02
 )
+#: The same scene with the event-driven switch law (stick band 1e-6 m/s): no stiffness, every stick and
+#: slip a located event.
+STICK_SLIP_SWITCH_MODEL = STICK_SLIP_MODEL.replace(friction_law="switch")
 
 
 def make_scenes(quick: bool = False, names: Iterable[str] | None = None, n: int | None = None) -> list[Scene]:
@@ -213,11 +225,13 @@ def make_scenes(quick: bool = False, names: Iterable[str] | None = None, n: int 
     ))  # fmt: skip
     k = count(8, 2)
     scenes.append(Scene(
-        "stick_slip", "stick-slip, V = 0.01 m/s, tanh eps = 1e-5 m/s, 0.2 s", STICK_SLIP_MODEL, 0.2,
-        {"mu": _spread(0.21, 0.22, k)}, _y0(k, 1e-6),
+        "stick_slip", "stick-slip, V = 0.01 m/s: tanh eps = 1e-5 m/s (rust) vs switch law (switch), 0.2 s",
+        STICK_SLIP_MODEL, 0.2, {"mu": _spread(0.21, 0.22, k)}, _y0(k, 1e-6),
         "Regularised Coulomb friction with a Stribeck curve (mu_s 0.3, v_s 0.02 m/s, mu(V) 0.21-0.22) at "
         "V = 0.01 m/s: the falling curve destabilises sliding and v_r reaches 0 (sticking); eps = 1e-5 m/s "
-        "makes the sticking phases stiff.",
+        "makes the sticking phases stiff. The `switch` lines integrate the same scene with the event-driven "
+        "switch law (stick band 1e-6 m/s), each against its own reference.",
+        variants={"switch": STICK_SLIP_SWITCH_MODEL},
     ))  # fmt: skip
     k = count(64, 16)
     scenes.append(Scene(
@@ -311,6 +325,22 @@ def _scipy_batch(scene: Scene, method: str, rtol: float, repeat: int) -> BatchRu
     seconds, (z, status, nfev, steps, reasons) = _best_of(f, repeat)
     return BatchRun(z_end=z, status=status, n_rhs=nfev, steps=steps, n_reject=np.zeros_like(steps),
                     seconds=seconds, reason="; ".join(sorted(set(reasons)))[:200])  # fmt: skip
+
+
+def _scipy_switch_batch(scene: Scene, rtol: float) -> BatchRun:
+    """End states of the switch law by the independent ``reference.SwitchReference`` (bilateral; untimed)."""
+    from . import reference
+
+    base = scene.model.values()
+    z = np.full(scene.n, np.nan)
+    for i in range(scene.n):
+        values = dict(base, **{k: float(v[i]) for k, v in scene.params.items()})
+        y, _ = reference.SwitchReference(values).solve(scene.y0[i], scene.t_end, [scene.t_end], rtol=rtol,
+                                                       atol=scene.atol(rtol))  # fmt: skip
+        z[i] = y[-1, 0]
+    zeros = np.zeros(scene.n, dtype=np.int64)
+    return BatchRun(z_end=z, status=np.where(np.isfinite(z), 0, STATUS["non_finite"]), n_rhs=zeros, steps=zeros,
+                    n_reject=zeros, seconds=math.nan)  # fmt: skip
 
 
 def find_baselines_module(paths: Sequence[str | os.PathLike] | None = None):
@@ -570,6 +600,43 @@ def fastest(rows: list[dict], targets: Sequence[float] = FASTEST_AT) -> list[dic
     return out
 
 
+def law_comparison(rows: list[dict], scenes: list[dict], targets: Sequence[float] = FASTEST_AT) -> list[dict]:
+    """Per scene with variants, method and target error: time and rhs calls of the base law and each variant.
+
+    Both read off their own work-precision lines (log-log interpolation, no extrapolation); only pairs
+    where both lines reach the error are listed.
+    """
+    out = []
+    for s in scenes:
+        lines = _lines(rows, s["name"])
+        for key in s.get("variants") or {}:
+            for method in RUST_METHODS:
+                base, var = lines.get(f"rust {method}"), lines.get(f"{key} {method}")
+                if not base or not var:
+                    continue
+                for target in targets:
+                    def at(line, col, target=target):
+                        return time_at_error([r["error"] for r in line], [r[col] for r in line], target)
+
+                    tb, tv = at(base, "seconds_per_traj"), at(var, "seconds_per_traj")
+                    nb, nv = at(base, "n_rhs"), at(var, "n_rhs")
+                    if all(math.isfinite(v) for v in (tb, tv, nb, nv)):
+                        out.append({"scene": s["name"], "variant": key, "method": method, "error": target,
+                                    "base_seconds": tb, "variant_seconds": tv, "time_ratio": tb / tv,
+                                    "base_rhs": nb, "variant_rhs": nv, "rhs_ratio": nb / nv})  # fmt: skip
+            # The best method of each law against each other (least time and least rhs, taken separately).
+            for target in targets:
+                got = [q for q in out if q["scene"] == s["name"] and q["variant"] == key and q["error"] == target
+                       and q["method"] in RUST_METHODS]  # fmt: skip
+                if len(got) > 1:
+                    tb, tv = min(q["base_seconds"] for q in got), min(q["variant_seconds"] for q in got)
+                    nb, nv = min(q["base_rhs"] for q in got), min(q["variant_rhs"] for q in got)
+                    out.append({"scene": s["name"], "variant": key, "method": "best of each", "error": target,
+                                "base_seconds": tb, "variant_seconds": tv, "time_ratio": tb / tv,
+                                "base_rhs": nb, "variant_rhs": nv, "rhs_ratio": nb / nv})  # fmt: skip
+    return out
+
+
 # --- the run ---------------------------------------------------------------------------------------
 
 
@@ -606,6 +673,9 @@ def _reference(scene: Scene, *, check_k: int, progress: bool) -> dict:
         elif scene.is_unilateral_constant() and _has("scipy"):
             chk = _scipy_batch(head, "DOP853", 1e-12, 1)
             info["check_method"] = "scipy DOP853 rtol 1e-12, event-driven (reference.solve_unilateral)"
+        elif scene.model.friction_law == "switch" and scene.model.contact == "bilateral" and _has("scipy"):
+            chk = _scipy_switch_batch(head, 1e-13)
+            info["check_method"] = "scipy DOP853 rtol 1e-13, event-driven switch law (reference.SwitchReference)"
         else:
             chk = run_rust(head, "dopri5", 1e-12, repeat=1)
             info["check_method"] = "rust dopri5 rtol 1e-12"
@@ -725,9 +795,20 @@ def measure(config: BenchConfig, *, progress: bool = True) -> dict:
         info = {"name": scene.name, "title": scene.title, "description": scene.description, "t_end": scene.t_end,
                 "n_traj": scene.n, "contact": scene.model.contact, "friction_law": scene.model.friction_law,
                 "reference": ref["info"]}  # fmt: skip
+        # Each variant (another friction law on the same batch) is measured against its own reference.
+        refs = {}
+        for key in scene.variants:
+            _log(f"  variant {key}", progress)
+            vref = _reference(scene.variant(key), check_k=cfg.check_n, progress=progress)
+            refs[key] = (vref["z_end"], vref["scale"])
+            info.setdefault("variants", {})[key] = {
+                "friction_law": scene.variants[key].friction_law, "reference": vref["info"],
+                "stick_band": scene.variants[key].stick_band}  # fmt: skip
         scene_info.append(info)
 
-        def add(impl, method, rtol, run, scene=scene, z_ref=z_ref, scale=scale):
+        def add(impl, method, rtol, run, scene=scene, z_ref=z_ref, scale=scale, refs=refs):
+            if impl in refs:
+                z_ref, scale = refs[impl]
             row = make_row(scene.name, impl, method, rtol, run, z_ref, scale)
             rows.append(row)
             flag = f"  FAILED ({row['status']})" if row["failed"] else ""
@@ -740,6 +821,10 @@ def measure(config: BenchConfig, *, progress: bool = True) -> dict:
         # passes instead of all repeats of one rung.
         jobs = {("rust", m, r): (lambda m=m, r=r, sc=scene: run_rust(sc, m, r, repeat=1)) for m in cfg.methods
                 for r in cfg.ladder}  # fmt: skip
+        for key in scene.variants:
+            vscene = scene.variant(key)
+            jobs.update({(key, m, r): (lambda m=m, r=r, sc=vscene: run_rust(sc, m, r, repeat=1))
+                         for m in cfg.methods for r in cfg.ladder})  # fmt: skip
         if bl is not None and scene.is_bilateral_constant():
             jobs.update({("numba", "DP5", r): (lambda r=r, sc=scene: _numba_batch(bl, sc, r, 1)) for r in cfg.ladder})
         best: dict = {}
@@ -890,6 +975,10 @@ _STYLE = {
     "rust dopri5": ("o", "-", "#0072B2"),
     "rust dop853": ("s", "-", "#D55E00"),
     "rust rodas4": ("D", "-", "#009E73"),
+    # The switch friction law on the stick-slip scene: the same method colours, open markers, dashed.
+    "switch dopri5": ("o", (0, (4, 2)), "#0072B2"),
+    "switch dop853": ("s", (0, (4, 2)), "#D55E00"),
+    "switch rodas4": ("D", (0, (4, 2)), "#009E73"),
     "numba DP5": ("^", ":", "#56B4E9"),
     "scipy RK45": ("o", "--", "#7f7f7f"),
     "scipy DOP853": ("s", "--", "#CC79A7"),
@@ -927,8 +1016,12 @@ def plot_work_precision(rows: list[dict], scene: dict | str, *, ax=None):
         rs = sorted((r for r in rows if r["scene"] == name and r["label"] == label), key=lambda r: -r["rtol"])
         ok = [r for r in rs if not r["failed"]]
         bad = [r for r in rs if r["failed"]]
+        hollow = {"markerfacecolor": "white", "markeredgewidth": 1.5} if label.startswith("switch ") else {}
+        # Beside variant lines, say which law the scene's own Rust lines integrate.
+        shown = f"{label} ({'tanh' if info.get('friction_law') == 'coulomb' else info.get('friction_law')} law)" \
+            if info.get("variants") and label.startswith("rust ") else label
         line = ax.plot([max(r["error"], _ERR_FLOOR) for r in ok], [r["seconds_per_traj"] for r in ok],
-                       marker=marker, linestyle=ls, color=color, label=label, markersize=5)  # fmt: skip
+                       marker=marker, linestyle=ls, color=color, label=shown, markersize=5, **hollow)  # fmt: skip
         color = line[0].get_color()
         if bad:
             any_fail = True
@@ -943,6 +1036,11 @@ def plot_work_precision(rows: list[dict], scene: dict | str, *, ax=None):
     if chk is not None and math.isfinite(chk) and chk > 0:
         ax.axvspan(_ERR_FLOOR / 3, max(chk, _ERR_FLOOR), color="0.95", hatch="//", zorder=0, linewidth=0,
                    label=f"below reference check ({chk:.0e})")  # fmt: skip
+    for key, var in (info.get("variants") or {}).items():
+        vchk = var["reference"].get("check_value")
+        if vchk is not None and math.isfinite(vchk) and vchk > 0:
+            ax.axvline(vchk, color="0.4", linestyle=":", linewidth=1.2, zorder=0,
+                       label=f"{key} lines: reference check ({vchk:.0e})")  # fmt: skip
     ax.set_xlim(_ERR_FLOOR / 3, 60.0)
     ax.set_xlabel("error  max |z(t_end) - z_ref| / max|z_ref|")
     ax.set_ylabel("wall time per trajectory [s] (1 thread)")
@@ -1023,6 +1121,23 @@ def render_summary(payload: dict, *, images: dict[str, str] | None = None, extra
         L.append(f"Stick-slip check (`{s['name']}`): the reference's minimum sliding velocity is {v:+.3g} m/s "
                  + ("<= 0: the contact point sticks." if v <= 0 else "> 0: NO sticking; the scene does not test "
                     "what it should."))  # fmt: skip
+        for key, var in (s.get("variants") or {}).items():
+            v, eta = var["reference"]["min_slip_velocity"], var.get("stick_band", math.nan)
+            L.append(f"With the {var['friction_law']} law (`{key}` lines) the minimum is {v:+.3g} m/s, "
+                     + (f"within the stick band {eta:g} m/s: it sticks." if v <= eta * (1 + 1e-6) else
+                        f"outside the stick band {eta:g} m/s: NO sticking."))  # fmt: skip
+    laws = law_comparison(rows, scenes)
+    if laws:
+        L += ["", "## Friction laws at matched error", "",
+              ("Each line read at the same error (against its own law's reference) as in the ratios below; "
+               "ratio = tanh / switch (> 1: the switch law is cheaper). The right-hand-side counts are the "
+               "integrator's own (event location adds none), so their ratio does not depend on the machine."),
+              "", "| scene | method | error | tanh time | switch time | time ratio | tanh rhs | switch rhs | "
+              "rhs ratio |", "|---|---|---|---|---|---|---|---|---|"]  # fmt: skip
+        for q in laws:
+            L.append(f"| `{q['scene']}` | {q['method']} | {q['error']:.0e} | {_fmt_s(q['base_seconds'])} | "
+                     f"{_fmt_s(q['variant_seconds'])} | **{q['time_ratio']:.3g}x** | {q['base_rhs']:.3g} | "
+                     f"{q['variant_rhs']:.3g} | **{q['rhs_ratio']:.3g}x** |")  # fmt: skip
 
     L += ["", "## Speed ratio of the Rust core at matched error", "",
           ("Ratio = baseline time / Rust time per trajectory, both read off their work-precision lines "

@@ -391,7 +391,7 @@ def _add_bench_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _run_bench(args: argparse.Namespace) -> int:
-    from ._workprecision import MATCHED_ERRORS, BenchConfig, run_work_precision, speed_ratios
+    from ._workprecision import MATCHED_ERRORS, BenchConfig, law_comparison, run_work_precision, speed_ratios
 
     skip = {s for group in args.skip for s in group}
     config = BenchConfig(
@@ -412,6 +412,9 @@ def _run_bench(args: argparse.Namespace) -> int:
         r = q["ratio"]
         speed = f"{r:.3g}x faster than" if r >= 1 else f"{1 / r:.3g}x slower than"
         print(f"  {q['scene']:<16} error {q['error']:.0e}: {q['rust_label']} {speed} {q['baseline_label']}")
+    for q in law_comparison(rows, payload["scenes"], MATCHED_ERRORS):
+        print(f"  {q['scene']:<16} error {q['error']:.0e}: {q['method']} tanh / {q['variant']} law: "
+              f"{q['rhs_ratio']:.3g}x the rhs calls, {q['time_ratio']:.3g}x the time")
     for name in ("summary", "csv", "json", "docs"):
         if name in payload["files"]:
             print(f"{name}: {payload['files'][name]}")

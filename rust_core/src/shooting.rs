@@ -10,8 +10,11 @@
 //! S = I + (f+ - f-) n^T / (n^T f-)          n = grad h, h the switching function
 //! ```
 //!
-//! (`h = zc` for the gap event, `h = N_law` for the normal-force event), and the run restarts in the
-//! new mode. The Newton matrix is `[Phi(T) - I]` without the `zd` column, plus the column `f(y(T))`
+//! (`h = zc` for the gap event, `h = N_law` for the normal-force event; for the switch friction
+//! law `h = v_r -+ eta` at the stick band's edges and `h = mu_s N - |F_req|` at the stick bound),
+//! and the run restarts in the new mode. Entering stick, the saltation matrix projects every
+//! perturbation onto the band edge (the stick field has `d v_r/dt = 0`), so a stick-slip cycle has
+//! a zero multiplier besides the trivial one. The Newton matrix is `[Phi(T) - I]` without the `zd` column, plus the column `f(y(T))`
 //! for `T`. The Floquet multipliers are the eigenvalues of `Phi(T)` at the converged orbit, sorted
 //! by modulus; one of them is the trivial 1 of an autonomous system, and the orbit is stable when
 //! every other one has modulus below `1 - stability_tol`.
@@ -121,6 +124,9 @@ pub fn saltation(s: &Slider, y: &State, before: ContactMode, after: ContactMode,
             n[idx::ZD] = -p.contact_damping;
             n[idx::PHI] = p.twist_coupling;
         }
+        // Switch law: band edges `v_r = +-eta` and the stick bound `mu_s N - |F_req| = 0`.
+        event::BAND_HI | event::BAND_LO => n = s.slip_velocity_gradient(),
+        event::STICK => n = s.stick_margin_gradient(y),
         _ => return Jacobian::identity(),
     }
     if before == after {
@@ -157,7 +163,7 @@ fn missed_crossing<const N: usize>(s: &Slider, st: &StepView<'_, N, ContactMode>
             }
             let relevant = match e {
                 0 => unilateral || gap_always,
-                _ => unilateral && (st.mode == ContactMode::Contact || s.gap(&yk) <= 0.0),
+                _ => unilateral && (st.mode.in_contact() || s.gap(&yk) <= 0.0),
             };
             if relevant {
                 return Some(h);
@@ -1023,6 +1029,34 @@ pub(crate) mod tests {
         let sm = saltation(&s, &y, ContactMode::Contact, ContactMode::Free, event::GAP);
         // Only the velocity rows change, and the z column carries the jump.
         assert!(sm[(0, 0)] == 1.0 && sm[(1, 0)] != 0.0);
+    }
+
+    #[test]
+    fn saltation_into_stick_projects_onto_the_band_edge() {
+        use crate::model::{FrictionLaw, Params};
+        let s = Slider::new(Params {
+            friction_law: FrictionLaw::Switch,
+            mu_static: 0.3,
+            stribeck_velocity: 0.02,
+            sliding_speed: 0.01,
+            ..Params::seed()
+        })
+        .unwrap();
+        // On the upper band edge, slipping inwards.
+        let eta = s.p.stick_band;
+        let phid = 0.01;
+        let xd = s.p.sliding_speed - eta - s.p.torsion_sign * s.p.moment_arm * phid;
+        let y = State::new(1e-6, 0.0, 2e-5, xd, 1e-4, phid);
+        assert!((s.slip_velocity(&y) - eta).abs() < 1e-15);
+        let sm = saltation(&s, &y, ContactMode::Contact, ContactMode::Stick, event::BAND_HI);
+        // Every perturbation leaves v_r on the edge: n^T S = 0 (a zero Floquet multiplier).
+        let n = s.slip_velocity_gradient();
+        let row = n.transpose() * sm;
+        assert!(row.amax() < 1e-12, "{row}");
+        // Leaving stick for slip at the bound: S maps the stick field onto the slip field.
+        let sm = saltation(&s, &y, ContactMode::Stick, ContactMode::Contact, event::STICK);
+        let (fm, fp) = (s.rhs(&y, ContactMode::Stick), s.rhs(&y, ContactMode::Contact));
+        assert!((sm * fm - fp).amax() <= 1e-9 * fp.amax());
     }
 
     #[test]

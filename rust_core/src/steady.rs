@@ -17,7 +17,7 @@
 //! minimum sliding velocity. Phases are `alpha` in `|.| sin(k psi + alpha)`, `psi = w t` with the phase
 //! of `z1` set to 0 (MODEL.md §5), in radians in `[0, 2 pi)`.
 
-use crate::model::{event, idx, ContactMode, ContactModel, Slider, State};
+use crate::model::{event, idx, ContactMode, ContactModel, FrictionLaw, Slider, State};
 use crate::ode::{integrate, Control, Method, Observer, Options, Outcome, Sampler, Stats, StepView};
 use crate::status::Status;
 use nalgebra::SVector;
@@ -74,9 +74,11 @@ pub fn options_for(s: &Slider, tol: &Tolerances) -> Options<6> {
     if let Some(n) = tol.max_events {
         o.max_events = n;
     }
-    if s.p.contact == ContactModel::Unilateral {
+    if s.p.contact == ContactModel::Unilateral || s.p.friction_law == FrictionLaw::Switch {
         // A hop off the disk can be shorter than one step (0.19 ms on the seed's bouncing cycle,
-        // about one step at rtol 1e-8): check the contact functions inside every step too.
+        // about one step at rtol 1e-8): check the contact functions inside every step too. The
+        // switch law's band is as narrow as the user makes it: a slip that dips into the band and
+        // out again within a step is caught the same way.
         o.interior_checks = 3;
     }
     o

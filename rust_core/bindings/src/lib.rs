@@ -47,7 +47,8 @@ fn friction_from(name: &str) -> Result<FrictionLaw, CoreError> {
     match name {
         "constant" => Ok(FrictionLaw::Constant),
         "coulomb" => Ok(FrictionLaw::Coulomb),
-        _ => Err(CoreError(format!("friction_law = {name:?} is not valid: must be 'constant' or 'coulomb'"))),
+        "switch" => Ok(FrictionLaw::Switch),
+        _ => Err(CoreError(format!("friction_law = {name:?} is not valid: must be 'constant', 'coulomb' or 'switch'"))),
     }
 }
 

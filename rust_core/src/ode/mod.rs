@@ -25,7 +25,7 @@ use nalgebra::{SMatrix, SVector};
 pub use driver::integrate;
 
 /// Most event functions a system may declare.
-pub const MAX_EVENTS: usize = 4;
+pub const MAX_EVENTS: usize = 8;
 
 /// What a located event does to the integration.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
