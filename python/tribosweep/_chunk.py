@@ -646,6 +646,16 @@ def _dynamics(model_values, contact, friction_law, point_params, method, options
                              f"motion small (|z| <= {a:.3g} m, below {SLOW_DECAY_FRACTION:g} |z_st|): still decaying"
                              for a in amp[slow]]  # fmt: skip
             pts, meas = pts[~slow], {k: v[~slow] for k, v in meas.items()}
+            # Transient chaos: bounded until t_max, the motion left through the escape limit during
+            # the measurement window. That is an answer (the run diverged), not a failure.
+            esc = meas["status"] == STATUS["diverged"]
+            if esc.any():
+                q = pts[esc]
+                out["regime"][q] = REGIME["diverged"]
+                out["status"][q] = STATUS["success"]
+                reason[q] = [f"bounded until t_max = {t_max:g} s without settling (irregular), then |z| reached the "
+                             "escape limit during the measurement window after it: transient chaos"] * q.size
+            pts, meas = pts[~esc], {k: v[~esc] for k, v in meas.items()}
             for key in _irregular.IRREGULAR_VARIABLES:
                 out[key][pts] = meas[key]
             bad = meas["status"] != STATUS["success"]

@@ -716,7 +716,11 @@ impl OdeSystem<6> for Slider {
         g[event::GAP] = self.gap(y);
         g[event::NORMAL] = self.p.normal_load + self.dynamic_law_force(y);
         let v_r = self.slip_velocity(y);
-        g[event::SLIP] = v_r;
+        // Under the constant law the sliding velocity acts on nothing and V only shifts it: its
+        // zero crossing is no event (it would make a run's steps and work depend on V, and sweeps
+        // share one run among points that differ only in V). `min_slip_velocity` still sees it at
+        // every step end and event, and on the cycle's Fourier samples.
+        g[event::SLIP] = if self.p.friction_law == FrictionLaw::Constant { 1.0 } else { v_r };
         g[event::ESCAPE] = self.p.escape_limit - y[idx::Z].abs();
         if self.p.friction_law == FrictionLaw::Switch {
             self.switch_events(y, v_r, mode, g);

@@ -246,11 +246,12 @@ fn rhs<const UNI: bool, const COUL: bool>(c: &Coef, contact: &[bool; W], y: &V6,
 /// The slider's event functions on the lanes (`model::Slider::events`), from the state and the
 /// dynamic law force.
 #[inline(always)]
-fn events_lanes(c: &Coef, y: &V6, fzl: &L, g: &mut [L; NE]) {
+fn events_lanes<const COUL: bool>(c: &Coef, y: &V6, fzl: &L, g: &mut [L; NE]) {
     for l in 0..W {
         g[event::GAP][l] = c.zst[l] + y[idx::Z][l];
         g[event::NORMAL][l] = c.fst[l] + fzl[l];
-        g[event::SLIP][l] = c.v[l] - (y[idx::XD][l] + c.sl[l] * y[idx::PHID][l]);
+        // No event under the constant law (see `Slider::events`).
+        g[event::SLIP][l] = if COUL { c.v[l] - (y[idx::XD][l] + c.sl[l] * y[idx::PHID][l]) } else { 1.0 };
         g[event::ESCAPE][l] = c.esc[l] - y[idx::Z][l].abs();
     }
 }
@@ -611,7 +612,7 @@ fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
 
         // ---- events at the step end; hidden crossings inside the step (unilateral) ----
         let mut g1 = [zero; NE];
-        events_lanes(c, &yn, &fzl, &mut g1);
+        events_lanes::<COUL>(c, &yn, &fzl, &mut g1);
         let mut hidden = zero; // theta of the interior point to end a redone step at (0: none)
         if UNI {
             // The interpolant at three interior points: DP5's from its stages, DOP853's needs
@@ -624,7 +625,7 @@ fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
             } else {
                 dense5(y, &yn, [k1, &k3, &k4, &k5, &k6, &k7], &hh)
             };
-            hidden_crossings(c, y, &dense, &ln.g0, &g1, &ln.pend, &ok, &mut hidden);
+            hidden_crossings::<COUL>(c, y, &dense, &ln.g0, &g1, &ln.pend, &ok, &mut hidden);
         }
 
         // ---- accept or reject, the controller (branch-free) ----
@@ -731,7 +732,7 @@ fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
             let z = yn[idx::Z][l];
             let normal = if UNI && !ln.contact[l] { 0.0 } else { ln.c.fst[l] + fzl[l] };
             let gap = g1[event::GAP][l];
-            let vr = g1[event::SLIP][l];
+            let vr = ln.c.v[l] - (yn[idx::XD][l] + ln.c.sl[l] * yn[idx::PHID][l]);
             ln.min_n[l] = if p { ln.min_n[l].min(normal) } else { ln.min_n[l] };
             ln.max_gap[l] = if p { ln.max_gap[l].max(gap) } else { ln.max_gap[l] };
             ln.min_vr[l] = if p { ln.min_vr[l].min(vr) } else { ln.min_vr[l] };
@@ -822,7 +823,7 @@ fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
                             _ => None,
                         };
                     }
-                    let contact = mode == ContactMode::Contact;
+                    let contact = mode.in_contact();
                     let pend = sd.pend;
                     for i in 0..6 {
                         ln.y[i][l] = y1[i];
@@ -1163,7 +1164,7 @@ fn dense853<const UNI: bool, const COUL: bool>(
 /// first such `x` (0 where none).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn hidden_crossings(
+fn hidden_crossings<const COUL: bool>(
     c: &Coef,
     _y0: &V6,
     dense: &LaneDense,
@@ -1183,7 +1184,7 @@ fn hidden_crossings(
             let fz = -c.ks[l] * z + c.ka[l] * z * z - c.c[l] * zd + c.kphi[l] * ph;
             g[event::GAP][l] = c.zst[l] + z;
             g[event::NORMAL][l] = c.fst[l] + fz;
-            g[event::SLIP][l] = c.v[l] - (xd + c.sl[l] * phd);
+            g[event::SLIP][l] = if COUL { c.v[l] - (xd + c.sl[l] * phd) } else { 1.0 };
             g[event::ESCAPE][l] = c.esc[l] - z.abs();
         }
         let mut hit = [false; W];
@@ -1345,7 +1346,7 @@ fn refill<'a>(ln: &mut Lanes<'a>, l: usize, next: &mut usize, inp: &Input<'a, '_
         ln.n_acc[l] = 0;
         ln.n_rej[l] = 0;
         ln.n_extra[l] = 0;
-        ln.contact[l] = mode == ContactMode::Contact;
+        ln.contact[l] = mode.in_contact();
         let e = sd.obs.ext;
         ln.min_n[l] = e.min_normal_force;
         ln.max_gap[l] = e.max_gap;
