@@ -329,18 +329,19 @@ fn ensemble<'py>(
                 && p0.is_some_and(|p| p.contact == ContactModel::Bilateral && p.friction_law == FrictionLaw::Constant);
             if batchable || lanes_ok {
                 let task = if te.is_empty() { Task::Final } else { Task::Sampled(&te) };
-                let out = py.detach(|| {
-                    grouped(&items, threads, |sliders, y0s, _| {
-                        if batchable {
-                            // The batch locates an escape inside its step, as the scalar path does.
+                let out: Vec<(LaneResult, String)> = py.detach(|| {
+                    if batchable {
+                        // The batch locates an escape inside its step, as the scalar path does.
+                        grouped(&items, threads, |sliders, y0s, _| {
                             tribosweep_core::ode::batch::run_bilateral_batch(sliders, y0s, t_end, &tol)
                                 .into_iter()
                                 .map(|run| LaneResult { run, samples: Vec::new(), summary: None, events: Vec::new() })
                                 .collect()
-                        } else {
-                            lanes::run_lanes(sliders, y0s, t_end, method, &tol, task)
-                        }
-                    })
+                        })
+                    } else {
+                        let (sliders, y0s) = unzip_items(&items);
+                        lanes_out(lanes::run_lanes_threads(&sliders, &y0s, t_end, method, &tol, task, threads))
+                    }
                 });
                 let runs: Vec<RunResult> = out.iter().map(|o| o.0.run).collect();
                 let reasons: Vec<String> = out.iter().map(|o| o.1.clone()).collect();
@@ -400,11 +401,10 @@ fn ensemble<'py>(
                 ..SteadyOptions::default()
             };
             if lanes_ok {
-                let out = py.detach(|| {
-                    grouped(&items, threads, |sliders, y0s, range| {
-                        let decay = decays.as_ref().map(|d| &d[range]);
-                        lanes::run_lanes(sliders, y0s, t_end, method, &tol, Task::Steady { opts: &opts, decay })
-                    })
+                let out: Vec<(LaneResult, String)> = py.detach(|| {
+                    let (sliders, y0s) = unzip_items(&items);
+                    let task = Task::Steady { opts: &opts, decay: decays.as_deref() };
+                    lanes_out(lanes::run_lanes_threads(&sliders, &y0s, t_end, method, &tol, task, threads))
                 });
                 let sums: Vec<(Summary, String)> = out
                     .into_iter()
@@ -440,6 +440,29 @@ fn ensemble<'py>(
     Ok(d)
 }
 
+/// Sliders and start states of validated items.
+fn unzip_items(items: &[(Params, State)]) -> (Vec<Slider>, Vec<State>) {
+    items.iter().map(|(p, y)| (Slider::new(*p).expect("validated before the parallel section"), *y)).unzip()
+}
+
+/// Lane results with their reasons (a panic on a worker thread: `Status::Panic` and its message).
+fn lanes_out(v: Vec<Result<LaneResult, String>>) -> Vec<(LaneResult, String)> {
+    v.into_iter()
+        .map(|r| match r {
+            Ok(x) => (x, String::new()),
+            Err(msg) => (
+                LaneResult {
+                    run: failed_run(Status::Panic),
+                    samples: Vec::new(),
+                    summary: Some(Summary::failed(Status::Panic)),
+                    events: Vec::new(),
+                },
+                format!("panic: {msg}"),
+            ),
+        })
+        .collect()
+}
+
 /// Run `f` on groups of the items in parallel (each group a slice of sliders and start states
 /// and its index range), one result per item in input order. Groups are big enough to keep the
 /// eight lanes busy (the last long runs of a small group leave lanes idle) and small enough to
@@ -448,8 +471,10 @@ fn grouped<F>(items: &[(Params, State)], threads: Option<usize>, f: F) -> Vec<(L
 where
     F: Fn(&[Slider], &[State], std::ops::Range<usize>) -> Vec<LaneResult> + Sync,
 {
+    // About four groups per thread, so that the threads stay busy to the end of a call even when
+    // a few long runs (a census's 30 s disturbances) dominate it; at least one full set of lanes.
     let nthreads = threads.unwrap_or_else(tribosweep_core::ensemble::default_threads).max(1);
-    let group = (items.len() / (4 * nthreads)).clamp(64, 1024);
+    let group = items.len().div_ceil(4 * nthreads).clamp(8, 1024);
     let ranges: Vec<std::ops::Range<usize>> =
         (0..items.len()).step_by(group).map(|a| a..(a + group).min(items.len())).collect();
     let out: Vec<Vec<(LaneResult, String)>> = par_map(

@@ -55,6 +55,7 @@ use crate::steady::{
     options_for, status_of, summarize, Extremes, ExtremesObserver, RunResult, SteadyObserver, SteadyOptions, Summary,
     Tolerances,
 };
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// Event functions of the slider (gap, law normal force, sliding velocity, escape).
 const NE: usize = 4;
@@ -329,11 +330,13 @@ struct Lanes<'a> {
     side: [Option<Side<'a>>; W],
 }
 
-/// Integrate each `sliders[i]` from `y0s[i]` at `t = 0` with Dormand–Prince 5(4), eight
-/// trajectories at a time, and compute `task` for each; results in input order.
+/// Integrate each `sliders[i]` from `y0s[i]` at `t = 0` with `method` (Dormand–Prince 5(4) or
+/// DOP853), eight trajectories at a time on this thread, and compute `task` for each; results in
+/// input order.
 ///
 /// Precondition (the caller checks): all sliders share one contact model and one friction law,
-/// which [`supports`] accepts; `sliders.len() == y0s.len()`. Panics otherwise.
+/// which [`supports`] accepts; [`supports_method`] accepts `method`; `sliders.len() ==
+/// y0s.len()`. Panics otherwise.
 pub fn run_lanes(
     sliders: &[Slider],
     y0s: &[State],
@@ -342,54 +345,123 @@ pub fn run_lanes(
     tol: &Tolerances,
     task: Task<'_>,
 ) -> Vec<LaneResult> {
+    check(sliders, y0s, method, &task);
+    let feed = AtomicUsize::new(0);
+    let mut out = dispatch(sliders, y0s, t_end, method, tol, task, &feed);
+    out.sort_unstable_by_key(|r| r.0);
+    out.into_iter().map(|r| r.1).collect()
+}
+
+/// [`run_lanes`] on `threads` threads (`None`: [`crate::ensemble::default_threads`]): every
+/// thread runs its own eight lanes and takes the next trajectory of the call whenever one of its
+/// lanes ends, so the threads stay busy to the end however unequal the runs. A trajectory's
+/// result does not depend on which lanes or thread ran it (bitwise; tested), so results are the
+/// same for any thread count. A panic on a thread becomes `Err(message)` for the trajectories
+/// that thread had not finished.
+pub fn run_lanes_threads(
+    sliders: &[Slider],
+    y0s: &[State],
+    t_end: f64,
+    method: Method,
+    tol: &Tolerances,
+    task: Task<'_>,
+    threads: Option<usize>,
+) -> Vec<Result<LaneResult, String>> {
+    check(sliders, y0s, method, &task);
+    let n = sliders.len();
+    let nthreads = threads.unwrap_or_else(crate::ensemble::default_threads).max(1).min(n.div_ceil(W).max(1));
+    let feed = AtomicUsize::new(0);
+    let workers: Vec<usize> = (0..nthreads).collect();
+    let parts = crate::ensemble::par_map(
+        &workers,
+        Some(nthreads),
+        |_| Ok(dispatch(sliders, y0s, t_end, method, tol, task, &feed)),
+        Err,
+    );
+    let mut out: Vec<Option<Result<LaneResult, String>>> = vec![None; n];
+    let mut panic = None;
+    for p in parts {
+        match p {
+            Ok(v) => {
+                for (i, r) in v {
+                    out[i] = Some(Ok(r));
+                }
+            }
+            Err(msg) => panic = Some(msg),
+        }
+    }
+    let msg = panic.unwrap_or_default();
+    out.into_iter().map(|r| r.unwrap_or_else(|| Err(msg.clone()))).collect()
+}
+
+fn check(sliders: &[Slider], y0s: &[State], method: Method, task: &Task<'_>) {
     assert_eq!(sliders.len(), y0s.len(), "run_lanes: one initial state per slider");
-    let Some(first) = sliders.first() else { return Vec::new() };
-    let (contact, law) = (first.p.contact, first.p.friction_law);
-    for s in sliders {
-        assert!(supports(&s.p), "run_lanes: friction law {:?} is not lane-batched", s.p.friction_law);
-        assert!(
-            s.p.contact == contact && s.p.friction_law == law,
-            "run_lanes: every slider of one call shares the contact model and friction law"
-        );
+    assert!(supports_method(method), "run_lanes: method {method:?} is not lane-batched");
+    if let Some(first) = sliders.first() {
+        for s in sliders {
+            assert!(supports(&s.p), "run_lanes: friction law {:?} is not lane-batched", s.p.friction_law);
+            assert!(
+                s.p.contact == first.p.contact && s.p.friction_law == first.p.friction_law,
+                "run_lanes: every slider of one call shares the contact model and friction law"
+            );
+        }
     }
     if let Task::Steady { decay: Some(d), .. } = task {
         assert_eq!(d.len(), sliders.len(), "run_lanes: one decay amplitude per slider");
     }
-    assert!(supports_method(method), "run_lanes: method {method:?} is not lane-batched");
-    let uni = contact == ContactModel::Unilateral;
-    let coul = law == FrictionLaw::Coulomb;
+}
+
+/// The monomorphised, CPU-dispatched lane driver for the sliders' model and `method`.
+fn dispatch(
+    sliders: &[Slider],
+    y0s: &[State],
+    t_end: f64,
+    method: Method,
+    tol: &Tolerances,
+    task: Task<'_>,
+    feed: &AtomicUsize,
+) -> Vec<(usize, LaneResult)> {
+    let Some(first) = sliders.first() else { return Vec::new() };
+    let uni = first.p.contact == ContactModel::Unilateral;
+    let coul = first.p.friction_law == FrictionLaw::Coulomb;
     let m8 = method == Method::Dop853;
+    macro_rules! go {
+        ($u:literal, $c:literal, $m:literal) => {
+            dispatch_cpu::<$u, $c, $m>(sliders, y0s, t_end, tol, task, feed)
+        };
+    }
     match (uni, coul, m8) {
-        (false, false, false) => dispatch::<false, false, false>(sliders, y0s, t_end, tol, task),
-        (false, true, false) => dispatch::<false, true, false>(sliders, y0s, t_end, tol, task),
-        (true, false, false) => dispatch::<true, false, false>(sliders, y0s, t_end, tol, task),
-        (true, true, false) => dispatch::<true, true, false>(sliders, y0s, t_end, tol, task),
-        (false, false, true) => dispatch::<false, false, true>(sliders, y0s, t_end, tol, task),
-        (false, true, true) => dispatch::<false, true, true>(sliders, y0s, t_end, tol, task),
-        (true, false, true) => dispatch::<true, false, true>(sliders, y0s, t_end, tol, task),
-        (true, true, true) => dispatch::<true, true, true>(sliders, y0s, t_end, tol, task),
+        (false, false, false) => go!(false, false, false),
+        (false, true, false) => go!(false, true, false),
+        (true, false, false) => go!(true, false, false),
+        (true, true, false) => go!(true, true, false),
+        (false, false, true) => go!(false, false, true),
+        (false, true, true) => go!(false, true, true),
+        (true, false, true) => go!(true, false, true),
+        (true, true, true) => go!(true, true, true),
     }
 }
 
-fn dispatch<const UNI: bool, const COUL: bool, const M8: bool>(
+fn dispatch_cpu<const UNI: bool, const COUL: bool, const M8: bool>(
     sliders: &[Slider],
     y0s: &[State],
     t_end: f64,
     tol: &Tolerances,
     task: Task<'_>,
-) -> Vec<LaneResult> {
+    feed: &AtomicUsize,
+) -> Vec<(usize, LaneResult)> {
     #[cfg(target_arch = "x86_64")]
     {
         if std::is_x86_feature_detected!("avx512f") {
             // SAFETY: the CPU supports the features the function is compiled for.
-            return unsafe { run_avx512::<UNI, COUL, M8>(sliders, y0s, t_end, tol, task) };
+            return unsafe { run_avx512::<UNI, COUL, M8>(sliders, y0s, t_end, tol, task, feed) };
         }
         if std::is_x86_feature_detected!("avx2") {
             // SAFETY: as above.
-            return unsafe { run_avx2::<UNI, COUL, M8>(sliders, y0s, t_end, tol, task) };
+            return unsafe { run_avx2::<UNI, COUL, M8>(sliders, y0s, t_end, tol, task, feed) };
         }
     }
-    run_impl::<UNI, COUL, M8>(sliders, y0s, t_end, tol, task)
+    run_impl::<UNI, COUL, M8>(sliders, y0s, t_end, tol, task, feed)
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -400,8 +472,9 @@ unsafe fn run_avx512<const UNI: bool, const COUL: bool, const M8: bool>(
     t_end: f64,
     tol: &Tolerances,
     task: Task<'_>,
-) -> Vec<LaneResult> {
-    run_impl::<UNI, COUL, M8>(sliders, y0s, t_end, tol, task)
+    feed: &AtomicUsize,
+) -> Vec<(usize, LaneResult)> {
+    run_impl::<UNI, COUL, M8>(sliders, y0s, t_end, tol, task, feed)
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -412,8 +485,9 @@ unsafe fn run_avx2<const UNI: bool, const COUL: bool, const M8: bool>(
     t_end: f64,
     tol: &Tolerances,
     task: Task<'_>,
-) -> Vec<LaneResult> {
-    run_impl::<UNI, COUL, M8>(sliders, y0s, t_end, tol, task)
+    feed: &AtomicUsize,
+) -> Vec<(usize, LaneResult)> {
+    run_impl::<UNI, COUL, M8>(sliders, y0s, t_end, tol, task, feed)
 }
 
 /// Everything the set-up and teardown of a lane needs.
@@ -423,6 +497,8 @@ struct Input<'a, 'b> {
     t_end: f64,
     tol: Tolerances,
     task: Task<'a>,
+    /// Index of the next trajectory to start (shared by the workers of a threaded call).
+    feed: &'b AtomicUsize,
 }
 
 /// The portable path (the tests check that the SIMD copies agree bitwise).
@@ -433,15 +509,17 @@ fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
     t_end: f64,
     tol: &Tolerances,
     task: Task<'_>,
-) -> Vec<LaneResult> {
+    feed: &AtomicUsize,
+) -> Vec<(usize, LaneResult)> {
     let (t_end, tol) = match task {
         Task::Steady { opts, .. } => (opts.t_max, opts.tol),
         _ => (t_end, *tol),
     };
-    let inp = Input { sliders, y0s, t_end, tol, task };
+    let inp = Input { sliders, y0s, t_end, tol, task, feed };
     let n = sliders.len();
     let rtol = tol.rtol;
-    let mut out: Vec<Option<LaneResult>> = vec![None; n];
+    let mut out: Vec<(usize, LaneResult)> = Vec::new();
+    let _ = n;
     let zero = [0.0; W];
     let mut ln = Lanes {
         c: Coef::zero(),
@@ -471,9 +549,8 @@ fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
     let steady = matches!(task, Task::Steady { .. });
     let sampled = matches!(task, Task::Sampled(_));
     let h_min_rel = Options::<6>::new(rtol, 1.0).h_min_rel;
-    let mut next = 0usize;
     for l in 0..W {
-        refill(&mut ln, l, &mut next, &inp, &mut out);
+        refill(&mut ln, l, &inp, &mut out);
     }
 
     let mut k2 = [zero; 6];
@@ -526,7 +603,7 @@ fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
                 };
                 let (t, y) = (ln.t[l], lane_state(&ln.y, l));
                 finish(&mut ln, l, t, y, outcome, &mut out);
-                refill(&mut ln, l, &mut next, &inp, &mut out);
+                refill(&mut ln, l, &inp, &mut out);
             }
             continue;
         }
@@ -709,7 +786,7 @@ fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
                 let outcome = if ordinary { Outcome::StepTooSmall } else { Outcome::NonFinite };
                 let (t, y) = (ln.t[l], lane_state(&ln.y, l));
                 finish(&mut ln, l, t, y, outcome, &mut out);
-                refill(&mut ln, l, &mut next, &inp, &mut out);
+                refill(&mut ln, l, &inp, &mut out);
             }
         }
 
@@ -799,7 +876,7 @@ fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
                 sync_from_side(&mut ln, l, steady, sampled);
                 if let Some(outcome) = ev.end {
                     finish(&mut ln, l, ev.t1, ev.y1, outcome, &mut out);
-                    refill(&mut ln, l, &mut next, &inp, &mut out);
+                    refill(&mut ln, l, &inp, &mut out);
                     continue;
                 }
                 if let Some(sw) = ev.switched {
@@ -811,7 +888,7 @@ fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
                     sd.stats.n_rhs += 1;
                     if !f.iter().all(|v| v.is_finite()) {
                         finish(&mut ln, l, t, y1, Outcome::NonFinite, &mut out);
-                        refill(&mut ln, l, &mut next, &inp, &mut out);
+                        refill(&mut ln, l, &inp, &mut out);
                         continue;
                     }
                     let mut g = [0.0; MAX_EVENTS];
@@ -852,13 +929,13 @@ fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
                     }
                     if last[l] {
                         finish(&mut ln, l, t_new[l], y1, Outcome::Finished, &mut out);
-                        refill(&mut ln, l, &mut next, &inp, &mut out);
+                        refill(&mut ln, l, &inp, &mut out);
                     }
                 }
             }
         }
     }
-    out.into_iter().map(|r| r.expect("every trajectory has a result")).collect()
+    out
 }
 
 /// The scalar driver's handling of one accepted step of one lane: its events (located on the
@@ -1209,7 +1286,7 @@ fn cross(a: f64, b: f64) -> bool {
 
 /// Write lane `l`'s result (ended at `(t, y)` with `outcome`) and mark it idle.
 #[cold]
-fn finish(ln: &mut Lanes<'_>, l: usize, t: f64, y: State, outcome: Outcome, out: &mut [Option<LaneResult>]) {
+fn finish(ln: &mut Lanes<'_>, l: usize, t: f64, y: State, outcome: Outcome, out: &mut Vec<(usize, LaneResult)>) {
     let mut sd = ln.side[l].take().expect("finish on a live lane");
     let ext = Extremes {
         min_normal_force: ln.min_n[l],
@@ -1226,7 +1303,7 @@ fn finish(ln: &mut Lanes<'_>, l: usize, t: f64, y: State, outcome: Outcome, out:
     stats.n_reject = ln.n_rej[l];
     let escaped = y[idx::Z].abs() >= sd.s.p.escape_limit * (1.0 - 1e-9);
     let run = RunResult { status: status_of(outcome, escaped), t, y, extremes: ext, stats };
-    out[sd.i] = Some(conclude(run, &mut sd));
+    out.push((sd.i, conclude(run, &mut sd)));
     idle(ln, l);
 }
 
@@ -1268,10 +1345,13 @@ fn idle(ln: &mut Lanes<'_>, l: usize) {
 /// Load the next trajectory that needs a step into lane `l` (trajectories that end before their
 /// first step get their result here); leave the lane idle when none is left.
 #[cold]
-fn refill<'a>(ln: &mut Lanes<'a>, l: usize, next: &mut usize, inp: &Input<'a, '_>, out: &mut [Option<LaneResult>]) {
-    while *next < inp.sliders.len() {
-        let i = *next;
-        *next += 1;
+fn refill<'a>(ln: &mut Lanes<'a>, l: usize, inp: &Input<'a, '_>, out: &mut Vec<(usize, LaneResult)>) {
+    loop {
+        // The next trajectory of the call, shared by every worker of it.
+        let i = inp.feed.fetch_add(1, Ordering::Relaxed);
+        if i >= inp.sliders.len() {
+            break;
+        }
         let s = &inp.sliders[i];
         let y0 = inp.y0s[i];
         let t_end = inp.t_end;
@@ -1304,20 +1384,20 @@ fn refill<'a>(ln: &mut Lanes<'a>, l: usize, next: &mut usize, inp: &Input<'a, '_
             conclude(run, sd)
         };
         if !t_end.is_finite() || !y0.iter().all(|v| v.is_finite()) {
-            out[i] = Some(early(Outcome::NonFinite, 0, &mut sd));
+            out.push((i, early(Outcome::NonFinite, 0, &mut sd)));
             continue;
         }
         if t_end < 0.0 {
-            out[i] = Some(early(Outcome::StepTooSmall, 0, &mut sd));
+            out.push((i, early(Outcome::StepTooSmall, 0, &mut sd)));
             continue;
         }
         if t_end == 0.0 {
-            out[i] = Some(early(Outcome::Finished, 0, &mut sd));
+            out.push((i, early(Outcome::Finished, 0, &mut sd)));
             continue;
         }
         let f0 = s.rhs(&y0, mode);
         if !f0.iter().all(|v| v.is_finite()) {
-            out[i] = Some(early(Outcome::NonFinite, 1, &mut sd));
+            out.push((i, early(Outcome::NonFinite, 1, &mut sd)));
             continue;
         }
         let mut n_rhs = 1;

@@ -9,6 +9,11 @@ fn lanes5(s: &[Slider], y0: &[State], t_end: f64, tol: &Tolerances, task: Task<'
     run_lanes(s, y0, t_end, Method::Dopri5, tol, task)
 }
 
+fn sorted(mut v: Vec<(usize, LaneResult)>) -> Vec<LaneResult> {
+    v.sort_unstable_by_key(|r| r.0);
+    v.into_iter().map(|r| r.1).collect()
+}
+
 fn tol(rtol: f64) -> Tolerances {
     Tolerances::new(rtol)
 }
@@ -301,13 +306,20 @@ fn results_do_not_depend_on_the_batch() {
                 assert_eq!(bits(&rp[j]), bits(&all[k]), "{name} permuted #{k}");
             }
             let portable = match (s[0].p.contact == ContactModel::Unilateral, method == Method::Dop853) {
-                (true, false) => run_impl::<true, false, false>(&s, &y0, 0.1, &t, task),
-                (false, false) => run_impl::<false, false, false>(&s, &y0, 0.1, &t, task),
-                (true, true) => run_impl::<true, false, true>(&s, &y0, 0.1, &t, task),
-                (false, true) => run_impl::<false, false, true>(&s, &y0, 0.1, &t, task),
+                (true, false) => sorted(run_impl::<true, false, false>(&s, &y0, 0.1, &t, task, &AtomicUsize::new(0))),
+                (false, false) => sorted(run_impl::<false, false, false>(&s, &y0, 0.1, &t, task, &AtomicUsize::new(0))),
+                (true, true) => sorted(run_impl::<true, false, true>(&s, &y0, 0.1, &t, task, &AtomicUsize::new(0))),
+                (false, true) => sorted(run_impl::<false, false, true>(&s, &y0, 0.1, &t, task, &AtomicUsize::new(0))),
             };
             for i in 0..s.len() {
                 assert_eq!(bits(&portable[i]), bits(&all[i]), "{name} portable #{i}");
+            }
+            // Threads that take the next trajectory as their lanes free up: the same bits.
+            for th in [1, 2, 3] {
+                let r = run_lanes_threads(&s, &y0, 0.1, method, &t, task, Some(th));
+                for i in 0..s.len() {
+                    assert_eq!(bits(r[i].as_ref().unwrap()), bits(&all[i]), "{name} {th} threads #{i}");
+                }
             }
         }
     }
