@@ -944,6 +944,29 @@ mod tests {
         assert!((f.normal - total).abs() < 1e-9 * p.normal_load);
     }
 
+    /// The analytic Jacobian against central differences (steps `h_rel` times each component's
+    /// scale), element by element to 1e-6 (1 + |J|).
+    fn assert_jacobian_matches_fd(s: &Slider, y: &State, mode: ContactMode, h_rel: f64, label: &str) {
+        let j = s.jacobian(y, mode);
+        let scale = [1e-6, 1e-3, 1e-6, 1e-3, 1e-4, 1e-2];
+        for c in 0..6 {
+            let h = scale[c] * h_rel;
+            let (mut yp, mut ym) = (*y, *y);
+            yp[c] += h;
+            ym[c] -= h;
+            let col = (s.rhs(&yp, mode) - s.rhs(&ym, mode)) / (2.0 * h);
+            for r in 0..6 {
+                let tol = 1e-6 * (1.0 + j[(r, c)].abs());
+                assert!(
+                    (col[r] - j[(r, c)]).abs() < tol,
+                    "{label} {mode:?} J[{r},{c}] = {} vs fd {}",
+                    j[(r, c)],
+                    col[r]
+                );
+            }
+        }
+    }
+
     #[test]
     fn jacobian_matches_finite_differences() {
         for law in [FrictionLaw::Constant, FrictionLaw::Coulomb] {
@@ -956,25 +979,7 @@ mod tests {
                 })
                 .unwrap();
                 let y = State::new(2e-6, 1e-3, -1e-6, 0.01, 2e-4, 0.3);
-                let j = s.jacobian(&y, mode);
-                let scale = [1e-6, 1e-3, 1e-6, 1e-3, 1e-4, 1e-2];
-                for c in 0..6 {
-                    let h = scale[c] * 1e-4;
-                    let mut yp = y;
-                    let mut ym = y;
-                    yp[c] += h;
-                    ym[c] -= h;
-                    let col = (s.rhs(&yp, mode) - s.rhs(&ym, mode)) / (2.0 * h);
-                    for r in 0..6 {
-                        let tol = 1e-6 * (1.0 + j[(r, c)].abs());
-                        assert!(
-                            (col[r] - j[(r, c)]).abs() < tol,
-                            "{law:?} {mode:?} J[{r},{c}] = {} vs fd {}",
-                            j[(r, c)],
-                            col[r]
-                        );
-                    }
-                }
+                assert_jacobian_matches_fd(&s, &y, mode, 1e-4, &format!("{law:?}"));
             }
         }
     }
@@ -1013,24 +1018,7 @@ mod tests {
         ] {
             for (x, phi) in [(2e-6, 1e-4), (-3e-5, -2e-4)] {
                 let y = state_with_slip(&s, v, x, phi);
-                let j = s.jacobian(&y, mode);
-                let scale = [1e-6, 1e-3, 1e-6, 1e-3, 1e-4, 1e-2];
-                for c in 0..6 {
-                    let h = scale[c] * 1e-5;
-                    let (mut yp, mut ym) = (y, y);
-                    yp[c] += h;
-                    ym[c] -= h;
-                    let col = (s.rhs(&yp, mode) - s.rhs(&ym, mode)) / (2.0 * h);
-                    for r in 0..6 {
-                        let tol = 1e-6 * (1.0 + j[(r, c)].abs());
-                        assert!(
-                            (col[r] - j[(r, c)]).abs() < tol,
-                            "{mode:?} v_r = {v}: J[{r},{c}] = {} vs fd {}",
-                            j[(r, c)],
-                            col[r]
-                        );
-                    }
-                }
+                assert_jacobian_matches_fd(&s, &y, mode, 1e-5, &format!("v_r = {v}"));
             }
         }
     }

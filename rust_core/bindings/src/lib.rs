@@ -332,7 +332,7 @@ fn ensemble<'py>(
                 let out: Vec<(LaneResult, String)> = py.detach(|| {
                     if batchable {
                         // The batch locates an escape inside its step, as the scalar path does.
-                        grouped(&items, threads, |sliders, y0s, _| {
+                        grouped(&items, threads, |sliders, y0s| {
                             tribosweep_core::ode::batch::run_bilateral_batch(sliders, y0s, t_end, &tol)
                                 .into_iter()
                                 .map(|run| LaneResult { run, samples: Vec::new(), summary: None, events: Vec::new() })
@@ -463,13 +463,13 @@ fn lanes_out(v: Vec<Result<LaneResult, String>>) -> Vec<(LaneResult, String)> {
         .collect()
 }
 
-/// Run `f` on groups of the items in parallel (each group a slice of sliders and start states
-/// and its index range), one result per item in input order. Groups are big enough to keep the
+/// Run `f` on groups of the items in parallel (each group a slice of sliders and start states),
+/// one result per item in input order. Groups are big enough to keep the
 /// eight lanes busy (the last long runs of a small group leave lanes idle) and small enough to
 /// spread over the threads. A panic marks its whole group.
 fn grouped<F>(items: &[(Params, State)], threads: Option<usize>, f: F) -> Vec<(LaneResult, String)>
 where
-    F: Fn(&[Slider], &[State], std::ops::Range<usize>) -> Vec<LaneResult> + Sync,
+    F: Fn(&[Slider], &[State]) -> Vec<LaneResult> + Sync,
 {
     // About four groups per thread, so that the threads stay busy to the end of a call even when
     // a few long runs (a census's 30 s disturbances) dominate it; at least one full set of lanes.
@@ -484,7 +484,7 @@ where
             let g = &items[r.clone()];
             let sliders: Vec<Slider> = g.iter().map(|(p, _)| Slider::new(*p).expect("validated")).collect();
             let y0s: Vec<State> = g.iter().map(|(_, y)| *y).collect();
-            f(&sliders, &y0s, r.clone()).into_iter().map(|x| (x, String::new())).collect()
+            f(&sliders, &y0s).into_iter().map(|x| (x, String::new())).collect()
         },
         |msg| {
             let failed = LaneResult {

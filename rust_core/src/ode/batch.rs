@@ -45,6 +45,7 @@
 use super::controller::{initial_step, FAC_MAX, FAC_MIN, SAFETY};
 use super::dopri5::Dopri5Dense;
 use super::driver::locate;
+use super::lanes::Coef;
 use super::{Dense, Options, Stats};
 use crate::model::{idx, ContactMode, ContactModel, FrictionLaw, Slider, State};
 use crate::status::Status;
@@ -66,32 +67,6 @@ pub(crate) const BETA: f64 = 0.04;
 pub(crate) const ALPHA: f64 = 1.0 / 5.0 - 0.75 * BETA;
 pub(crate) const LN_SAFETY: f64 = -0.105_360_515_657_826_3;
 pub(crate) const LN_ERR_FLOOR: f64 = -9.210_340_371_976_184;
-
-/// Per-lane coefficients of the bilateral constant-`mu` right-hand side and the tolerances.
-#[derive(Clone, Copy)]
-struct Coef {
-    ks: L,
-    ka: L,
-    c: L,
-    kphi: L,
-    mu: L,
-    inv_m: L,
-    wz2: L,
-    dz: L,
-    wx2: L,
-    dx: L,
-    wt2: L,
-    dt: L,
-    /// s L / I
-    tg: L,
-    atol: V6,
-    /// F_st, z_st, V, s L, escape limit (bookkeeping only).
-    fst: L,
-    zst: L,
-    v: L,
-    sl: L,
-    esc: L,
-}
 
 /// The state of the eight lanes.
 struct Lanes {
@@ -167,33 +142,6 @@ fn rhs(c: &Coef, y: &V6, out: &mut V6, fz: &mut L) {
     }
 }
 
-/// Set lane `l`'s coefficients from slider `s`.
-fn set_coef(c: &mut Coef, l: usize, s: &Slider, atol: &[f64; 6]) {
-    let p = &s.p;
-    let (wz, wx, wt) = (p.omega_normal, p.omega_friction, p.omega_torsion);
-    c.ks[l] = s.k_s;
-    c.ka[l] = p.contact_quadratic;
-    c.c[l] = p.contact_damping;
-    c.kphi[l] = p.twist_coupling;
-    c.mu[l] = p.mu;
-    c.inv_m[l] = 1.0 / p.mass;
-    c.wz2[l] = wz * wz;
-    c.dz[l] = 2.0 * p.zeta_normal * wz;
-    c.wx2[l] = wx * wx;
-    c.dx[l] = 2.0 * p.zeta_friction * wx;
-    c.wt2[l] = wt * wt;
-    c.dt[l] = 2.0 * p.zeta_torsion * wt;
-    c.tg[l] = p.torsion_sign * p.moment_arm / p.inertia;
-    for i in 0..6 {
-        c.atol[i][l] = atol[i];
-    }
-    c.fst[l] = p.normal_load;
-    c.zst[l] = s.z_st;
-    c.v[l] = p.sliding_speed;
-    c.sl[l] = p.torsion_sign * p.moment_arm;
-    c.esc[l] = p.escape_limit;
-}
-
 /// Integrate each `sliders[i]` from `y0s[i]` at `t = 0` to `t_end` with Dormand–Prince 5(4),
 /// eight trajectories at a time; the result for each trajectory, in input order.
 ///
@@ -246,27 +194,7 @@ fn run_impl(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances) -> 
     let mut out: Vec<Option<RunResult>> = vec![None; n];
     let zero = [0.0; W];
     let mut ln = Lanes {
-        c: Coef {
-            ks: zero,
-            ka: zero,
-            c: zero,
-            kphi: zero,
-            mu: zero,
-            inv_m: zero,
-            wz2: zero,
-            dz: zero,
-            wx2: zero,
-            dx: zero,
-            wt2: zero,
-            dt: zero,
-            tg: zero,
-            atol: [splat(1.0); 6],
-            fst: zero,
-            zst: zero,
-            v: zero,
-            sl: zero,
-            esc: splat(f64::INFINITY),
-        },
+        c: Coef::zero(),
         y: [zero; 6],
         f: [zero; 6],
         t: zero,
@@ -708,7 +636,7 @@ fn refill(
             &mut n_rhs,
         );
         let atol = tol.atol.unwrap_or(characteristic_sizes(s).map(|v| v * tol.rtol));
-        set_coef(&mut ln.c, l, s, &atol);
+        ln.c.set(l, s, &atol);
         for k in 0..6 {
             ln.y[k][l] = y0[k];
             ln.f[k][l] = f0[k];

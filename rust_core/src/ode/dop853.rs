@@ -403,7 +403,7 @@ impl<const N: usize, S: OdeSystem<N>> Stepper<N, S> for Dop853<N> {
         y0: &'a SVector<f64, N>,
         y1: &'a SVector<f64, N>,
     ) -> Dop853Dense<'a, N, S> {
-        Dop853Dense { sys, mode, k: &self.k, y0, y1, t0: t, h, cont: OnceCell::new(), extra: Cell::new(0) }
+        Dop853Dense::from_stages(sys, mode, &self.k, y0, y1, t, h)
     }
 }
 

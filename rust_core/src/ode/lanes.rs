@@ -100,40 +100,40 @@ pub fn supports_method(m: Method) -> bool {
     matches!(m, Method::Dopri5 | Method::Dop853)
 }
 
-/// Per-lane coefficients of the right-hand side and the tolerances.
+/// Per-lane coefficients of the right-hand side and the tolerances (shared with `batch`).
 #[derive(Clone, Copy)]
-struct Coef {
-    ks: L,
-    ka: L,
-    c: L,
-    kphi: L,
-    mu: L,
-    inv_m: L,
-    wz2: L,
-    dz: L,
-    wx2: L,
-    dx: L,
-    wt2: L,
-    dt: L,
+pub(crate) struct Coef {
+    pub(crate) ks: L,
+    pub(crate) ka: L,
+    pub(crate) c: L,
+    pub(crate) kphi: L,
+    pub(crate) mu: L,
+    pub(crate) inv_m: L,
+    pub(crate) wz2: L,
+    pub(crate) dz: L,
+    pub(crate) wx2: L,
+    pub(crate) dx: L,
+    pub(crate) wt2: L,
+    pub(crate) dt: L,
     /// s L / I
-    tg: L,
-    atol: V6,
+    pub(crate) tg: L,
+    pub(crate) atol: V6,
     /// F_st, z_st, V, s L, escape limit.
-    fst: L,
-    zst: L,
-    v: L,
-    sl: L,
-    esc: L,
+    pub(crate) fst: L,
+    pub(crate) zst: L,
+    pub(crate) v: L,
+    pub(crate) sl: L,
+    pub(crate) esc: L,
     /// Stribeck law: mu_k, mu_s - mu_k, 1/v_s, 1/eps, mu(V) F_st tanh(V/eps).
-    mu_k: L,
-    dmu: L,
-    inv_vs: L,
-    inv_eps: L,
-    stat: L,
+    pub(crate) mu_k: L,
+    pub(crate) dmu: L,
+    pub(crate) inv_vs: L,
+    pub(crate) inv_eps: L,
+    pub(crate) stat: L,
 }
 
 impl Coef {
-    fn zero() -> Self {
+    pub(crate) fn zero() -> Self {
         let z = [0.0; W];
         Coef {
             ks: z,
@@ -163,7 +163,7 @@ impl Coef {
         }
     }
 
-    fn set(&mut self, l: usize, s: &Slider, atol: &[f64; 6]) {
+    pub(crate) fn set(&mut self, l: usize, s: &Slider, atol: &[f64; 6]) {
         let p = &s.p;
         let (wz, wx, wt) = (p.omega_normal, p.omega_friction, p.omega_torsion);
         self.ks[l] = s.k_s;
@@ -518,8 +518,7 @@ fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
     let inp = Input { sliders, y0s, t_end, tol, task, feed };
     let n = sliders.len();
     let rtol = tol.rtol;
-    let mut out: Vec<(usize, LaneResult)> = Vec::new();
-    let _ = n;
+    let mut out: Vec<(usize, LaneResult)> = Vec::with_capacity(n);
     let zero = [0.0; W];
     let mut ln = Lanes {
         c: Coef::zero(),
@@ -702,7 +701,7 @@ fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
             } else {
                 dense5(y, &yn, [k1, &k3, &k4, &k5, &k6, &k7], &hh)
             };
-            hidden_crossings::<COUL>(c, y, &dense, &ln.g0, &g1, &ln.pend, &ok, &mut hidden);
+            hidden_crossings::<COUL>(c, &dense, &ln.g0, &g1, &ln.pend, &ok, &mut hidden);
         }
 
         // ---- accept or reject, the controller (branch-free) ----
@@ -1243,7 +1242,6 @@ fn dense853<const UNI: bool, const COUL: bool>(
 #[allow(clippy::too_many_arguments)]
 fn hidden_crossings<const COUL: bool>(
     c: &Coef,
-    _y0: &V6,
     dense: &LaneDense,
     g0: &[L; NE],
     g1: &[L; NE],
