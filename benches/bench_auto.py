@@ -28,10 +28,10 @@ def main(argv=None) -> int:
     axes = dict(normal_load=np.linspace(10, 150, a.loads), arm_length=np.linspace(0.05, 0.11, a.arms),
                 sliding_speed=[0.46], progress=False, threads=1, t_max=a.t_max)
     t0 = time.perf_counter()
-    tidf = ts.sweep(method="tidf", **axes)
+    tidf = ts.sweep(strategy="tidf", **axes)
     t_tidf = time.perf_counter() - t0
     t0 = time.perf_counter()
-    shoot = ts.sweep(method="shooting", **axes)
+    shoot = ts.sweep(strategy="shooting", **axes)
     t_shoot = time.perf_counter() - t0
     err = shoot.tidf_a1_error.values.ravel()
     has = np.isfinite(err)
@@ -46,14 +46,14 @@ def main(argv=None) -> int:
         print(f"  orbits stable: {(shoot.orbit_stable.values.ravel()[has] == 1).sum()} of {has.sum()} "
               f"(bilateral saddles around stable sliding are unstable)")
     t0 = time.perf_counter()
-    auto = ts.sweep(method="auto", **axes)
+    auto = ts.sweep(strategy="auto", **axes)
     t_auto = time.perf_counter() - t0
     t0 = time.perf_counter()
-    lean = ts.sweep(method="auto", census=False, **axes)
+    lean = ts.sweep(strategy="auto", census=False, **axes)
     t_lean = time.perf_counter() - t0
-    assert np.array_equal(lean.regime.values, ts.sweep(method="auto", **axes).regime.values)
+    assert np.array_equal(lean.regime.values, ts.sweep(strategy="auto", **axes).regime.values)
     t0 = time.perf_counter()
-    full = ts.sweep(method="transient", **axes)
+    full = ts.sweep(strategy="transient", **axes)
     t_full = time.perf_counter() - t0
     ra, rt = auto.regime.values.ravel(), full.regime.values.ravel()
     settled = (full.status.values.ravel() == 0) & ~np.isin(

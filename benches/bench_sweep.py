@@ -35,7 +35,7 @@ def child(points: int, method: str, threads: int, output: str | None, bistabilit
     t0 = time.perf_counter()
     ds = ts.sweep(
         normal_load=np.linspace(10, 150, nl), arm_length=np.linspace(0.05, 0.127, na),
-        sliding_speed=np.linspace(0.2, 1.0, nv), method=method, threads=threads, output=output,
+        sliding_speed=np.linspace(0.2, 1.0, nv), strategy=method, threads=threads, output=output,
         progress=False, census=bistability, t_max=20.0,
     )
     wall = time.perf_counter() - t0

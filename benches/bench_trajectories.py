@@ -15,14 +15,12 @@ from __future__ import annotations
 import argparse
 import json
 import pathlib
-import sys
 import time
 
 import numpy as np
 
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-import baselines  # noqa: E402
-import tribosweep as ts  # noqa: E402
+import tribosweep as ts  # noqa
+from tribosweep.bench import baselines  # noqa: E402
 
 
 def best_of(f, repeat=3):

@@ -1,6 +1,6 @@
 """Work-precision charts and failure maps of the Rust integrators against scipy and numba baselines.
 
-A thin wrapper of ``tribosweep bench`` (``python/tribosweep/_workprecision.py``, ``_failure.py``) that
+A thin wrapper of ``tribosweep bench`` (the bench wing, ``python/tribosweep/bench/``) that
 also regenerates ``docs/benchmarks.md`` from the run:
 
     python benches/work_precision.py --quick             # about a minute on two cores
@@ -23,9 +23,8 @@ DOCS = HERE.parent / "docs" / "benchmarks.md"
 
 def main(argv=None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
-    os.environ.setdefault("TRIBOSWEEP_BENCHES", str(HERE))  # where the numba kernel (baselines.py) lives
     if "--from-json" in argv:
-        from tribosweep._workprecision import load_payload, render_docs
+        from tribosweep.bench.workprecision import load_payload, render_docs
 
         i = argv.index("--from-json")
         payload = load_payload(argv[i + 1])

@@ -10,7 +10,8 @@ import pytest
 import xarray as xr
 
 import tribosweep as ts
-from tribosweep import _chunk, cli
+from tribosweep import cli
+from tribosweep._sweep import chunk as _chunk
 
 _REAL_COMPUTE_CHUNK = _chunk.compute_chunk
 
@@ -24,7 +25,7 @@ def run(argv, capsys):
 
 def test_sweep_info_plot(tmp_path, capsys):
     nc, png = tmp_path / "s.nc", tmp_path / "s.png"
-    code, out, err = run(["sweep", "--normal-load", "10,30,60", "--arm-length", "0.05:0.1:2", "--method", "linear",
+    code, out, err = run(["sweep", "--normal-load", "10,30,60", "--arm-length", "0.05:0.1:2", "--strategy", "linear",
                           "-o", nc, "--plot", png, "--no-progress", "--threads", "1"], capsys)  # fmt: skip
     assert code == 0, err
     assert nc.exists() and png.stat().st_size > 0
@@ -48,7 +49,7 @@ def test_sweep_info_plot(tmp_path, capsys):
 def test_default_sweep_and_extra_axes(tmp_path, capsys):
     nc = tmp_path / "new_dir" / "d.nc"
     png = tmp_path / "other_dir" / "d.png"
-    code, _, err = run(["sweep", "--method", "linear", "-o", nc, "--plot", png, "--no-progress"], capsys)
+    code, _, err = run(["sweep", "--strategy", "linear", "-o", nc, "--plot", png, "--no-progress"], capsys)
     assert code == 0, err
     assert png.exists()
     with xr.open_dataset(nc) as ds:
@@ -58,7 +59,7 @@ def test_default_sweep_and_extra_axes(tmp_path, capsys):
         assert ds.attrs["model_contact"] == "unilateral"
     nc2 = tmp_path / "e.nc"
     code, _, err = run(["sweep", "--normal-load", "50", "--mu", "0.2,0.25", "--axis", "contact_damping=200:300:2",
-                        "--method", "linear", "-o", nc2, "--no-progress"], capsys)  # fmt: skip
+                        "--strategy", "linear", "-o", nc2, "--no-progress"], capsys)  # fmt: skip
     assert code == 0, err
     with xr.open_dataset(nc2) as ds:
         assert ds.regime.dims == ("normal_load", "arm_length", "sliding_speed", "mu", "contact_damping")
@@ -72,10 +73,10 @@ def test_config_file(tmp_path, capsys):
         f'output = "{tmp_path / "cfg.nc"}"\n[axes]\nmu = "0.2,0.25"\n[model]\ntwist_coupling = -45.2e3\n'
         "[solver]\nt_max = 0.001\n"
     )
-    code, _, err = run(["sweep", "--config", cfg, "--method", "linear", "--no-progress"], capsys)
+    code, _, err = run(["sweep", "--config", cfg, "--strategy", "linear", "--no-progress"], capsys)
     assert code == 0, err
     with xr.open_dataset(tmp_path / "cfg.nc") as ds:
-        assert ds.attrs["method"] == "linear"  # the command line wins
+        assert ds.attrs["strategy"] == "linear"  # the command line wins
         assert ds.attrs["model_twist_coupling"] == -45.2e3
         assert ds.attrs["solver_t_max"] == 0.001
         assert ds.mu.values.tolist() == [0.2, 0.25]
@@ -153,7 +154,7 @@ def test_bad_input_exits_2_with_a_message(argv, message, tmp_path, monkeypatch, 
 def test_bad_config_exits_2(text, message, tmp_path, capsys):
     cfg = tmp_path / "c.toml"
     cfg.write_text(text)
-    code, _, err = run(["sweep", "--config", cfg, "-o", tmp_path / "x.nc", "--method", "linear"], capsys)
+    code, _, err = run(["sweep", "--config", cfg, "-o", tmp_path / "x.nc", "--strategy", "linear"], capsys)
     assert code == 2
     assert message in err
 
@@ -170,7 +171,7 @@ def test_info_on_a_file_that_is_not_a_sweep(tmp_path, capsys):
 
 def test_interrupt_exits_130_and_resume_finishes(tmp_path, monkeypatch, capsys):
     nc = tmp_path / "r.nc"
-    argv = ["sweep", "--normal-load", "10,30,60", "--method", "linear", "--chunk-size", "1", "-o", nc, "--no-progress"]
+    argv = ["sweep", "--normal-load", "10,30,60", "--strategy", "linear", "--chunk-size", "1", "-o", nc, "--no-progress"]
     calls = []
 
     def interrupt_after_one(*args):
@@ -227,7 +228,7 @@ def test_commands_registry_is_extensible():
 
 def test_info_counts_bistable_points_and_multi_period_cycles(tmp_path, capsys):
     nc = tmp_path / "m.nc"
-    ds = ts.sweep(normal_load=[10.0, 30.0], arm_length=[0.05, 0.1], method="linear", progress=False)
+    ds = ts.sweep(normal_load=[10.0, 30.0], arm_length=[0.05, 0.1], strategy="linear", progress=False)
     ds["cycle_period_ratio"][1, 0, 0] = 2.03
     ds["bistable"][0, 1, 0] = 1
     ds.to_netcdf(nc)

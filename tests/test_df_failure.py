@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from tribosweep import _df_failure as dff
+from tribosweep.bench import df_failure as dff
 
 
 def test_validity_map_flags_contact_opening_at_the_seed_and_passes_a_valid_point():
@@ -40,7 +40,7 @@ def test_maps_are_written(tmp_path):
 
 
 def test_model_cost_numbers(tmp_path):
-    from tribosweep._model_cost import model_cost
+    from tribosweep.bench.model_cost import model_cost
 
     r = model_cost(tmp_path, quick=True)
     d = r["numbers"]

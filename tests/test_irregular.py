@@ -10,15 +10,17 @@ import numpy as np
 import pytest
 
 import tribosweep as ts
-from tribosweep import _apparatus, _chunk, _core, _irregular
+from tribosweep import _apparatus, _codes, _core, _irregular
+from tribosweep._settings import DEFAULTS
+from tribosweep._sweep import chunk as _chunk
 
-REGIME = _chunk.REGIME
+REGIME = _codes.REGIME
 IRREGULAR_VARS = tuple(_irregular.IRREGULAR_VARIABLES)
 
 #: The Stribeck sweep of issue 10: 29 of its 200 points ended unstable_undetermined before.
 STRIBECK_MODEL = ts.SliderModel(contact="unilateral", friction_law="coulomb", mu_static=0.3)
 STRIBECK_GRID = dict(normal_load=np.linspace(10, 150, 10), arm_length=np.linspace(0.05, 0.127, 4),
-                     sliding_speed=np.linspace(0.2, 1.0, 5), method="auto", census=False, t_max=20.0,
+                     sliding_speed=np.linspace(0.2, 1.0, 5), strategy="auto", census=False, t_max=20.0,
                      progress=False)  # fmt: skip
 
 
@@ -37,8 +39,8 @@ def test_dominant_frequency_recovers_a_known_frequency_to_three_hundredths_of_a_
     # 0.5 s at 1e-4 s (the defaults): bins 12.57 rad/s apart. Frequencies at every offset from the
     # bins, with a second harmonic of 0.4 and 10 % white noise: the Hann peak refined by a log
     # parabola is within 0.03 bin (0.38 rad/s, 0.06 % at 640 rad/s); the bare bin would be 0.5 off.
-    dt = _irregular.SAMPLE_DT
-    t = np.arange(int(_irregular.WINDOW / dt) + 1) * dt
+    dt = DEFAULTS.irregular.sample_dt
+    t = np.arange(int(DEFAULTS.irregular.window / dt) + 1) * dt
     w = np.linspace(500.0, 800.0, 97)
     rng = np.random.default_rng(20240610)
     z = 20e-6 * (np.sin(w[:, None] * t + 0.3) + 0.4 * np.sin(2 * w[:, None] * t + 1.0)
@@ -182,7 +184,7 @@ def test_irregular_variables_carry_units_long_names_and_the_regime_its_flag(stri
     assert meanings[REGIME["irregular"]] == "irregular"
     assert list(stribeck.regime.attrs["flag_values"]) == list(range(len(meanings)))
     assert "irregular:" in stribeck.regime.attrs["comment"]
-    assert stribeck.attrs["solver_ftle_tau"] == _irregular.FTLE_TAU
+    assert stribeck.attrs["solver_ftle_tau"] == DEFAULTS.irregular.ftle_tau
 
 
 def test_a_failed_measurement_leaves_the_point_undetermined_with_its_failure(monkeypatch):
@@ -195,16 +197,16 @@ def test_a_failed_measurement_leaves_the_point_undetermined_with_its_failure(mon
                 "n_rhs": np.zeros(n, np.int64)}  # fmt: skip
 
     monkeypatch.setattr(_irregular, "measure", failing)
-    ds = ts.sweep(normal_load=[10.0], method="transient", t_max=1e-3, progress=False)
+    ds = ts.sweep(normal_load=[10.0], strategy="transient", t_max=1e-3, progress=False)
     assert int(ds.regime.values.ravel()[0]) == REGIME["unstable_undetermined"]
     assert int(ds.status.values.ravel()[0]) == ts.STATUS["step_too_small"]
     assert "measurement window failed" in str(ds.reason.values.ravel()[0])
 
 
 def test_method_linear_says_it_computed_no_motion():
-    ds = ts.sweep(normal_load=[10.0], method="linear", progress=False)
+    ds = ts.sweep(normal_load=[10.0], strategy="linear", progress=False)
     assert int(ds.regime.values.ravel()[0]) == REGIME["unstable_undetermined"]
-    assert "method=linear" in str(ds.reason.values.ravel()[0])
+    assert "strategy=linear" in str(ds.reason.values.ravel()[0])
 
 
 # --- bad input ---------------------------------------------------------------------------------
@@ -230,7 +232,7 @@ def test_sweep_rejects_bad_measurement_settings_before_work_starts(monkeypatch, 
 
     monkeypatch.setattr(_chunk, "compute_chunk", no_work)
     with pytest.raises(ValueError, match=match):
-        ts.sweep(normal_load=[10.0], method="auto", progress=False, **kwargs)
+        ts.sweep(normal_load=[10.0], strategy="auto", progress=False, **kwargs)
 
 
 @pytest.mark.parametrize(

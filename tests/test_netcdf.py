@@ -16,8 +16,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import tribosweep as ts
-from tribosweep import _census, _chunk, _netcdf
-from tribosweep._netcdf import MemoryWriter, NetCDFWriter, VarSpec, flat_slabs
+from tribosweep import _census
+from tribosweep._sweep import schema as _schema
+from tribosweep._sweep.netcdf import MemoryWriter, NetCDFWriter, flat_slabs
+from tribosweep._sweep.schema import VarSpec
 
 
 @pytest.fixture(scope="module")
@@ -25,7 +27,7 @@ def sweep_file(tmp_path_factory) -> pathlib.Path:
     """A small sweep with every kind of variable: an extra axis, text reasons, the calibrated wear rate."""
     path = tmp_path_factory.mktemp("nc") / "sweep.nc"
     ds = ts.sweep(
-        normal_load=[10.0, 30.0, 60.0], arm_length=[0.05, 0.1], extra_axes={"mu": [0.2, 0.25]}, method="auto",
+        normal_load=[10.0, 30.0, 60.0], arm_length=[0.05, 0.1], extra_axes={"mu": [0.2, 0.25]}, strategy="auto",
         t_max=1e-3, output=path, chunk_size=5, progress=False, wear_calibration=ts.WearCalibration(b_w=1e-9),
     )  # fmt: skip
     assert (ds.reason.values != "").any()  # non-trivial text (failed or undetermined points)
@@ -107,7 +109,7 @@ def test_round_trip_through_xarray(sweep_file, tmp_path):
 
 def test_in_memory_dataset_round_trips_and_matches_the_file(sweep_file, tmp_path):
     mem = ts.sweep(
-        normal_load=[10.0, 30.0, 60.0], arm_length=[0.05, 0.1], extra_axes={"mu": [0.2, 0.25]}, method="auto",
+        normal_load=[10.0, 30.0, 60.0], arm_length=[0.05, 0.1], extra_axes={"mu": [0.2, 0.25]}, strategy="auto",
         t_max=1e-3, chunk_size=5, progress=False, wear_calibration=ts.WearCalibration(b_w=1e-9),
     )  # fmt: skip
     path = tmp_path / "mem.nc"
@@ -200,17 +202,17 @@ def test_a_failed_assembly_leaves_no_file(tmp_path, monkeypatch):
 
     monkeypatch.setattr(NetCDFWriter, "write", broken)
     with pytest.raises(RuntimeError, match="disk full"):
-        ts.sweep(normal_load=[10.0, 20.0], method="linear", output=tmp_path / "s.nc", progress=False)
+        ts.sweep(normal_load=[10.0, 20.0], strategy="linear", output=tmp_path / "s.nc", progress=False)
     assert not (tmp_path / "s.nc").exists() and not (tmp_path / "s.nc.tmp").exists()
     assert (tmp_path / "s.nc.parts" / "chunk_000000.npz").exists()  # the work is kept
     monkeypatch.undo()
-    ts.sweep(normal_load=[10.0, 20.0], method="linear", output=tmp_path / "s.nc", resume=True,
+    ts.sweep(normal_load=[10.0, 20.0], strategy="linear", output=tmp_path / "s.nc", resume=True,
              progress=False).close()  # fmt: skip
     assert (tmp_path / "s.nc").exists()
 
 
 def test_point_specs_cover_the_chunk_output():
-    specs = {s.name for s in _netcdf.point_specs(("x",))}
-    assert specs == set(_chunk.POINT_VARIABLES) | set(_census.CENSUS_VARIABLES)
-    assert {s.name: s.dims for s in _netcdf.point_specs(("x",))}["basin_fraction"] == ("x", "attractor")
-    assert {s.name for s in _netcdf.point_specs(("x",), wear_rate=True)} == specs | {"wear_rate"}
+    specs = {s.name for s in _schema.point_specs(("x",))}
+    assert specs == set(_schema.POINT_VARIABLES) | set(_census.CENSUS_VARIABLES)
+    assert {s.name: s.dims for s in _schema.point_specs(("x",))}["basin_fraction"] == ("x", "attractor")
+    assert {s.name for s in _schema.point_specs(("x",), wear_rate=True)} == specs | {"wear_rate"}

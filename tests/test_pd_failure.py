@@ -11,8 +11,8 @@ import pytest
 
 import tribosweep as ts
 from tribosweep import INSTABILITY_NAMES
-from tribosweep import _pd_failure as pf
 from tribosweep._simulate import STATE_VARS
+from tribosweep.bench import pd_failure as pf
 
 LOAD = 80.0
 
@@ -88,7 +88,7 @@ def test_shooting_map_codes():
 
 
 def test_sweep_reports_the_doubled_period():
-    ds = ts.sweep(normal_load=[LOAD], extra_axes={"mu": [0.41, 0.425]}, method="transient", progress=False)
+    ds = ts.sweep(normal_load=[LOAD], extra_axes={"mu": [0.41, 0.425]}, strategy="transient", progress=False)
     ratio = ds.cycle_period_ratio.squeeze()
     assert float(ratio.sel(mu=0.41)) == pytest.approx(1.0, abs=0.1)
     assert float(ratio.sel(mu=0.425)) == pytest.approx(2.0, abs=0.15)

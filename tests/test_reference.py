@@ -1,15 +1,12 @@
-"""Tests of the independent reference (python/tribosweep/reference.py) and the numba baseline.
+"""Tests of the independent reference (tribosweep.bench.reference) and the numba baseline.
 
 Truth first: the reference is checked against closed forms and the values of MODEL.md /
-seed_values.json before anything else is compared with it. The modules are loaded by file
-path so that these tests run without the compiled extension ``tribosweep._core``.
+seed_values.json before anything else is compared with it.
 """
 
-import importlib.util
 import json
 import math
 import pathlib
-import sys
 
 import numpy as np
 import pytest
@@ -19,17 +16,7 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 SEED_VALUES = ROOT.parents[0] / "shared" / "reference" / "seed_values.json"
 
 
-def _load(name, path):
-    if name in sys.modules:
-        return sys.modules[name]
-    spec = importlib.util.spec_from_file_location(name, path)
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules[name] = mod
-    spec.loader.exec_module(mod)
-    return mod
-
-
-ref = _load("_tribosweep_reference_for_benches", ROOT / "python" / "tribosweep" / "reference.py")
+from tribosweep.bench import reference as ref  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -224,7 +211,7 @@ def test_unilateral_bouncing_switches_alternate():
 
 def test_numba_dp5_matches_scipy_dop853():
     pytest.importorskip("numba")
-    bl = _load("_tribosweep_baselines", ROOT / "benches" / "baselines.py")
+    from tribosweep.bench import baselines as bl
     params_list, y0, t_end = bl.seed_ensemble_params(5, seed=0)
     P = ref.params_to_array(params_list)
     truth, scale = [], []
@@ -245,7 +232,7 @@ def test_numba_dp5_matches_scipy_dop853():
 def test_numba_dp5_decoupled_closed_form():
     """Truth for the kernel: the decoupled linear limit, and fifth-order convergence."""
     pytest.importorskip("numba")
-    bl = _load("_tribosweep_baselines", ROOT / "benches" / "baselines.py")
+    from tribosweep.bench import baselines as bl
     p = dict(ref.seed_parameters(), contact_quadratic=0.0, mu=0.0, twist_coupling=0.0)
     _, k_s = ref.static_point(p)
     m, wz = p["mass"], p["omega_normal"]

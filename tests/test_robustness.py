@@ -89,8 +89,8 @@ def test_auto_and_transient_regimes():
 
     def regimes(**kw):
         args = dict(AGREE_GRID) | kw
-        return (ts.sweep(method="auto", census=False, **args).regime.values,
-                ts.sweep(method="transient", **args).regime.values)  # fmt: skip
+        return (ts.sweep(strategy="auto", census=False, **args).regime.values,
+                ts.sweep(strategy="transient", **args).regime.values)  # fmt: skip
 
     ref = regimes()
     loads = np.asarray(AGREE_GRID["normal_load"])

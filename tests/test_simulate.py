@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import tribosweep as ts
-from tribosweep import reference
+from tribosweep.bench import reference
 
 METHODS = ["dopri5", "dop853", "rodas4"]
 

@@ -13,10 +13,16 @@ import pytest
 import xarray as xr
 
 import tribosweep as ts
-from tribosweep import _census, _chunk, _sweep
-from tribosweep._chunk import REGIME
+from tribosweep import _census, _codes
+from tribosweep._codes import REGIME
+from tribosweep._settings import SweepSettings
+from tribosweep._sweep import api as _api
+from tribosweep._sweep import chunk as _chunk
+from tribosweep._sweep import plan as _plan
+from tribosweep._sweep import schema as _schema
+from tribosweep._sweep import stages as _stages
 
-LINEAR = {"method": "linear", "progress": False}
+LINEAR = {"strategy": "linear", "progress": False}
 _REAL_COMPUTE_CHUNK = _chunk.compute_chunk
 
 
@@ -90,7 +96,7 @@ def test_bad_extra_axes(extra, match):
 @pytest.mark.parametrize(
     ("kwargs", "match"),
     [
-        ({"method": "bogus"}, "method = 'bogus'"),
+        ({"strategy": "bogus"}, "strategy = 'bogus'"),
         ({"chunk_size": 0}, "chunk_size"),
         ({"threads": 0}, "threads"),
         ({"t_max": -1.0}, "t_max"),
@@ -104,7 +110,7 @@ def test_bad_extra_axes(extra, match):
 )
 def test_bad_options(kwargs, match):
     with pytest.raises(ValueError, match=match):
-        ts.sweep(**{"method": "linear", "progress": False, **kwargs})
+        ts.sweep(**{"strategy": "linear", "progress": False, **kwargs})
 
 
 @pytest.mark.parametrize(
@@ -113,20 +119,20 @@ def test_bad_options(kwargs, match):
 )
 def test_wrong_types(kwargs):
     with pytest.raises(TypeError, match=next(iter(kwargs))):
-        ts.sweep(**{"method": "linear", "progress": False, **kwargs})
+        ts.sweep(**{"strategy": "linear", "progress": False, **kwargs})
 
 
 def test_tidf_and_shooting_stages_at_the_seed(seed_values):
     ref = seed_values["tidf_root_seed"]
     orb = seed_values["bilateral_periodic_orbit_seed"]
-    d = ts.sweep(normal_load=[84.46], method="tidf", progress=False)
-    assert int(d.decided_by.values.ravel()[0]) == _chunk.DECIDED_BY["tidf"]
+    d = ts.sweep(normal_load=[84.46], strategy="tidf", progress=False)
+    assert int(d.decided_by.values.ravel()[0]) == _codes.DECIDED_BY["tidf"]
     assert int(d.tidf_roots.values.ravel()[0]) == 5
     assert abs(float(d.tidf_omega.values.ravel()[0]) - ref["omega"]) < 7e-4
     assert abs(float(d.tidf_a1.values.ravel()[0]) / ref["A1"] - 1) < 1e-3
     assert int(d.tidf_contact_opens.values.ravel()[0]) == 1
-    s = ts.sweep(normal_load=[84.46], method="shooting", progress=False)
-    assert int(s.decided_by.values.ravel()[0]) == _chunk.DECIDED_BY["shooting"]
+    s = ts.sweep(normal_load=[84.46], strategy="shooting", progress=False)
+    assert int(s.decided_by.values.ravel()[0]) == _codes.DECIDED_BY["shooting"]
     assert abs(float(s.orbit_a1.values.ravel()[0]) / orb["A1"] - 1) < 1e-3
     assert int(s.orbit_stable.values.ravel()[0]) == 0
     # MODEL.md §6: the describing function is within 3.3 % in A1 of the orbit.
@@ -138,9 +144,9 @@ def test_tidf_and_shooting_stages_at_the_seed(seed_values):
 def test_auto_finds_the_seed_bistable():
     # MODEL.md §6: at the seed, stable sliding and a stable bouncing cycle coexist. The census sees
     # both (fractions near 0.7 / 0.3 at K = 32: each is more than 4 standard errors from 0 and 1).
-    ds = ts.sweep(normal_load=[84.46], method="auto", progress=False)
+    ds = ts.sweep(normal_load=[84.46], strategy="auto", progress=False)
     assert int(ds.regime.values.ravel()[0]) == REGIME["steady_sliding"]
-    assert int(ds.bistable.values.ravel()[0]) == _chunk.BISTABLE["coexisting"]
+    assert int(ds.bistable.values.ravel()[0]) == _codes.BISTABLE["coexisting"]
     p = ds.basin_fraction.values.reshape(-1, 4)[0]
     assert 0 < p[0] < 1 and 0 < p[1] < 1, p
     assert abs(float(ds.largest_cycle_omega.values.ravel()[0]) / 640.371 - 1) < 1e-3
@@ -159,7 +165,7 @@ def test_linear_stage_at_the_seed(seed_values):
     assert ds.linear_frequency.item() == pytest.approx(ev[1][1], abs=1e-3)
     assert ds.normal_mode_frequency.item() == pytest.approx(seed_values["normal_mode_frequency_hz_seed"], abs=0.05)
     assert ds.regime.item() == REGIME["steady_sliding"]
-    assert ds.decided_by.item() == _chunk.DECIDED_BY["linear"]
+    assert ds.decided_by.item() == _codes.DECIDED_BY["linear"]
     assert ds.bistable.item() == -1  # not checked
     assert ds.n_rhs.item() == 0 and ds.newton_iterations.item() == 0
     assert math.isnan(ds.cycle_omega.item())
@@ -185,7 +191,7 @@ def test_linear_eigenvalues_match_the_reference_jacobian_at_several_points():
 
     h = np.array([1e-9, 1e-6, 1e-9, 1e-6, 1e-7, 1e-4])
     j_fd = np.column_stack([(rhs(h[i] * np.eye(6)[i]) - rhs(-h[i] * np.eye(6)[i])) / (2 * h[i]) for i in range(6)])
-    j = _chunk.jacobians(v)[0]
+    j = _census.jacobians(v)[0]
     np.testing.assert_allclose(j, j_fd, rtol=1e-6, atol=1e-6 * np.abs(j_fd).max())
 
 
@@ -212,9 +218,9 @@ def test_mu_static_follows_a_swept_mu_when_unset():
     model = ts.SliderModel(friction_law="coulomb")
     ds = ts.sweep(model, normal_load=[50.0], extra_axes={"mu": [0.2, 0.25]}, **LINEAR)
     assert ds.regime.shape[-1] == 2
-    plan_params = _sweep._Plan(model, {"normal_load": np.array([1.0]), "arm_length": np.array([0.072]),
+    plan_params = _plan.Plan(model, {"normal_load": np.array([1.0]), "arm_length": np.array([0.072]),
                                        "sliding_speed": np.array([0.46]), "mu": np.array([0.2, 0.3])},
-                               "linear", {}, 4, ts.WearReference(), None).point_params(0, 2)  # fmt: skip
+                               "linear", SweepSettings(), 4, ts.WearReference(), None).point_params(0, 2)  # fmt: skip
     np.testing.assert_array_equal(plan_params["mu_static"], [0.2, 0.3])
 
 
@@ -267,9 +273,9 @@ def _summary(outcome, status="success", off=0.0, vmin=0.1, reason=""):
     ],
 )
 def test_classification_of_transient_summaries(summary, stable, regime, decided_by):
-    r, status, reason, decided = _chunk._classify(summary, np.array([stable]), 7.0)
-    assert _chunk.REGIME_NAMES[r[0]] == regime
-    assert _chunk.DECIDED_BY_NAMES[decided[0]] == decided_by
+    r, status, reason, decided = _stages.classify(summary, np.array([stable]), 7.0)
+    assert _codes.REGIME_NAMES[r[0]] == regime
+    assert _codes.DECIDED_BY_NAMES[decided[0]] == decided_by
     if regime == "irregular":
         # Bounded, unsettled: an answer (status success), with what it is in the reason.
         assert status[0] == ts.STATUS["success"]
@@ -284,28 +290,28 @@ def test_classification_of_transient_summaries(summary, stable, regime, decided_
 
 def test_an_unsettled_run_with_a_non_finite_end_is_a_failure_not_irregular():
     s = _summary("unsettled", status="not_converged") | {"y_end": np.array([[np.nan, 0, 0, 0, 0, 0]])}
-    r, status, reason, _ = _chunk._classify(s, np.array([False]), 7.0)
-    assert _chunk.REGIME_NAMES[r[0]] == "failed"
+    r, status, reason, _ = _stages.classify(s, np.array([False]), 7.0)
+    assert _codes.REGIME_NAMES[r[0]] == "failed"
     assert status[0] != ts.STATUS["success"] and "unsettled" in reason[0]
 
 
 def test_a_failed_point_is_data_not_an_exception(monkeypatch):
     # Whatever goes wrong in the core for one point (here a simulated panic) becomes that point's
     # status and reason; the sweep goes on with the others.
-    def panicking(model_values, contact, friction_law, point_params, sel, options, y0=None, decay=None):
+    def panicking(points, sel, y0, decay=None):
         n = sel.size
         return {"status": np.full(n, ts.STATUS["panic"], np.uint8), "outcome": np.full(n, 4, np.uint8),
                 "reason": ["panic: boom"] * n, **{k: np.full(n, np.nan) for k in (
                     "omega", "z1_amp", "z2_amp", "phi1_amp", "fraction_off_disk", "min_normal_force",
                     "min_slip_velocity")}, "n_rhs": np.zeros(n, np.int64)}  # fmt: skip
 
-    monkeypatch.setattr(_chunk, "_transient", panicking)
-    ds = ts.sweep(normal_load=[10.0, 50.0], method="auto", progress=False)
+    monkeypatch.setattr(_stages, "run_steady", panicking)
+    ds = ts.sweep(normal_load=[10.0, 50.0], strategy="auto", progress=False)
     r = ds.regime.values.ravel()
     assert r.tolist() == [REGIME["failed"], REGIME["steady_sliding"]]
     assert ds.status.values.ravel().tolist() == [ts.STATUS["panic"], ts.STATUS["success"]]
     assert "panic: boom" in ds.reason.values.ravel()[0]
-    assert ds.decided_by.values.ravel().tolist() == [_chunk.DECIDED_BY["transient"], _chunk.DECIDED_BY["tidf"]]
+    assert ds.decided_by.values.ravel().tolist() == [_codes.DECIDED_BY["transient"], _codes.DECIDED_BY["tidf"]]
     assert ds.wear_applicability.values.ravel().tolist() == [2, 0]  # undetermined, mild
 
 
@@ -313,10 +319,10 @@ def test_a_failed_point_is_data_not_an_exception(monkeypatch):
 def test_an_unsettled_bounded_run_is_irregular_unless_it_is_sliding_still_decaying():
     # 10 N: sliding unstable; the run is bounded and unsettled at t_max: irregular motion, measured.
     # 50 N: sliding stable, the 1 um disturbance (< |z_st|/2) still decaying: sliding, by linear stability.
-    ds = ts.sweep(normal_load=[10.0, 50.0], method="transient", t_max=1e-3, progress=False)
+    ds = ts.sweep(normal_load=[10.0, 50.0], strategy="transient", t_max=1e-3, progress=False)
     assert ds.regime.values.ravel().tolist() == [REGIME["irregular"], REGIME["steady_sliding"]]
     assert ds.status.values.ravel().tolist() == [ts.STATUS["success"], ts.STATUS["not_converged"]]
-    assert ds.decided_by.values.ravel().tolist() == [_chunk.DECIDED_BY["transient"], _chunk.DECIDED_BY["linear"]]
+    assert ds.decided_by.values.ravel().tolist() == [_codes.DECIDED_BY["transient"], _codes.DECIDED_BY["linear"]]
     reason = ds.reason.values.ravel()
     assert "neither periodic nor decayed by t_max = 0.001 s" in reason[0] and "FTLE" in reason[0]
     assert "did not settle by t_max = 0.001 s" in reason[1] and "still decaying" in reason[1]
@@ -331,7 +337,7 @@ def test_an_unsettled_bounded_run_is_irregular_unless_it_is_sliding_still_decayi
 
 @requires_driver
 def test_auto_runs_the_transient_only_where_sliding_is_unstable():
-    ds = ts.sweep(normal_load=[10.0, 50.0], method="auto", progress=False, threads=2, census=False)
+    ds = ts.sweep(normal_load=[10.0, 50.0], strategy="auto", progress=False, threads=2, census=False)
     r = ds.regime.values.ravel()
     assert r[1] == REGIME["steady_sliding"] and ds.n_rhs.values.ravel()[1] == 0
     assert r[0] in (REGIME["self_excited"], REGIME["contact_loss"], REGIME["stick_slip"], REGIME["diverged"])
@@ -343,11 +349,11 @@ def test_auto_runs_the_transient_only_where_sliding_is_unstable():
 
 @requires_driver
 def test_transient_decays_at_a_stable_point_and_is_thread_independent():
-    kw = {"normal_load": [50.0, 80.0], "method": "transient", "progress": False}
+    kw = {"normal_load": [50.0, 80.0], "strategy": "transient", "progress": False}
     one = ts.sweep(threads=1, **kw)
     two = ts.sweep(threads=2, **kw)
     assert one.regime.values.ravel().tolist() == [REGIME["steady_sliding"]] * 2
-    assert (one.decided_by.values == _chunk.DECIDED_BY["transient"]).all()
+    assert (one.decided_by.values == _codes.DECIDED_BY["transient"]).all()
     xr.testing.assert_identical(strip(one), strip(two))
 
 
@@ -361,7 +367,7 @@ def test_compute_chunk_is_pure_and_picklable():
             {"wear": {"normal_load": 84.46, "sliding_speed": 0.46, "frequency_hz": 229.2}})  # fmt: skip
     a = _chunk.compute_chunk(*pickle.loads(pickle.dumps(args)))
     b = _chunk.compute_chunk(*args)
-    assert set(a) == set(_chunk.POINT_VARIABLES) | set(_census.CENSUS_VARIABLES)
+    assert set(a) == set(_schema.POINT_VARIABLES) | set(_census.CENSUS_VARIABLES)
     for k in a:
         if k != "wall_time":
             np.testing.assert_array_equal(a[k], b[k])
@@ -398,7 +404,7 @@ class _FutureExecutor:
 
 
 def test_executor_returning_futures_fed_in_windows(monkeypatch):
-    monkeypatch.setattr(_sweep, "EXECUTOR_WINDOW", 2)
+    monkeypatch.setattr(_api, "EXECUTOR_WINDOW", 2)
     kw = {"normal_load": [10.0, 30.0, 60.0], "arm_length": [0.05, 0.1], "chunk_size": 1, **LINEAR}
     xr.testing.assert_identical(strip(ts.sweep(**kw)), strip(ts.sweep(executor=_FutureExecutor(), **kw)))
 
@@ -479,7 +485,7 @@ def test_resume_recomputes_deleted_and_corrupt_chunks(tmp_path, monkeypatch):
     ("change", "named"),
     [
         ({"normal_load": [10.0, 30.0, 61.0]}, "normal_load"),
-        ({"method": "auto"}, "method"),
+        ({"strategy": "auto"}, "strategy"),
         ({"chunk_size": 3}, "chunk_size"),
         ({"extra_axes": {"mu": [0.2]}}, r"axes 'mu' differs \(saved \(absent\), now \[0.2\]\)"),
         ({"model": ts.SliderModel(contact="unilateral", mu=0.25)}, "mu"),
@@ -527,10 +533,10 @@ def test_progress_line_without_tqdm(monkeypatch, capsys):
         return real_import(name, *a, **k)
 
     monkeypatch.setattr(builtins, "__import__", no_tqdm)
-    ts.sweep(normal_load=[10.0, 20.0], method="linear", chunk_size=1, progress=True)
+    ts.sweep(normal_load=[10.0, 20.0], strategy="linear", chunk_size=1, progress=True)
     err = capsys.readouterr().err
     assert "sweep: 2/2 points (100 %)" in err
-    ts.sweep(normal_load=[10.0, 20.0], method="linear", progress=False)
+    ts.sweep(normal_load=[10.0, 20.0], strategy="linear", progress=False)
     assert capsys.readouterr().err == ""
 
 
@@ -544,8 +550,8 @@ def test_auto_agrees_with_transient_where_the_transient_settles():
     # Issue 4: on a test grid, the regime of `auto` (cheapest model per point) equals the regime of
     # always integrating, at every point where the integration settled.
     kw = AGREE_GRID
-    auto = ts.sweep(method="auto", **kw)
-    full = ts.sweep(method="transient", **kw)
+    auto = ts.sweep(strategy="auto", **kw)
+    full = ts.sweep(strategy="transient", **kw)
     ra, rt = auto.regime.values.ravel(), full.regime.values.ravel()
     # Settled: the transient reached a cycle, sliding or an escape (irregular motion did not settle).
     settled = (full.status.values.ravel() == ts.STATUS["success"]) & ~np.isin(
@@ -554,10 +560,10 @@ def test_auto_agrees_with_transient_where_the_transient_settles():
     assert np.array_equal(ra[settled], rt[settled]), (ra, rt)
     # auto decides many points without integrating, and without the bistability question (which
     # `transient` from a small disturbance does not ask) it integrates less.
-    assert (auto.decided_by.values != _chunk.DECIDED_BY["transient"]).sum() >= 4
-    lean = ts.sweep(method="auto", census=False, **kw)
+    assert (auto.decided_by.values != _codes.DECIDED_BY["transient"]).sum() >= 4
+    lean = ts.sweep(strategy="auto", census=False, **kw)
     assert np.array_equal(lean.regime.values, auto.regime.values)
-    cheap = (lean.decided_by.values.ravel() != _chunk.DECIDED_BY["transient"]) & ~np.isin(
+    cheap = (lean.decided_by.values.ravel() != _codes.DECIDED_BY["transient"]) & ~np.isin(
         lean.regime.values.ravel(), [REGIME["unstable_undetermined"], REGIME["irregular"]])
     assert np.all(lean.n_rhs.values.ravel()[cheap] == 0) and np.all(full.n_rhs.values.ravel()[cheap] > 10_000)
     assert lean.n_rhs.values.sum() < full.n_rhs.values.sum()
@@ -567,7 +573,7 @@ def test_auto_agrees_with_transient_where_the_transient_settles():
 def test_points_that_differ_only_in_speed_share_their_dynamics_exactly():
     # Constant friction: V only shifts v_r. The sweep computes the dynamics once per (load, arm)
     # and must give the same numbers as separate single-speed sweeps.
-    kw = dict(normal_load=[8.0, 84.46], method="auto", progress=False, census=False, t_max=20.0)
+    kw = dict(normal_load=[8.0, 84.46], strategy="auto", progress=False, census=False, t_max=20.0)
     both = ts.sweep(sliding_speed=[0.3, 0.6], **kw)
     for j, v in enumerate([0.3, 0.6]):
         one = ts.sweep(sliding_speed=[v], **kw)
@@ -584,10 +590,10 @@ def test_points_that_differ_only_in_speed_share_their_dynamics_exactly():
 def test_regime_map_marks_bistable_points():
     from tribosweep.plot import regime_map
 
-    ds = ts.sweep(normal_load=[10.0, 30.0, 60.0], arm_length=[0.05, 0.1], method="linear", progress=False)
+    ds = ts.sweep(normal_load=[10.0, 30.0, 60.0], arm_length=[0.05, 0.1], strategy="linear", progress=False)
     labels = lambda fig: [t.get_text() for leg in fig.legends for t in leg.get_texts()]  # noqa: E731
     assert not any("coexists" in s for s in labels(regime_map(ds)))
-    ds["bistable"][1, 0, 0] = _chunk.BISTABLE["coexisting"]
+    ds["bistable"][1, 0, 0] = _codes.BISTABLE["coexisting"]
     fig = regime_map(ds)
     assert any("coexists" in s for s in labels(fig))
     assert any(p.get_hatch() == "//" for p in fig.axes[0].patches)
@@ -596,7 +602,7 @@ def test_regime_map_marks_bistable_points():
 def test_regime_map_labels_multi_period_cycles():
     from tribosweep.plot import regime_map
 
-    ds = ts.sweep(normal_load=[10.0, 30.0, 60.0], arm_length=[0.05, 0.1], method="linear", progress=False)
+    ds = ts.sweep(normal_load=[10.0, 30.0, 60.0], arm_length=[0.05, 0.1], strategy="linear", progress=False)
     texts = lambda fig: [t.get_text() for t in fig.axes[0].texts]  # noqa: E731
     assert "2T" not in texts(regime_map(ds))
     ds["cycle_period_ratio"][2, 1, 0] = 2.08  # the period-2 cycle at 80 N, mu 0.425
@@ -626,7 +632,7 @@ def test_stable_point_without_a_saddle_is_marked_no_saddle():
     # 30 N, mu 0.05: sliding stable, and the describing function has no physical root there (no
     # saddle cycle: no census); 84.46 N, mu 0.05 has one, and every disturbance returns to sliding.
     ds = ts.sweep(normal_load=[30.0, 84.46], extra_axes={"mu": [0.05]}, progress=False)
-    names = [_chunk.BISTABLE_NAMES[_chunk.BISTABLE_VALUES.index(int(v))] for v in ds.bistable.values.ravel()]
+    names = [_codes.BISTABLE_NAMES[_codes.BISTABLE_VALUES.index(int(v))] for v in ds.bistable.values.ravel()]
     assert names == ["no_saddle", "one_attractor"]
     assert ds.basin_stability.values.ravel()[1] == 1.0 and ds.census_samples.values.ravel().tolist() == [0, 32]
     assert np.isnan(ds.tidf_a1.values.ravel()[0]) and np.isfinite(ds.tidf_a1.values.ravel()[1])

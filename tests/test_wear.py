@@ -119,7 +119,7 @@ def test_caveats_are_documented():
 
 
 def test_sweep_wear_is_one_at_the_reference_and_nan_outside_the_mild_regime():
-    ds = ts.sweep(normal_load=[10.0, 84.46], method="linear", progress=False)
+    ds = ts.sweep(normal_load=[10.0, 84.46], strategy="linear", progress=False)
     rel = ds.wear_rate_relative.sel(arm_length=0.072, sliding_speed=0.46).values
     regime = ds.regime.sel(arm_length=0.072, sliding_speed=0.46).values
     assert regime.tolist() == [ts.REGIME_NAMES.index("unstable_undetermined"), 0]
@@ -133,7 +133,7 @@ def test_sweep_wear_is_one_at_the_reference_and_nan_outside_the_mild_regime():
 
 def test_sweep_wear_reference_and_calibration_options():
     ref = WearReference(normal_load=50.0, arm_length=0.1, sliding_speed=0.46)
-    ds = ts.sweep(normal_load=[50.0], arm_length=[0.1], method="linear", progress=False, wear_reference=ref,
+    ds = ts.sweep(normal_load=[50.0], arm_length=[0.1], strategy="linear", progress=False, wear_reference=ref,
                   wear_calibration=WearCalibration(b_w=1e-9, normal_load=50.0))  # fmt: skip
     assert ds.wear_rate_relative.item() == pytest.approx(1.0, rel=1e-12)
     f = ds.normal_mode_frequency.item()

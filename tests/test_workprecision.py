@@ -11,8 +11,9 @@ import pytest
 import xarray as xr
 
 from tribosweep import STATUS, STATUS_NAMES, cli
-from tribosweep import _failure as fm
-from tribosweep import _workprecision as wp
+from tribosweep.bench import analysis, charts, runners, status_map
+from tribosweep.bench import failure as fm
+from tribosweep.bench import scenes as bench_scenes
 
 pytest.importorskip("scipy")
 pytest.importorskip("matplotlib")
@@ -28,7 +29,7 @@ def test_cli_tiny_bench_writes_every_file(tmp_path, capsys):
         assert (out / name).stat().st_size > 0, name
     with open(out / "work_precision.csv") as f:
         reader = csv.DictReader(f)
-        assert tuple(reader.fieldnames) == wp.COLUMNS
+        assert tuple(reader.fieldnames) == bench_scenes.COLUMNS
         rows = list(reader)
     labels = {r["label"] for r in rows}
     assert labels == {"rust dopri5", "rust dop853", "rust rodas4", "scipy RK45", "scipy DOP853", "scipy Radau"}
@@ -49,14 +50,14 @@ def test_cli_tiny_bench_writes_every_file(tmp_path, capsys):
 
 
 def test_dop853_error_decreases_along_the_ladder():
-    (scene,) = wp.make_scenes(names=["seed"], n=3)
-    ref = wp.run_rust(scene, "dop853", wp.REF_RTOL, repeat=1)
+    (scene,) = bench_scenes.make_scenes(names=["seed"], n=3)
+    ref = runners.run_rust(scene, "dop853", bench_scenes.REF_RTOL, repeat=1)
     scale = ref.extra["max_abs_z"]
     errors = []
     for rtol in (1e-5, 1e-8, 1e-11):
-        run = wp.run_rust(scene, "dop853", rtol, repeat=1)
+        run = runners.run_rust(scene, "dop853", rtol, repeat=1)
         assert np.all(run.status == 0)
-        errors.append(wp.error_of(run.z_end, ref.z_end, scale))
+        errors.append(runners.error_of(run.z_end, ref.z_end, scale))
     assert errors[0] > 30 * errors[1] > 900 * errors[2] > 0, errors
     # 0.5 s is ~50 periods: the global error is a few hundred times rtol, not more
     assert errors[1] < 1e3 * 1e-8
@@ -65,18 +66,18 @@ def test_dop853_error_decreases_along_the_ladder():
 def test_time_at_error_interpolates_in_log_space():
     k = np.arange(2, 11)
     errors, times = 10.0**-k, 10.0 ** (k / 2)  # time ~ error^-1/2
-    assert wp.time_at_error(errors, times, 10**-6.5) == pytest.approx(10**3.25, rel=1e-12)
-    assert wp.time_at_error(errors, times, 1e-4) == pytest.approx(100.0, rel=1e-12)  # exactly on a rung
-    assert math.isnan(wp.time_at_error(errors, times, 1e-12))  # no extrapolation
-    assert math.isnan(wp.time_at_error(errors, times, 1.0))
+    assert analysis.time_at_error(errors, times, 10**-6.5) == pytest.approx(10**3.25, rel=1e-12)
+    assert analysis.time_at_error(errors, times, 1e-4) == pytest.approx(100.0, rel=1e-12)  # exactly on a rung
+    assert math.isnan(analysis.time_at_error(errors, times, 1e-12))  # no extrapolation
+    assert math.isnan(analysis.time_at_error(errors, times, 1.0))
     # NaN or zero rungs are skipped: the line bridges them
     e2, t2 = errors.copy(), times.copy()
     e2[3], t2[5] = np.nan, np.nan
-    assert wp.time_at_error(e2, t2, 10**-5.5) == pytest.approx(10**2.75, rel=1e-12)
+    assert analysis.time_at_error(e2, t2, 10**-5.5) == pytest.approx(10**2.75, rel=1e-12)
     # a non-monotone line: the first bracketing pair in ladder order wins (1e-3 -> 1e-5, not 1e-5 -> 1e-4)
     w = math.log(3e-5 / 1e-3) / math.log(1e-5 / 1e-3)
-    assert wp.time_at_error([1e-3, 1e-5, 1e-4, 1e-6], [1, 2, 3, 4], 3e-5) == pytest.approx(2**w, rel=1e-12)
-    assert wp.time_at_error([1e-3, 1e-5, 1e-4, 1e-6], [1, 2, 3, 4], 2e-6) == pytest.approx(
+    assert analysis.time_at_error([1e-3, 1e-5, 1e-4, 1e-6], [1, 2, 3, 4], 3e-5) == pytest.approx(2**w, rel=1e-12)
+    assert analysis.time_at_error([1e-3, 1e-5, 1e-4, 1e-6], [1, 2, 3, 4], 2e-6) == pytest.approx(
         math.exp(math.log(3) + math.log(2e-6 / 1e-4) / math.log(1e-6 / 1e-4) * math.log(4 / 3)), rel=1e-12)
 
 
@@ -100,7 +101,7 @@ def _synthetic_rows():
 
 def test_speed_ratios_and_fastest_on_synthetic_lines():
     rows = _synthetic_rows()
-    ratios = wp.speed_ratios(rows, (1e-6, 1e-9))
+    ratios = analysis.speed_ratios(rows, (1e-6, 1e-9))
     # (fastest, scipy fastest) and (fastest, numba) resolve to pairs already quoted: not repeated
     assert len(ratios) == 4
     q = {(r["error"], r["baseline"]): r for r in ratios}
@@ -110,10 +111,10 @@ def test_speed_ratios_and_fastest_on_synthetic_lines():
     assert q[(1e-6, "scipy RK45")]["ratio"] == pytest.approx(300 * 3**0.25, rel=1e-12)
     rows.append(_row("s", "scipy DOP853", 1e-4, 1e-7, 1e-3))
     rows.append(_row("s", "scipy DOP853", 1e-5, 1e-10, 2e-3))
-    q = {(r["error"], r["baseline"]): r for r in wp.speed_ratios(rows, (1e-6, 1e-9))}
+    q = {(r["error"], r["baseline"]): r for r in analysis.speed_ratios(rows, (1e-6, 1e-9))}
     assert q[(1e-9, "scipy (fastest)")]["baseline_label"] == "scipy DOP853"
     rows = rows[:-2]
-    best = {f["error"]: f for f in wp.fastest(rows, (1e-6, 1e-13))}
+    best = {f["error"]: f for f in analysis.fastest(rows, (1e-6, 1e-13))}
     assert best[1e-6]["label"] == "rust dopri5" and best[1e-6]["next_seconds"] / best[1e-6]["seconds"] == \
         pytest.approx(2.5)  # fmt: skip
     assert best[1e-13]["label"] is None and best[1e-13]["why"] == "no method reaches it"
@@ -123,7 +124,7 @@ def test_speed_ratios_and_fastest_on_synthetic_lines():
                            "reference": {"check_value": 1e-12, "check_method": "c", "check_n": 1, "n_events": 0.0,
                                          "max_gap": -1e-5, "min_slip_velocity": 0.4}}],
                "rows": rows, "notes": ["a note"]}  # fmt: skip
-    md = wp.render_summary(payload)
+    md = charts.render_summary(payload)
     assert "| `s` | 1e-06 | rust dopri5 | numba DP5 |" in md and "**2.5x**" in md
     assert "| `s` | numba DP5 | 1e-12 | step_too_small |" in md  # the failed rung is listed
     assert "- a note" in md
@@ -134,21 +135,21 @@ def test_failed_rungs_are_recorded_and_drawn():
 
     def batch(z, status):
         n = len(z)
-        return wp.BatchRun(z_end=np.asarray(z, dtype=float), status=np.asarray(status), n_rhs=np.full(n, 10),
+        return runners.BatchRun(z_end=np.asarray(z, dtype=float), status=np.asarray(status), n_rhs=np.full(n, 10),
                            steps=np.full(n, 2), n_reject=np.zeros(n), seconds=0.01)  # fmt: skip
 
-    ok = wp.make_row("s", "rust", "dopri5", 1e-6, batch([1.1e-6, 2e-6], [0, 0]), z_ref, scale)
+    ok = analysis.make_row("s", "rust", "dopri5", 1e-6, batch([1.1e-6, 2e-6], [0, 0]), z_ref, scale)
     assert not ok["failed"] and ok["error"] == pytest.approx(0.1) and ok["seconds_per_traj"] == pytest.approx(5e-3)
-    ms = wp.make_row("s", "rust", "dopri5", 1e-7, batch([1e-6, 2e-6], [0, STATUS["max_steps"]]), z_ref, scale)
+    ms = analysis.make_row("s", "rust", "dopri5", 1e-7, batch([1e-6, 2e-6], [0, STATUS["max_steps"]]), z_ref, scale)
     assert ms["failed"] and ms["status"] == "max_steps" and ms["n_failed"] == 1
-    nan = wp.make_row("s", "numba", "DP5", 1e-6, batch([np.nan, 2e-6], [0, 0]), z_ref, scale)
+    nan = analysis.make_row("s", "numba", "DP5", 1e-6, batch([np.nan, 2e-6], [0, 0]), z_ref, scale)
     assert nan["failed"] and nan["status"] == "non_finite" and math.isnan(nan["error"])
-    big = wp.make_row("s", "scipy", "RK45", 1e-3, batch([9e-6, 2e-6], [0, 0]), z_ref, scale)
+    big = analysis.make_row("s", "scipy", "RK45", 1e-3, batch([9e-6, 2e-6], [0, 0]), z_ref, scale)
     assert big["failed"] and big["status"] == "error_above_1" and big["error"] == pytest.approx(8.0)
-    fig = wp.plot_work_precision([ok, ms, nan, big], "s")
+    fig = charts.plot_work_precision([ok, ms, nan, big], "s")
     crosses = [ln for ln in fig.axes[0].lines if ln.get_marker() == "x" and len(ln.get_xdata())]
     assert sum(len(ln.get_xdata()) for ln in crosses) == 3  # every failed rung is drawn, none dropped
-    assert all(x == wp._FAIL_X for ln in crosses for x in ln.get_xdata())
+    assert all(x == charts._FAIL_X for ln in crosses for x in ln.get_xdata())
 
 
 def test_stiffness_map_and_status_hook(tmp_path):
@@ -175,12 +176,12 @@ def test_draw_status_map_hook_on_any_flag_dataset():
                                                 "flag_meanings": "success no_root below_resolution"})},
         coords={"normal_load": ("normal_load", [20.0, 80.0], {"units": "N"}), "mu": [0.2, 0.3]},
     )  # fmt: skip
-    fig = fm.draw_status_map(ds, "flag", cost=None)
+    fig = status_map.draw_status_map(ds, "flag", cost=None)
     texts = [t.get_text() for t in fig.axes[0].texts]
     assert sorted(texts) == ["BE", "NO"]  # the two failing cells, by their flag meanings
     assert fig.axes[0].get_xlabel() == "mu" and fig.axes[0].get_ylabel() == "normal_load [N]"
     with pytest.raises(ValueError, match="needs two"):
-        fm.draw_status_map(ds.expand_dims(integrator=["a", "b"]), "flag")
+        status_map.draw_status_map(ds.expand_dims(integrator=["a", "b"]), "flag")
 
 
 def test_load_mu_map_marks_the_escape():
@@ -195,7 +196,7 @@ def test_load_mu_map_marks_the_escape():
 
 
 def test_law_comparison_on_synthetic_lines():
-    (scene,) = wp.make_scenes(names=["stick_slip"], n=1)
+    (scene,) = bench_scenes.make_scenes(names=["stick_slip"], n=1)
     assert scene.variants["switch"].friction_law == "switch"
     assert scene.variant("switch").model.friction_law == "switch" and scene.variant("switch").variants == {}
 
@@ -208,7 +209,7 @@ def test_law_comparison_on_synthetic_lines():
             row("rust", "rodas4", 1e-4, 1e-3, 0.1, 1e4), row("rust", "rodas4", 1e-8, 1e-9, 1.0, 1e5),
             row("switch", "rodas4", 1e-4, 1e-3, 0.2, 2e4), row("switch", "rodas4", 1e-8, 1e-9, 0.4, 4e4)]
     scenes = [{"name": "stick_slip", "variants": {"switch": {}}}]
-    got = {(q["method"], q["error"]): q for q in wp.law_comparison(rows, scenes, targets=(1e-6,))}
+    got = {(q["method"], q["error"]): q for q in analysis.law_comparison(rows, scenes, targets=(1e-6,))}
     # 1e-6 is half-way (in log) between the rungs: geometric means.
     assert got[("dopri5", 1e-6)]["rhs_ratio"] == pytest.approx(math.sqrt(2e12) / math.sqrt(4e8), rel=1e-12)
     assert got[("rodas4", 1e-6)]["time_ratio"] == pytest.approx(math.sqrt(0.1) / math.sqrt(0.08), rel=1e-12)

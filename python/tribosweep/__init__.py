@@ -8,9 +8,16 @@ from __future__ import annotations
 
 from . import _core
 from ._apparatus import ARM_EXPONENTS, apparatus_model, arm_frequencies
-from ._census import ATTRACTOR_NAMES, census
-from ._chunk import BISTABLE_NAMES, REGIME_NAMES
-from ._flags import INSTABILITY_NAMES, OUTCOME_NAMES, STATUS, STATUS_NAMES
+from ._census import census
+from ._codes import (
+    ATTRACTOR_NAMES,
+    BISTABLE_NAMES,
+    INSTABILITY_NAMES,
+    OUTCOME_NAMES,
+    REGIME_NAMES,
+    STATUS,
+    STATUS_NAMES,
+)
 from ._frequency import describing_function, follow_cycle, hopf_load, linear_stability, periodic_orbit
 from ._model import PARAM_NAMES, SliderModel
 from ._simulate import DEFAULT_Y0, ensemble, simulate

@@ -51,30 +51,12 @@ from collections.abc import Mapping
 import numpy as np
 
 from . import _core
-from ._flags import OUTCOME_NAMES, STATUS, STATUS_NAMES
+from ._codes import ATTRACTOR_NAMES, OUTCOME_NAMES, STATUS, STATUS_NAMES
+from ._settings import DEFAULTS
 
-#: What a census sample reaches, in code order (the ``attractor`` dimension).
-ATTRACTOR_NAMES: tuple[str, ...] = ("sliding", "cycle", "irregular", "escape")
-#: One-line meaning of each, for the netCDF ``comment``.
-ATTRACTOR_DOC: dict[str, str] = {
-    "sliding": "the disturbance decayed to steady sliding",
-    "cycle": "the run settled on a periodic cycle",
-    "irregular": "bounded motion, neither periodic nor decayed by the census t_max (quasi-periodic or chaotic "
-    "bouncing, or a slower approach)",
-    "escape": "|z| passed the escape limit (outside the model's validity)",
-}
 #: Steady-state outcome name -> attractor index (-1: failed, left out of the fractions).
 _ATTRACTOR_OF: dict[str, int] = {"decayed": 0, "periodic": 1, "unsettled": 2, "diverged": 3, "failed": -1}
 
-#: Default number of disturbances per point.
-SAMPLES: int = 32
-#: Default amplitude scale of the disturbances, in units of |z_st| (the size at which the contact
-#: opens). At the seed the saddle cycle's A1 is 1.35 |z_st| and the bouncing cycle's 1.43 |z_st|,
-#: so the default box reaches past both.
-DISTURBANCE_SCALE: float = 3.0
-#: Default longest simulated time of one sample [s]. Near a Hopf point a disturbance decays at
-#: 0.07 1/s; such a slow approach is reported as ``irregular`` (say so when reading fractions there).
-CENSUS_T_MAX: float = 30.0
 #: Relative tolerance within which two cycles (same period multiplicity) are the same: frequency
 #: and first-harmonic amplitude of z.
 CYCLE_TOL: float = 1e-2
@@ -164,6 +146,75 @@ def _mode_shape_numeric(j: np.ndarray, lam: np.ndarray) -> np.ndarray:
     return out
 
 
+_LINEAR_FIELDS = (
+    "mass", "inertia", "moment_arm", "omega_normal", "omega_friction", "omega_torsion", "zeta_normal",
+    "zeta_friction", "zeta_torsion", "contact_stiffness", "contact_quadratic", "contact_damping",
+    "twist_coupling", "mu", "normal_load", "sliding_speed", "torsion_sign", "friction_regularization",
+    "mu_static", "stribeck_velocity",
+)  # fmt: skip
+
+
+def jacobians(values: Mapping[str, np.ndarray | float], friction_law: str = "constant") -> np.ndarray:
+    """Jacobians of steady sliding ``y = 0`` (in contact), shape ``(n, 6, 6)``, MODEL.md §2.
+
+    Parameters
+    ----------
+    values : mapping of str to float or 1-D array
+        Every real SliderModel field (SI units); arrays of one length ``n`` and scalars broadcast.
+    friction_law : {"constant", "coulomb", "switch"}
+        Friction law (the Coulomb law adds the Stribeck slope and the tanh regularisation; the
+        switch law the Stribeck slope).
+
+    Returns
+    -------
+    numpy.ndarray, shape (n, 6, 6), 1/s and 1/s^2
+        ``d rhs / dy`` for the state ``[z, zd, x, xd, phi, phid]``.
+    """
+    v = {k: np.asarray(values[k], dtype=np.float64) for k in _LINEAR_FIELDS}
+    n = int(np.broadcast_shapes(*(a.shape for a in v.values()), (1,))[0])
+    v = {k: np.broadcast_to(a, (n,)) for k, a in v.items()}
+    f, k0, ka = v["normal_load"], v["contact_stiffness"], v["contact_quadratic"]
+    z_st = -2.0 * f / (k0 + np.sqrt(k0 * k0 + 4.0 * ka * f))  # cancellation-free root, MODEL.md §3
+    k_s = k0 - 2.0 * ka * z_st
+    dfz = np.zeros((n, 6))
+    dfz[:, 0] = -k_s
+    dfz[:, 1] = -v["contact_damping"]
+    dfz[:, 4] = v["twist_coupling"]
+    s, arm = v["torsion_sign"], v["moment_arm"]
+    if friction_law == "constant":
+        dfx = dfz * v["mu"][:, None]
+    elif friction_law in ("coulomb", "switch"):
+        # F_x = mu(v_r) N tanh(v_r/eps) - mu(V) F_st, v_r = V - xd - s L phid (MODEL.md §2); the
+        # switch law slips at y = 0 (V > eta) with sign(v_r) = 1 in place of the tanh.
+        vel, vs, mus, eps = v["sliding_speed"], v["stribeck_velocity"], v["mu_static"], v["friction_regularization"]
+        e = np.exp(-vel / vs)
+        mu_k = (v["mu"] - mus * e) / (1.0 - e)
+        mu_v = mu_k + (mus - mu_k) * e
+        th = np.tanh(vel / eps) if friction_law == "coulomb" else np.ones_like(vel)
+        dmu = -(mus - mu_k) / vs * e
+        dg = dmu * th + mu_v * (1.0 - th * th) / eps
+        dfx = dfz * (mu_v * th)[:, None]
+        dfx[:, 3] -= f * dg
+        dfx[:, 5] -= f * dg * s * arm
+    else:
+        raise ValueError(f"friction_law = {friction_law!r} is not valid: must be 'constant', 'coulomb' or 'switch'")
+    m = v["mass"]
+    wz, wx, wt = v["omega_normal"], v["omega_friction"], v["omega_torsion"]
+    j = np.zeros((n, 6, 6))
+    j[:, 0, 1] = j[:, 2, 3] = j[:, 4, 5] = 1.0
+    j[:, 1, :] = dfz / m[:, None]
+    j[:, 3, :] = dfx / m[:, None]
+    j[:, 5, :] = (s * arm / v["inertia"])[:, None] * dfx
+    j[:, 1, 0] -= wz * wz
+    j[:, 1, 1] -= 2.0 * v["zeta_normal"] * wz
+    j[:, 3, 2] -= wx * wx
+    j[:, 3, 3] -= 2.0 * v["zeta_friction"] * wx
+    j[:, 5, 4] -= wt * wt
+    j[:, 5, 5] -= 2.0 * v["zeta_torsion"] * wt
+    return j
+
+
+
 def starts(
     full: Mapping[str, np.ndarray], friction_law: str, samples: int, scale: float, eigenvalues: np.ndarray
 ) -> np.ndarray:
@@ -178,8 +229,6 @@ def starts(
     if friction_law == "constant":
         vt, vn = mode_shape(v, lam_t), mode_shape(v, lam_n)
     else:
-        from ._chunk import jacobians
-
         j = jacobians(v, friction_law)
         vt, vn = _mode_shape_numeric(j, lam_t), _mode_shape_numeric(j, lam_n)
     z_abs = np.abs(_static(v)[0])
@@ -382,12 +431,12 @@ def saddle_amplitude(base: Mapping[str, float], friction_law: str, names, values
 def census(
     model,
     *,
-    samples: int = SAMPLES,
-    disturbance_scale: float = DISTURBANCE_SCALE,
-    t_max: float = CENSUS_T_MAX,
-    integrator: str = "dop853",
-    rtol: float = 1e-8,
-    periodic_tol: float = 1e-5,
+    samples: int = DEFAULTS.census.samples,
+    disturbance_scale: float = DEFAULTS.census.disturbance_scale,
+    t_max: float = DEFAULTS.census.t_max,
+    integrator: str = DEFAULTS.integration.integrator,
+    rtol: float = DEFAULTS.integration.rtol,
+    periodic_tol: float = DEFAULTS.steady.periodic_tol,
     cycle_tol: float = CYCLE_TOL,
     threads: int | None = None,
 ):

@@ -8,7 +8,7 @@ import numpy as np
 import xarray as xr
 
 from . import _checks, _core
-from ._flags import INSTABILITY_NAMES, OUTCOME_NAMES, STATUS, STATUS_NAMES, flag_attrs
+from ._codes import INSTABILITY_NAMES, OUTCOME_NAMES, STATUS, STATUS_NAMES, flag_attrs
 from ._model import SliderModel
 
 _DEG = 180.0 / np.pi

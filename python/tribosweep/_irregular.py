@@ -46,24 +46,11 @@ from collections.abc import Callable, Mapping
 
 import numpy as np
 
-from . import _checks, _core
-from ._flags import STATUS, STATUS_NAMES
+from . import _core
+from ._codes import STATUS, STATUS_NAMES
+from ._settings import DEFAULTS, Integration, Irregular
 
-#: Length of the measurement window after the transient [s] (about 50 torsion periods: the
-#: spectrum's bins are 12.6 rad/s apart, the parabola refines the peak well within one).
-WINDOW: float = 0.5
-#: Sampling interval of the window [s] (about 100 samples per torsion period).
-SAMPLE_DT: float = 1e-4
-#: Length of one FTLE segment [s] (about 5 torsion periods at 98.75 Hz).
-FTLE_TAU: float = 0.05
-#: Segments averaged into the FTLE.
-FTLE_SEGMENTS: int = 40
-#: Segments run first and not averaged (the separation turns into the most unstable direction).
-FTLE_WARMUP: int = 4
-#: Separation of the two trajectories, in units of the characteristic sizes.
-FTLE_D0: float = 1e-8
-#: Relative tolerance of the FTLE runs (see the module docstring).
-FTLE_RTOL: float = 1e-11
+_DEF = DEFAULTS.irregular
 
 #: Per-point output: name -> (dtype, units, long name); NaN except at irregular points.
 IRREGULAR_VARIABLES: dict[str, tuple[str, str, str]] = {
@@ -73,56 +60,6 @@ IRREGULAR_VARIABLES: dict[str, tuple[str, str, str]] = {
     "irregular_ftle": ("f8", "s-1", "largest finite-time Lyapunov exponent of irregular motion"),
     "irregular_ftle_se": ("f8", "s-1", "standard error of irregular_ftle (spread of its segments)"),
 }
-
-
-def settings(
-    *,
-    window: float = WINDOW,
-    sample_dt: float = SAMPLE_DT,
-    tau: float = FTLE_TAU,
-    segments: int = FTLE_SEGMENTS,
-    warmup: int = FTLE_WARMUP,
-    d0: float = FTLE_D0,
-    rtol: float = FTLE_RTOL,
-    names: Mapping[str, str] | None = None,
-) -> dict:
-    """Checked measurement settings (plain data, for a sweep's options).
-
-    ``names`` maps a setting to the name its caller knows it by (``tau`` -> ``ftle_tau`` in
-    :func:`tribosweep.sweep`), for the error messages.
-
-    Raises
-    ------
-    ValueError
-        An argument out of range (the message names it, its value and the valid range).
-    """
-    nm = {k: k for k in ("window", "sample_dt", "tau", "segments", "warmup", "d0", "rtol")} | dict(names or {})
-    try:
-        rt = _checks.rtol(rtol)
-    except ValueError as e:
-        raise ValueError(str(e).replace("rtol", nm["rtol"], 1)) from None
-    out = {
-        "window": _checks.positive(nm["window"], window),
-        "sample_dt": _checks.positive(nm["sample_dt"], sample_dt),
-        "tau": _checks.positive(nm["tau"], tau),
-        "segments": _count(nm["segments"], segments, 2),
-        "warmup": _count(nm["warmup"], warmup, 0),
-        "d0": _checks.positive(nm["d0"], d0),
-        "rtol": rt,
-    }
-    if not out["d0"] < 1e-3:
-        raise ValueError(f"{nm['d0']} = {d0!r} is out of range: must be in (0, 1e-3) (a separation small enough "
-                         "to stay linear)")  # fmt: skip
-    if out["window"] < 16 * out["sample_dt"]:
-        raise ValueError(f"{nm['window']} = {window!r} is out of range: must be at least 16 {nm['sample_dt']} = "
-                         f"{16 * out['sample_dt']:g} s (a spectrum needs samples)")  # fmt: skip
-    return out
-
-
-def _count(name: str, value, low: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not low <= value <= 1_000_000:
-        raise ValueError(f"{name} = {value!r} is out of range: must be an integer in [{low}, 1000000]")
-    return int(value)
 
 
 def characteristic_sizes(values: Mapping[str, np.ndarray | float]) -> np.ndarray:
@@ -185,10 +122,10 @@ def benettin(
     y0: np.ndarray,
     scale: np.ndarray,
     *,
-    tau: float = FTLE_TAU,
-    segments: int = FTLE_SEGMENTS,
-    warmup: int = FTLE_WARMUP,
-    d0: float = FTLE_D0,
+    tau: float = _DEF.ftle_tau,
+    segments: int = _DEF.ftle_segments,
+    warmup: int = _DEF.ftle_warmup,
+    d0: float = _DEF.ftle_d0,
 ) -> dict[str, np.ndarray]:
     """Largest finite-time Lyapunov exponent of many trajectories by the two-trajectory method.
 
@@ -209,7 +146,7 @@ def benettin(
         Characteristic size of each component (> 0).
     tau, segments, warmup, d0
         Segment length [time units of ``propagate``], averaged segments (>= 2), discarded first
-        segments (>= 0) and separation (see :func:`settings`).
+        segments (>= 0) and separation (the ``ftle_*`` fields of :class:`tribosweep._settings.Irregular`).
 
     Returns
     -------
@@ -217,8 +154,8 @@ def benettin(
         ``ftle`` and ``ftle_se`` (NaN where a run failed) [1/time], ``rates`` ``(n, segments)``
         (``ln(d_k/d0)/tau`` of each averaged segment), ``ok`` (bool) and ``y_end`` ``(n, d)``.
     """
-    s = settings(tau=tau, segments=segments, warmup=warmup, d0=d0)
-    tau, segments, warmup, d0 = s["tau"], s["segments"], s["warmup"], s["d0"]
+    s = Irregular(ftle_tau=tau, ftle_segments=segments, ftle_warmup=warmup, ftle_d0=d0)
+    tau, segments, warmup, d0 = s.ftle_tau, s.ftle_segments, s.ftle_warmup, s.ftle_d0
     y = np.array(y0, dtype=np.float64, ndmin=2)
     n, dim = y.shape
     scale = np.broadcast_to(np.asarray(scale, dtype=np.float64), (n, dim))
@@ -294,10 +231,9 @@ def measure(
     sel: np.ndarray,
     y_start: np.ndarray,
     *,
-    integrator: str = "dop853",
-    rtol: float = 1e-8,
+    integration: Integration = DEFAULTS.integration,
+    settings: Irregular = _DEF,
     threads: int | None = None,
-    settings_: Mapping | None = None,
 ) -> dict[str, np.ndarray]:
     """Measure the irregular motion of the points ``sel`` from their states ``y_start``.
 
@@ -309,11 +245,12 @@ def measure(
         The points to measure.
     y_start : array, (m, 6)
         Their states where the transient ended.
-    integrator, rtol, threads
-        The window's integration (the FTLE runs use the settings' own ``rtol``, ``FTLE_RTOL``).
-    settings_ : mapping, optional
-        Measurement settings (:func:`settings`'s arguments: ``window``, ``sample_dt``, ``tau``,
-        ``segments``, ``warmup``, ``d0``, ``rtol``); defaults where absent.
+    integration : Integration
+        The window's integration (the FTLE runs use the settings' own ``ftle_rtol``).
+    settings : Irregular
+        Measurement settings.
+    threads : int, optional
+        Rust threads.
 
     Returns
     -------
@@ -321,7 +258,8 @@ def measure(
         ``IRREGULAR_VARIABLES``, ``status`` (uint8: success, or the first failure), ``reason``
         (empty or what failed) and ``n_rhs``.
     """
-    s = settings(**dict(settings_ or {}))
+    s = settings
+    integrator, rtol = integration.integrator, integration.rtol
     sel = np.asarray(sel, dtype=np.int64)
     m = sel.size
     out = {k: np.full(m, np.nan) for k in IRREGULAR_VARIABLES}
@@ -340,8 +278,8 @@ def measure(
     scale = characteristic_sizes({k: np.asarray(v)[sel] for k, v in full.items()})
 
     # The measurement window: z sampled from the transient's end state.
-    n_samples = int(math.floor(s["window"] / s["sample_dt"] + 1e-9)) + 1
-    t_eval = np.arange(n_samples) * s["sample_dt"]
+    n_samples = int(math.floor(s.window / s.sample_dt + 1e-9)) + 1
+    t_eval = np.arange(n_samples) * s.sample_dt
     win = _core.ensemble({k: float(v) for k, v in base.items()}, contact, friction_law, names, values,
                          np.ascontiguousarray(y_start, dtype=np.float64), float(t_eval[-1]), integrator, float(rtol),
                          None, np.ascontiguousarray(t_eval), threads, "sampled")  # fmt: skip
@@ -355,16 +293,16 @@ def measure(
     if ok.any():
         out["irregular_z_min"][ok] = z[ok].min(axis=1)
         out["irregular_z_max"][ok] = z[ok].max(axis=1)
-        out["irregular_omega"][ok] = dominant_omega(z[ok], s["sample_dt"])
+        out["irregular_omega"][ok] = dominant_omega(z[ok], s.sample_dt)
 
     # The FTLE, from the end of the window, every point's pair in one call per segment.
     idx = np.flatnonzero(ok)
     if idx.size:
         record = {"n_rhs": np.zeros(idx.size, dtype=np.int64), "failure": {}}
         propagate = slider_propagator(base, contact, friction_law, names, values[idx], integrator=integrator,
-                                      rtol=s["rtol"], threads=threads, record=record)  # fmt: skip
-        res = benettin(propagate, np.asarray(win["y_end"])[idx], scale[idx], tau=s["tau"], segments=s["segments"],
-                       warmup=s["warmup"], d0=s["d0"])  # fmt: skip
+                                      rtol=s.ftle_rtol, threads=threads, record=record)  # fmt: skip
+        res = benettin(propagate, np.asarray(win["y_end"])[idx], scale[idx], tau=s.ftle_tau, segments=s.ftle_segments,
+                       warmup=s.ftle_warmup, d0=s.ftle_d0)  # fmt: skip
         out["irregular_ftle"][idx] = res["ftle"]
         out["irregular_ftle_se"][idx] = res["ftle_se"]
         out["n_rhs"][idx] += record["n_rhs"]

@@ -7,12 +7,13 @@ from collections.abc import Sequence
 import numpy as np
 import xarray as xr
 
-from . import _checks, _core
-from ._flags import OUTCOME_NAMES, STATUS_NAMES, flag_attrs
+from . import _checks, _core, _settings
+from ._codes import OUTCOME_NAMES, STATUS_NAMES, flag_attrs
 from ._model import PARAM_LONG_NAMES, PARAM_NAMES, PARAM_UNITS, SliderModel
+from ._settings import DEFAULTS
 
 #: Default initial disturbance: z = 1 um, everything else at rest on the static point.
-DEFAULT_Y0 = np.array([1e-6, 0.0, 0.0, 0.0, 0.0, 0.0])
+DEFAULT_Y0 = np.array(_settings.DEFAULT_Y0)
 
 #: State components: (name, units, long name).
 STATE_VARS: tuple[tuple[str, str, str], ...] = (
@@ -83,7 +84,7 @@ def simulate(
     *,
     y0: Sequence[float] | None = None,
     method: str = "dopri5",
-    rtol: float = 1e-8,
+    rtol: float = DEFAULTS.integration.rtol,
     atol: float | Sequence[float] | None = None,
     t_eval: Sequence[float] | None = None,
     max_steps: int | None = None,
@@ -155,12 +156,12 @@ def ensemble(
     *,
     y0: Sequence[float] | Sequence[Sequence[float]] | None = None,
     method: str = "dopri5",
-    rtol: float = 1e-8,
+    rtol: float = DEFAULTS.integration.rtol,
     atol: float | Sequence[float] | None = None,
     t_eval: Sequence[float] | None = None,
     threads: int | None = None,
     steady: bool = False,
-    periodic_tol: float = 1e-5,
+    periodic_tol: float = DEFAULTS.steady.periodic_tol,
     decay_amplitude: float | None = None,
     max_steps: int | None = None,
     max_events: int | None = None,

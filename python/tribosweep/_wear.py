@@ -102,17 +102,18 @@ def slide_frequency_hz(sliding_speed):
 def normal_mode_frequency_hz(model: SliderModel) -> float:
     """Frequency ``Im(lambda_normal) / 2 pi`` [Hz] of the normal mode of steady sliding (MODEL.md §8).
 
-    Computed from the numpy eigenvalues of the 6x6 Jacobian; the mode is identified by the energy
-    participation of its eigenvector.
+    The Rust core's linear stability (``rust_core/src/linear.rs``); the mode is identified by the
+    energy participation of its eigenvector.
 
     Examples
     --------
     >>> round(normal_mode_frequency_hz(SliderModel()), 1)
     229.2
     """
-    from ._chunk import linear_stability
+    from . import _core
 
-    return float(linear_stability(model.values(), model.friction_law)["normal_mode_frequency"][0])
+    lin = _core.linear_stability(model.values(), model.contact, model.friction_law, [], np.zeros((1, 0)), 1)
+    return float(lin["normal_mode_frequency_hz"][0])
 
 
 def relative_wear_rate(

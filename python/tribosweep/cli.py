@@ -91,7 +91,7 @@ def _positive_int(text: str) -> int:
 
 # --- sweep -------------------------------------------------------------------------------------
 
-_CONFIG_KEYS = {"normal_load", "arm_length", "sliding_speed", "method", "output", "chunk_size", "threads", "plot",
+_CONFIG_KEYS = {"normal_load", "arm_length", "sliding_speed", "strategy", "method", "output", "chunk_size", "threads", "plot",
                 "axes", "model", "solver", "census", "wear_reference"}  # fmt: skip
 _SOLVER_KEYS = {"t_max", "integrator", "rtol", "atol", "periodic_tol", "decay_amplitude", "disturbance"}
 #: [census] keys -> sweep() arguments.
@@ -142,9 +142,13 @@ def _add_sweep_arguments(p: argparse.ArgumentParser) -> None:
     axes.add_argument("--axis", type=_named_axis, action="append", default=[], metavar="NAME=SPEC",
                       help="an extra axis over any real model field, e.g. contact_damping=100:300:3 (SI units)")  # fmt: skip
     p.add_argument("-o", "--output", metavar="FILE", help="netCDF output file (default sweep.nc)")
+    p.add_argument("--strategy", choices=("auto", "linear", "tidf", "shooting", "transient"),
+                   help="auto (default): each point gets the cheapest model that decides it (eigenvalues, the "
+                   "describing function, shooting, a transient, the attractor census); linear: eigenvalues only; "
+                   "tidf/shooting: also the describing function/periodic orbit everywhere; transient: integrate "
+                   "every point")  # fmt: skip
     p.add_argument("--method", choices=("auto", "linear", "tidf", "shooting", "transient"),
-                   help="auto (default): linear stability, then time integration where sliding is unstable; "
-                   "linear: eigenvalues only; transient: integrate every point")  # fmt: skip
+                   help=argparse.SUPPRESS)  # deprecated name of --strategy
     p.add_argument("--threads", type=_positive_int, metavar="N", help="worker threads (default: all cores)")
     p.add_argument("--resume", action="store_true", help="finish an interrupted sweep from FILE.parts/")
     p.add_argument("--config", metavar="FILE.toml",
@@ -179,6 +183,15 @@ def _add_sweep_arguments(p: argparse.ArgumentParser) -> None:
     census.add_argument("--census-t-max", type=float, metavar="S", help="longest run of one disturbance [s] (default 30)")
     census.add_argument("--disturbance-scale", type=float, metavar="X",
                         help="largest modal amplitude of a disturbance in units of |z_st| (default 3)")
+
+
+def _strategy(args: argparse.Namespace, cfg: dict) -> str:
+    """--strategy, else the config's ``strategy``; the old name ``method`` still works, with a note."""
+    for given, where in ((args.method, "--method"), (cfg.get("method"), "config key method")):
+        if given is not None:
+            sys.stderr.write(f"tribosweep: {where} is renamed strategy (method is the time integrator elsewhere); "
+                             "the old name goes away in 0.3\n")  # fmt: skip
+    return args.strategy or args.method or cfg.get("strategy") or cfg.get("method") or "auto"
 
 
 def _run_sweep(args: argparse.Namespace) -> int:
@@ -227,7 +240,7 @@ def _run_sweep(args: argparse.Namespace) -> int:
         model,
         **axes,
         extra_axes=extra or None,
-        method=args.method or cfg.get("method", "auto"),
+        strategy=_strategy(args, cfg),
         output=output,
         chunk_size=args.chunk_size or cfg.get("chunk_size"),
         threads=args.threads or cfg.get("threads"),
@@ -260,7 +273,7 @@ def describe(ds, path: str | None = None) -> str:
         span = f"{v[0]:g}" if v.size == 1 else f"{v[0]:g} .. {v[-1]:g}"
         dims.append(f"{d} {v.size} [{span} {units}]".replace(" ]", "]"))
     lines.append("dimensions: " + ", ".join(dims) + f" ({int(ds.regime.size)} points)")
-    for key in ("method", "source", "history"):
+    for key in ("strategy", "source", "history"):
         if key in ds.attrs:
             lines.append(f"{key}: {ds.attrs[key]}")
     for var in ("regime", "decided_by", "status", "bistable"):
@@ -391,7 +404,10 @@ def _add_bench_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _run_bench(args: argparse.Namespace) -> int:
-    from ._workprecision import MATCHED_ERRORS, BenchConfig, law_comparison, run_work_precision, speed_ratios
+    # The bench wing is reached only from here (its extra: pip install tribosweep[bench]).
+    from .bench.analysis import law_comparison, speed_ratios
+    from .bench.scenes import MATCHED_ERRORS
+    from .bench.workprecision import BenchConfig, run_work_precision
 
     skip = {s for group in args.skip for s in group}
     config = BenchConfig(

@@ -12,7 +12,7 @@ import os
 import numpy as np
 import xarray as xr
 
-from ._chunk import REGIME_NAMES
+from ._codes import REGIME_NAMES
 
 #: Colour of each regime (colour-blind-safe Okabe-Ito palette plus greys).
 REGIME_COLORS: dict[str, str] = {

@@ -1,4 +1,4 @@
-"""Writing sweep results: the CF schema, chunk slabs, and two writers (netCDF file, in memory).
+"""Writing sweep results: chunk slabs and two writers (netCDF file, in memory); the schema is in ``schema``.
 
 A sweep's points are numbered in C order over its dimensions. A chunk is a contiguous range of
 that numbering; :func:`flat_slabs` splits any range into at most ``2 ndim - 1`` hyperslabs, so
@@ -12,86 +12,11 @@ from __future__ import annotations
 
 import os
 from collections.abc import Iterator, Mapping
-from dataclasses import dataclass, field
 
 import numpy as np
 import xarray as xr
 
-from . import _census, _chunk
-
-
-@dataclass
-class VarSpec:
-    """One variable of the output: name, dimensions, dtype (``"str"`` for text) and CF attributes."""
-
-    name: str
-    dims: tuple[str, ...]
-    dtype: str
-    attrs: dict = field(default_factory=dict)
-
-
-def flag_attributes(values, meanings, dtype: str, long_name: str) -> dict:
-    """CF attributes of a categorical variable (``flag_values`` in the variable's own type)."""
-    return {
-        "long_name": long_name,
-        "flag_values": np.asarray(values, dtype=dtype),
-        "flag_meanings": " ".join(meanings),
-    }
-
-
-def point_specs(dims: tuple[str, ...], *, wear_rate: bool = False) -> list[VarSpec]:
-    """The per-point variables of a sweep over ``dims`` (``_chunk.POINT_VARIABLES``)."""
-    spec = dict(_chunk.POINT_VARIABLES)
-    if wear_rate:
-        spec.update(_chunk.OPTIONAL_POINT_VARIABLES)
-    out = []
-    for name, (dtype, units, long_name) in spec.items():
-        if name in _chunk.FLAG_MEANINGS:
-            values, meanings = _chunk.FLAG_MEANINGS[name]
-            attrs = flag_attributes(values, meanings, dtype, long_name)
-        else:
-            attrs = {"long_name": long_name}
-            if units is not None:
-                attrs["units"] = units
-        out.append(VarSpec(name, dims, dtype, attrs))
-    for name, (dtype, units, long_name, per_attractor) in _census.CENSUS_VARIABLES.items():
-        attrs = {"long_name": long_name} | ({} if units is None else {"units": units})
-        out.append(VarSpec(name, dims + (("attractor",) if per_attractor else ()), dtype, attrs))
-    by_name = {v.name: v for v in out}
-    by_name["basin_fraction"].attrs["comment"] = (
-        "census: K disturbances on the torsion and normal modes (amplitudes up to disturbance_scale |z_st|, a "
-        "Halton sequence seeded by the point's parameters), each run to its attractor; taken where sliding is "
-        "stable and a saddle cycle is predicted. "
-        + "; ".join(f"{k}: {v}" for k, v in _census.ATTRACTOR_DOC.items())
-    )
-    by_name["regime"].attrs["comment"] = "; ".join(f"{k}: {v}" for k, v in _chunk.REGIME_DOC.items())
-    by_name["bistable"].attrs["comment"] = (
-        "derived from the attractor census: -1 not_checked (no census: sliding unstable, census off, or failed); "
-        "0 one_attractor: every counted disturbance reached the same attractor; 1 coexisting: more than one "
-        "attractor seen (steady sliding, each distinct cycle and irregular motion count; escapes do not), the "
-        "evidence is basin_fraction; 2 no_saddle: stable sliding with no saddle cycle predicted by the describing "
-        "function, nothing to find. One attractor seen is no proof that nothing else coexists: a basin smaller "
-        "than about 1/K of the disturbances is likely missed"
-    )
-    by_name["reason"].attrs["comment"] = "free text; empty for a point decided without trouble"
-    by_name["z1_amplitude"].attrs["comment"] = (
-        "harmonics are of the cycle's own period: for a cycle of n mode periods (cycle_period_ratio about n, "
-        "after a period doubling or on subharmonic bouncing) the motion at the mode's frequency is the n-th "
-        "harmonic (z2_amplitude for n = 2), and z1_amplitude is small"
-    )
-    by_name["wall_time"].attrs["comment"] = "a measurement: differs between runs"
-    by_name["irregular_ftle"].attrs["comment"] = (
-        "only where regime is irregular (a bounded transient that neither repeated nor decayed by t_max), from where "
-        "it ended: Benettin's two-trajectory method, separation solver_ftle_d0 in units of the characteristic sizes "
-        "(|z_st|, |z_st| w_t, |z_st|, |z_st| w_t, |z_st|/L, |z_st| w_t/L), renormalised every solver_ftle_tau seconds, "
-        "mean of ln(d_k/d0)/tau over solver_ftle_segments segments after solver_ftle_warmup; about 0 (within a few "
-        "irregular_ftle_se): quasi-periodic, or still creeping onto a cycle; clearly > 0: chaotic"
-    )
-    by_name["irregular_omega"].attrs["comment"] = (
-        "peak of the Hann-windowed spectrum of z over solver_irregular_window seconds sampled every "
-        "solver_irregular_sample_dt, refined by a parabola through the log magnitudes of the peak bin and its neighbours"
-    )
-    return out
+from .schema import TRAILING_DIMS, VarSpec
 
 
 def flat_slabs(start: int, stop: int, shape: tuple[int, ...]) -> Iterator[tuple[tuple[slice, ...], slice]]:
@@ -147,17 +72,6 @@ def _attr_value(v):
 def clean_attrs(attrs: Mapping) -> dict:
     """Attributes netCDF can store: ``None`` dropped, bools as ints, sequences as arrays."""
     return {k: _attr_value(v) for k, v in attrs.items() if v is not None}
-
-
-#: Dimensions a per-point variable may carry after the sweep's own: name -> (values, attributes).
-TRAILING_DIMS: dict[str, tuple[np.ndarray, dict]] = {
-    "attractor": (
-        np.arange(len(_census.ATTRACTOR_NAMES), dtype=np.int8),
-        {"long_name": "attractor reached by census disturbances",
-         "flag_values": np.arange(len(_census.ATTRACTOR_NAMES), dtype=np.int8),
-         "flag_meanings": " ".join(_census.ATTRACTOR_NAMES)},
-    ),
-}  # fmt: skip
 
 
 class _Schema:

@@ -12,36 +12,20 @@ Two baselines for the bilateral, constant-``mu`` slider (MODEL.md §2) over the 
 step control of Hairer's DOPRI5 (PI controller, beta = 0.04, safety 0.9, factor limits
 0.2..10) and its RMS error norm ``sqrt(mean((err_i / (atol_i + rtol max(|y_old,i|, |y_new,i|)))^2))``.
 
-Run ``python benches/baselines.py [--n 200]`` for a timing table. Nothing here asserts a time.
+Run ``python -m tribosweep.bench.baselines [--n 200]`` for a timing table. Nothing here asserts a time.
 """
 
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import math
-import pathlib
 import sys
 import time
 
 import numpy as np
 
-_REF_PATH = pathlib.Path(__file__).resolve().parents[1] / "python" / "tribosweep" / "reference.py"
+from . import reference
 
-
-def _load_reference():
-    """Load the pure-Python reference by path (works before the Rust extension is built)."""
-    name = "_tribosweep_reference_for_benches"
-    if name in sys.modules:
-        return sys.modules[name]
-    spec = importlib.util.spec_from_file_location(name, _REF_PATH)
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules[name] = mod
-    spec.loader.exec_module(mod)
-    return mod
-
-
-reference = _load_reference()
 PARAM_ORDER = reference.PARAM_ORDER
 params_to_array = reference.params_to_array
 

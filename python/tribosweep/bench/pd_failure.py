@@ -31,11 +31,11 @@ import pathlib
 import numpy as np
 import xarray as xr
 
-from . import _core
-from ._flags import INSTABILITY_NAMES, OUTCOME_NAMES, flag_attrs
-from ._frequency import FLIP_TOL
-from ._model import SliderModel
-from ._simulate import STATE_VARS, ensemble
+from .. import _core
+from .._codes import INSTABILITY_NAMES, OUTCOME_NAMES, flag_attrs
+from .._frequency import FLIP_TOL
+from .._model import SliderModel
+from .._simulate import STATE_VARS, ensemble
 
 SHOOTING_NAMES = ("valid", "near_flip", "flip_unstable", "other_unstable", "not_converged", "no_cycle")
 #: Simulated time allowed to the transients [s]: near the flip the approach to the cycle is slow
@@ -221,7 +221,7 @@ def pd_failure_maps(out_dir: os.PathLike, *, quick: bool = False, threads: int |
     """
     from matplotlib.figure import Figure
 
-    from ._failure import draw_status_map
+    from .status_map import draw_status_map
 
     out = pathlib.Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

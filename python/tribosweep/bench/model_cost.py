@@ -21,7 +21,7 @@ import time
 
 import numpy as np
 
-from ._sweep import sweep
+from .._sweep import sweep
 
 
 def _timed(**kw):
@@ -36,18 +36,18 @@ def model_cost(out_dir: os.PathLike, *, quick: bool = False, t_max: float = 30.0
     out.mkdir(parents=True, exist_ok=True)
     axes = dict(normal_load=np.linspace(10, 150, 6 if quick else 12), arm_length=np.linspace(0.05, 0.11, 2 if quick else 3),
                 sliding_speed=[0.46], t_max=t_max)
-    tidf, t_tidf = _timed(method="tidf", **axes)
-    lin, t_lin = _timed(method="linear", **axes)
-    shoot, t_shoot = _timed(method="shooting", **axes)
-    auto, t_auto = _timed(method="auto", **axes)
-    lean, t_lean = _timed(method="auto", census=False, **axes)
-    full, t_full = _timed(method="transient", **axes)
+    tidf, t_tidf = _timed(strategy="tidf", **axes)
+    lin, t_lin = _timed(strategy="linear", **axes)
+    shoot, t_shoot = _timed(strategy="shooting", **axes)
+    auto, t_auto = _timed(strategy="auto", **axes)
+    lean, t_lean = _timed(strategy="auto", census=False, **axes)
+    full, t_full = _timed(strategy="transient", **axes)
     n = tidf.regime.size
     err = np.abs(shoot.tidf_a1_error.values.ravel())
     has = np.isfinite(err)
     n_orbit = max(int(has.sum()), 1)
     ra, rt = auto.regime.values.ravel(), full.regime.values.ravel()
-    from ._chunk import REGIME
+    from .._codes import REGIME
 
     # Settled: a cycle, sliding or an escape (irregular motion has not settled; auto starts it elsewhere).
     settled = (full.status.values.ravel() == 0) & ~np.isin(rt, [REGIME["unstable_undetermined"], REGIME["irregular"]])

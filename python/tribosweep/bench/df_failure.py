@@ -23,10 +23,10 @@ import pathlib
 import numpy as np
 import xarray as xr
 
-from . import _core
-from ._flags import flag_attrs
-from ._model import SliderModel
-from ._sweep import sweep
+from .. import _core
+from .._codes import flag_attrs
+from .._model import SliderModel
+from .._sweep import sweep
 
 #: |A1 error| of the describing function against the orbit above which a root counts as inaccurate.
 ACCURACY = 0.05
@@ -36,7 +36,7 @@ NEWTON_NAMES = ("converged", "other_root", "not_converged")
 
 def tidf_validity_map(normal_load, arm_length, *, mu: float = 0.215, threads: int | None = None) -> xr.Dataset:
     """Validity code of the describing function over normal load [N] x arm length [m] (see module doc)."""
-    ds = sweep(normal_load=normal_load, arm_length=arm_length, method="shooting", progress=False, threads=threads,
+    ds = sweep(normal_load=normal_load, arm_length=arm_length, strategy="shooting", progress=False, threads=threads,
                model=SliderModel(contact="bilateral", mu=mu))
     ds = ds.isel(sliding_speed=0)
     err = ds.tidf_a1_error.values
@@ -88,7 +88,7 @@ def newton_basin_map(frequency_offset, amplitude_factor, *, model: SliderModel |
 
 def tidf_failure_maps(out_dir: os.PathLike, *, quick: bool = False, threads: int | None = None) -> dict:
     """Compute and draw both maps into ``out_dir``; return ``files``, ``counts`` and ``markdown``."""
-    from ._failure import draw_status_map
+    from .status_map import draw_status_map
 
     out = pathlib.Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

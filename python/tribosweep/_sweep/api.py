@@ -1,0 +1,383 @@
+"""Sweeps over normal load x arm length x sliding speed (and any other real model field).
+
+A sweep is an ensemble: the grid's points, numbered in C order, are cut into chunks, and each
+chunk is one call of the pure function :func:`tribosweep._sweep.chunk.compute_chunk`. The loop runs
+in-process or through any executor with a ``map`` method (``concurrent.futures``, dask). With an
+output file, every finished chunk is saved at once to ``<output>.parts/chunk_NNNNNN.npz``
+(atomically) next to a manifest of the configuration, so an interrupted sweep keeps its work and
+``resume=True`` finishes it with results identical to an uninterrupted run. The final netCDF file
+is assembled chunk by chunk (memory does not grow with the sweep) through ``<output>.tmp``.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import warnings
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from .. import _checks, _settings, _wear
+from .._model import SliderModel
+from .._settings import DEFAULTS, SweepSettings
+from . import chunk as _chunk
+from . import netcdf, schema
+from .parts import Parts
+from .plan import (
+    AXIS_ATTRS,
+    DEFAULT_CHUNK_SIZE,
+    DEFAULT_CHUNK_SIZE_OTHER,
+    SEED_AXES,
+    Plan,
+    check_axis,
+    check_extra_axes,
+)
+
+_D = DEFAULTS
+
+def sweep(
+    model: SliderModel | None = None,
+    *,
+    normal_load: Sequence[float] | None = None,
+    arm_length: Sequence[float] | None = None,
+    sliding_speed: Sequence[float] | None = None,
+    extra_axes: Mapping[str, Sequence[float]] | None = None,
+    strategy: str = "auto",
+    output: str | os.PathLike | None = None,
+    chunk_size: int | None = None,
+    threads: int | None = None,
+    executor=None,
+    resume: bool = False,
+    progress: bool = True,
+    disturbance: float | Sequence[float] | None = None,
+    wear_reference: _wear.WearReference | None = None,
+    wear_calibration: _wear.WearCalibration | None = None,
+    t_max: float = _D.steady.t_max,
+    integrator: str = _D.integration.integrator,
+    rtol: float = _D.integration.rtol,
+    atol: float | Sequence[float] | None = None,
+    periodic_tol: float = _D.steady.periodic_tol,
+    decay_amplitude: float | None = None,
+    census: bool = _D.census.enabled,
+    samples: int = _D.census.samples,
+    census_t_max: float = _D.census.t_max,
+    disturbance_scale: float = _D.census.disturbance_scale,
+    unstable_disturbance: float = _D.unstable_disturbance,
+    shooting_rtol: float = _D.shooting.rtol,
+    shooting_tol: float = _D.shooting.tol,
+    irregular_window: float = _D.irregular.window,
+    irregular_sample_dt: float = _D.irregular.sample_dt,
+    ftle_tau: float = _D.irregular.ftle_tau,
+    ftle_segments: int = _D.irregular.ftle_segments,
+    ftle_warmup: int = _D.irregular.ftle_warmup,
+    ftle_d0: float = _D.irregular.ftle_d0,
+    ftle_rtol: float = _D.irregular.ftle_rtol,
+    method: str | None = None,
+    check_bistability: bool | None = None,
+    command: str | None = None,
+) -> xr.Dataset:
+    """Map the slider's regime over normal load x arm length x sliding speed (x extra axes).
+
+    Every point is the apparatus at that load, arm length and speed (:func:`apparatus_model`);
+    its regime is decided by ``strategy`` and recorded with how it was decided. A failed point is
+    data (``regime = failed`` with a status and a reason), never an exception.
+
+    Parameters
+    ----------
+    model : SliderModel, optional
+        Everything not swept; its natural frequencies belong to the seed arm length 7.2 cm.
+        Default: the seed with the physical ``contact="unilateral"``.
+    normal_load : array_like, N, optional
+        Strictly increasing loads > 0. Default ``[84.46]`` (a length-1 dimension).
+    arm_length : array_like, m, optional
+        Strictly increasing arm lengths > 0. Default ``[0.072]``.
+    sliding_speed : array_like, m/s, optional
+        Strictly increasing speeds > 0. Default ``[0.46]``.
+    extra_axes : dict of str to array_like, optional
+        More dimensions: any real SliderModel field except those the three above set, e.g.
+        ``{"mu": [0.2, 0.25, 0.3]}`` (units of ``tribosweep._model.PARAM_UNITS``).
+    strategy : {"auto", "linear", "transient", "tidf", "shooting"}
+        ``linear``: eigenvalues only (an unstable point is ``unstable_undetermined``);
+        ``tidf``: eigenvalues, then the describing function at every point; ``shooting``: also the
+        periodic orbit of every physical root; ``transient``: run every point to its steady state
+        from ``disturbance``; ``auto``: each point gets the cheapest model that decides it
+        (eigenvalues; the describing function at stable points; shooting where the disturbance
+        nears the saddle cycle; a transient where sliding is unstable or the others cannot
+        decide), see ``tribosweep._sweep.chunk``.
+    output : path-like, optional
+        netCDF file to write (through ``<output>.tmp``); finished chunks are kept in
+        ``<output>.parts/`` until it is complete. Without it the Dataset is built in memory.
+    chunk_size : int, optional
+        Points per chunk (default 4096 for ``linear``, 64 otherwise). Part of the configuration
+        a resumed sweep must match.
+    threads : int, optional
+        Rust worker threads inside a chunk (default ``TRIBOSWEEP_THREADS`` or all cores).
+        Results do not depend on it.
+    executor : object with ``map``, optional
+        Runs the chunks, e.g. a ``concurrent.futures`` executor or a dask ``Client`` (results
+        that are futures are waited for). Default: an in-process loop.
+    resume : bool
+        Finish the sweep whose chunks are in ``<output>.parts/`` (the configuration must match,
+        else ``ValueError`` names the difference).
+    progress : bool
+        Progress bar on stderr (tqdm if installed, else a plain line).
+    disturbance : float or array_like (6,), optional
+        Initial state of the transient runs: a ``z`` offset [m] or a full state
+        ``[z, zd, x, xd, phi, phid]`` (default ``z = 1 um``).
+    wear_reference : WearReference, optional
+        Reference point of ``wear_rate_relative`` (default the seed: 84.46 N, 7.2 cm, 0.46 m/s).
+    wear_calibration : WearCalibration, optional
+        Adds the absolute ``wear_rate`` [kg/m].
+    t_max : float, s
+        Longest simulated time of a transient run (100). A bounded run that has neither repeated
+        nor decayed by then is ``irregular`` (measured: ``irregular_*``); at a linearly stable point
+        a motion below ``|z_st|/2`` is sliding still decaying (``steady_sliding``, status ``not_converged``).
+    integrator : {"dop853", "dopri5", "rodas4"}
+        Time integrator of the transient runs. DOP853 by default: on the unilateral (impacting)
+        transients it is about twice as fast as Dopri5 at rtol 1e-8 and about 7x more accurate
+        (the work-precision charts of ``tribosweep bench``); a 1,058-point seed sweep takes 18 s
+        instead of 34 s.
+    rtol, atol
+        Integration tolerances (as in :func:`tribosweep.simulate`).
+    periodic_tol : float
+        Relative repetition tolerance that declares a cycle.
+    census : bool
+        ``auto``: take the attractor census (``tribosweep.census``) at stable points with a saddle
+        cycle: ``samples`` disturbances on the torsion and normal modes, each run to its attractor
+        with the model's contact law; ``basin_fraction`` (with ``basin_fraction_se``) on the
+        ``attractor`` dimension (sliding, cycle, irregular, escape), ``basin_stability``,
+        ``n_attractors``, ``n_cycles`` and the largest cycle's frequency and amplitude. ``bistable``
+        is derived from it: ``coexisting`` where more than one attractor was seen,
+        ``one_attractor``, or ``no_saddle`` where the describing function predicts no saddle (no
+        census: nothing to find). The census is most of an ``auto`` sweep's cost.
+    samples : int
+        Census disturbances per point ``K`` (default 32); fractions carry ``sqrt(p (1 - p) / K)``.
+    census_t_max : float, s
+        Longest simulated time of one census disturbance (30); bounded motion that has neither
+        decayed nor repeated by then counts as ``irregular``.
+    disturbance_scale : float
+        Largest modal amplitude of a census disturbance in units of ``|z_st|`` (3).
+    unstable_disturbance : float
+        ``auto``: transients of linearly unstable points start on the unstable mode with
+        ``|z| = unstable_disturbance |z_st|``.
+    decay_amplitude : float, m, optional
+        Amplitude below which a motion counts as decayed (default ``1e-3 |z_st|``).
+    irregular_window, irregular_sample_dt : float, s
+        A transient that stays bounded but neither repeats nor decays by ``t_max`` is regime
+        ``irregular``; from where it ended, ``z`` is sampled every ``irregular_sample_dt`` (1e-4)
+        over ``irregular_window`` (0.5) for ``irregular_z_min``, ``irregular_z_max`` and
+        ``irregular_omega`` (the spectral peak).
+    ftle_tau : float, s
+        Segment length of its largest finite-time Lyapunov exponent ``irregular_ftle`` (0.05:
+        about 5 torsion periods; see ``tribosweep._irregular``).
+    ftle_segments, ftle_warmup : int
+        Segments averaged (40, >= 2; the standard error ``irregular_ftle_se`` is their spread over
+        ``sqrt(ftle_segments)``) and run first without counting (4, >= 0).
+    ftle_d0 : float
+        Separation of the two trajectories in units of the characteristic sizes (1e-8).
+    ftle_rtol : float
+        Relative tolerance of the exponent's runs (1e-11: well below ``ftle_d0``).
+    shooting_rtol, shooting_tol : float
+        Integration and Newton tolerances of the shooting stage (1e-10, 1e-8: the orbit's ``A1``
+        is compared with the describing function's to a few 1e-3, and the monodromy matrix needs
+        a few more digits than that).
+    method : str, optional
+        Deprecated name of ``strategy`` (``method`` is the time integrator everywhere else).
+    command : str, optional
+        Command recorded in the ``history`` attribute (the CLI passes its command line).
+
+    Returns
+    -------
+    xarray.Dataset
+        Dimensions ``normal_load``, ``arm_length``, ``sliding_speed`` (+ extras); per point
+        ``regime``, ``status``, ``reason``, ``decided_by``, ``bistable``, linear stability,
+        cycle summary, irregular motion (``irregular_z_min``, ``irregular_z_max``,
+        ``irregular_omega``, ``irregular_ftle``, ``irregular_ftle_se``; NaN elsewhere), wear and cost
+        variables (see ``tribosweep._sweep.schema.POINT_VARIABLES``).
+        With ``output`` the Dataset is opened lazily from the file.
+
+    Raises
+    ------
+    ValueError
+        A bad axis (empty, not strictly increasing, NaN, non-positive), option, or a resume
+        whose configuration differs.
+    TypeError
+        ``model``, ``extra_axes``, ``wear_reference`` or ``wear_calibration`` of the wrong type.
+    FileExistsError
+        ``<output>.parts/`` exists and ``resume`` is false.
+    KeyboardInterrupt
+        Re-raised after an interruption; finished chunks stay in ``<output>.parts/``.
+
+    Examples
+    --------
+    >>> import tribosweep as ts
+    >>> ds = ts.sweep(normal_load=[10.0, 50.0], strategy="linear", progress=False)
+    >>> [str(r) for r in ds.regime.attrs["flag_meanings"].split()[:2]]
+    ['steady_sliding', 'self_excited']
+    >>> ds.regime.sel(arm_length=0.072, sliding_speed=0.46).values.tolist()
+    [6, 0]
+    """
+    if method is not None:
+        warnings.warn("sweep(method=...) is renamed strategy=... (method is the time integrator in simulate and "
+                      "ensemble); the old name goes away in 0.3", DeprecationWarning, stacklevel=2)  # fmt: skip
+        strategy = method
+    if check_bistability is not None:
+        warnings.warn("sweep(check_bistability=...) is renamed census=...; the old name goes away in 0.3",
+                      DeprecationWarning, stacklevel=2)  # fmt: skip
+        census = bool(check_bistability)
+    if model is None:
+        model = SliderModel(contact="unilateral")
+    if not isinstance(model, SliderModel):
+        raise TypeError(f"model = {model!r} must be a tribosweep.SliderModel or None")
+    if strategy not in _chunk.STRATEGIES:
+        raise ValueError(f"strategy = {strategy!r} is not valid: must be one of {_chunk.STRATEGIES}")
+    axes = {}
+    for name, values in (("normal_load", normal_load), ("arm_length", arm_length), ("sliding_speed", sliding_speed)):
+        values = [SEED_AXES[name]] if values is None else values
+        axes[name] = check_axis(name, values, units=AXIS_ATTRS[name]["units"])
+    axes.update(check_extra_axes(model, extra_axes))
+    if chunk_size is None:
+        chunk_size = DEFAULT_CHUNK_SIZE.get(strategy, DEFAULT_CHUNK_SIZE_OTHER)
+    if isinstance(chunk_size, bool) or not isinstance(chunk_size, (int, np.integer)) or chunk_size < 1:
+        raise ValueError(f"chunk_size = {chunk_size!r} is out of range: must be an integer >= 1")
+    threads = _checks.threads(threads)
+    wear_reference = _wear.WearReference() if wear_reference is None else wear_reference
+    if not isinstance(wear_reference, _wear.WearReference):
+        raise TypeError(f"wear_reference = {wear_reference!r} must be a tribosweep.WearReference or None")
+    if wear_calibration is not None and not isinstance(wear_calibration, _wear.WearCalibration):
+        raise TypeError(f"wear_calibration = {wear_calibration!r} must be a tribosweep.WearCalibration or None")
+    if resume and output is None:
+        raise ValueError("resume=True needs output: the finished chunks are kept next to the output file")
+    settings = SweepSettings.from_flat(
+        t_max=t_max, integrator=integrator, rtol=rtol, atol=atol, periodic_tol=periodic_tol,
+        decay_amplitude=decay_amplitude, census=census, samples=samples, census_t_max=census_t_max,
+        disturbance_scale=disturbance_scale, unstable_disturbance=unstable_disturbance, shooting_rtol=shooting_rtol,
+        shooting_tol=shooting_tol, irregular_window=irregular_window, irregular_sample_dt=irregular_sample_dt,
+        ftle_tau=ftle_tau, ftle_segments=ftle_segments, ftle_warmup=ftle_warmup, ftle_d0=ftle_d0, ftle_rtol=ftle_rtol,
+        y0=_settings.disturbance(disturbance),
+    )  # fmt: skip
+    f_ref = wear_reference.frequency_hz(model)
+    settings = settings.replace(wear={
+        "normal_load": wear_reference.normal_load,
+        "sliding_speed": wear_reference.sliding_speed,
+        "frequency_hz": f_ref,
+        "calibration": None if wear_calibration is None else wear_calibration.as_dict(),
+    })  # fmt: skip
+    plan = Plan(model, axes, strategy, settings, int(chunk_size), wear_reference, wear_calibration)
+    if command is None:
+        command = f"tribosweep.sweep(shape={plan.shape}, dims={plan.dims}, strategy={strategy!r})"
+    layout = (
+        schema.coords(plan),
+        schema.static_vars(plan),
+        schema.point_specs(plan.dims, wear_rate=wear_calibration is not None),
+        schema.global_attrs(plan, command, f_ref),
+    )
+
+    if output is None:
+        writer = netcdf.MemoryWriter(*layout)
+        _compute(plan, range(plan.n_chunks), threads, executor, progress, 0, writer.write)
+        return writer.to_dataset()
+
+    output = Path(output)
+    output.parent.mkdir(parents=True, exist_ok=True)
+    parts = Parts(output, plan, resume)
+    done = [k for k in range(plan.n_chunks) if parts.is_done(k)]
+    todo = [k for k in range(plan.n_chunks) if k not in set(done)]
+    n_done = sum(plan.chunk_range(k)[1] - plan.chunk_range(k)[0] for k in done)
+
+    def save(start, stop, arrays):
+        parts.save(start // plan.chunk_size, arrays)
+
+    try:
+        _compute(plan, todo, threads, executor, progress, n_done, save)
+    except KeyboardInterrupt:
+        saved = sum(1 for k in range(plan.n_chunks) if parts.path(k).exists())
+        sys.stderr.write(
+            f"\ninterrupted: {saved} of {plan.n_chunks} chunks are saved in {parts.dir}; run again with "
+            "resume=True (--resume) to finish\n"
+        )
+        raise
+    writer = netcdf.NetCDFWriter(output, *layout)
+    try:
+        for k in range(plan.n_chunks):
+            writer.write(*plan.chunk_range(k), parts.load(k))
+    except BaseException:
+        writer.abort()
+        raise
+    writer.close()
+    parts.remove()
+    return xr.open_dataset(output, engine="netcdf4")
+
+
+#: Chunks handed to an executor at a time: executors submit everything they are given at once, so
+#: the tasks (each with its points' parameters) are fed in windows to keep memory bounded.
+EXECUTOR_WINDOW: int = 256
+
+
+def _windowed_map(executor, plan: Plan, chunks: list[int], threads):
+    for i in range(0, len(chunks), EXECUTOR_WINDOW):
+        window = chunks[i : i + EXECUTOR_WINDOW]
+        yield from executor.map(_run_task, [plan.task(k, threads) for k in window])
+
+
+def _compute(plan: Plan, chunks, threads, executor, progress: bool, n_done: int, sink) -> None:
+    """Run ``chunks`` and hand each result to ``sink(start, stop, arrays)`` in order."""
+    chunks = list(chunks)
+    bar = _Progress(progress, plan.n_points, n_done)
+    try:
+        if executor is None:
+            # Looked up at call time (not bound at import) so that tests can patch it.
+            results = (_chunk.compute_chunk(*plan.task(k, threads)) for k in chunks)
+        else:
+            results = _windowed_map(executor, plan, chunks, threads)
+        for k, res in zip(chunks, results):
+            if hasattr(res, "result"):  # dask futures
+                res = res.result()
+            start, stop = plan.chunk_range(k)
+            sink(start, stop, res)
+            bar.update(stop - start)
+    finally:
+        bar.close()
+
+
+def _run_task(task: tuple) -> dict[str, np.ndarray]:
+    """Module-level (picklable) wrapper for executors."""
+    return _chunk.compute_chunk(*task)
+
+
+class _Progress:
+    """tqdm if installed, else one updating stderr line; nothing when disabled."""
+
+    def __init__(self, enabled: bool, total: int, initial: int):
+        self.total, self.done, self.bar = total, initial, None
+        self.enabled = enabled
+        if not enabled:
+            return
+        try:
+            from tqdm import tqdm
+        except ImportError:
+            self._line()
+        else:
+            self.bar = tqdm(total=total, initial=initial, unit="pt", desc="sweep", file=sys.stderr, dynamic_ncols=True)
+
+    def _line(self) -> None:
+        pct = 100.0 * self.done / self.total if self.total else 100.0
+        sys.stderr.write(f"\rsweep: {self.done}/{self.total} points ({pct:.0f} %)")
+        sys.stderr.flush()
+
+    def update(self, n: int) -> None:
+        self.done += n
+        if self.bar is not None:
+            self.bar.update(n)
+        elif self.enabled:
+            self._line()
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+        elif self.enabled:
+            sys.stderr.write("\n")
+            sys.stderr.flush()

@@ -1,0 +1,115 @@
+"""The resumable store of a sweep: ``<output>.parts/`` with a manifest and one ``.npz`` per finished chunk.
+
+Every file is written atomically (a temporary file, fsync, ``os.replace``), so a crash or a full
+disk never leaves a half-written chunk that counts as done; a chunk whose hash or range does not
+match the plan is removed and recomputed.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+from collections.abc import Mapping
+from pathlib import Path
+
+import numpy as np
+
+from .plan import Plan
+
+
+def compare_configs(saved: dict, now: dict, where: str) -> None:
+    """Raise ValueError naming the first difference between a saved and the current configuration."""
+
+    missing = object()
+
+    def show(v):
+        if v is missing:
+            return "(absent)"
+        s = json.dumps(v)
+        return s if len(s) < 120 else s[:117] + "..."
+
+    for key in sorted(set(saved) | set(now)):
+        a, b = saved.get(key, missing), now.get(key, missing)
+        if a == b:
+            continue
+        if isinstance(a, dict) and isinstance(b, dict):
+            for sub in sorted(set(a) | set(b)):
+                if a.get(sub, missing) != b.get(sub, missing):
+                    raise ValueError(
+                        f"cannot resume {where}: {key} {sub!r} differs (saved {show(a.get(sub, missing))}, now "
+                        f"{show(b.get(sub, missing))}); use the saved configuration, or delete the directory to "
+                        "start over"
+                    )
+        raise ValueError(
+            f"cannot resume {where}: {key} differs (saved {show(a)}, now {show(b)}); use the saved "
+            "configuration, or delete the directory to start over"
+        )
+
+
+class Parts:
+    """The sidecar directory of finished chunks: ``manifest.json`` and ``chunk_NNNNNN.npz``."""
+
+    def __init__(self, output: Path, plan: Plan, resume: bool):
+        self.dir = Path(str(output) + ".parts")
+        self.plan = plan
+        manifest = self.dir / "manifest.json"
+        if self.dir.exists():
+            if not resume:
+                raise FileExistsError(
+                    f"{self.dir} holds chunks of an unfinished sweep: pass resume=True (--resume) to finish it, "
+                    "or delete the directory to start over"
+                )
+            try:
+                saved = json.loads(manifest.read_text())
+            except (OSError, ValueError) as e:
+                raise ValueError(f"cannot resume {self.dir}: its manifest is unreadable ({e})") from None
+            compare_configs(saved.get("config", {}), plan.config, str(self.dir))
+        else:
+            self.dir.mkdir()
+            self._atomic_write(manifest, lambda f: f.write(self._manifest_text().encode()))
+
+    def _manifest_text(self) -> str:
+        p = self.plan
+        body = {"hash": p.hash, "n_points": p.n_points, "n_chunks": p.n_chunks, "shape": list(p.shape), "config": p.config}
+        return json.dumps(body, indent=1, sort_keys=True)
+
+    def path(self, k: int) -> Path:
+        return self.dir / f"chunk_{k:06d}.npz"
+
+    @staticmethod
+    def _atomic_write(path: Path, write) -> None:
+        tmp = path.with_name(path.name + ".tmp")
+        with open(tmp, "wb") as f:
+            write(f)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+
+    def save(self, k: int, arrays: Mapping[str, np.ndarray]) -> None:
+        start, stop = self.plan.chunk_range(k)
+        meta = {"__hash__": np.array(self.plan.hash), "__range__": np.array([start, stop])}
+        self._atomic_write(self.path(k), lambda f: np.savez(f, **meta, **arrays))
+
+    def load(self, k: int) -> dict[str, np.ndarray]:
+        with np.load(self.path(k), allow_pickle=False) as z:
+            return {name: z[name] for name in z.files if not name.startswith("__")}
+
+    def is_done(self, k: int) -> bool:
+        """True for a readable chunk file of this configuration and range (a bad one is removed)."""
+        p = self.path(k)
+        if not p.exists():
+            return False
+        try:
+            with np.load(p, allow_pickle=False) as z:
+                ok = str(z["__hash__"]) == self.plan.hash and list(z["__range__"]) == list(self.plan.chunk_range(k))
+        except Exception:  # noqa: BLE001 - any unreadable file is simply recomputed
+            ok = False
+        if not ok:
+            p.unlink()
+        return ok
+
+    def remove(self) -> None:
+        shutil.rmtree(self.dir)
+
+

@@ -1,0 +1,446 @@
+"""The analysis stages of a sweep chunk, one function each (MODEL.md §4-§6).
+
+Every stage reads and writes one :class:`Points` (the chunk's points, their parameters, the
+settings and the output arrays) and decides nothing about which stages run: that policy is the
+strategy's, in :mod:`tribosweep._sweep.chunk`. A stage that fails at a point leaves a status and a
+reason there and goes on.
+
+``linear``
+    Eigenvalues of steady sliding (the Rust core, every point): growth rate, frequency of the
+    least stable mode, normal-mode frequency (for wear, MODEL.md §8).
+``describing_function``
+    The triple-input describing function of the bilateral model (all roots in 150-3000 rad/s). At
+    a linearly stable point a physical root is the subcritical saddle cycle around stable sliding.
+``shooting``
+    The periodic orbit of the full ODE near a describing-function root, with Floquet multipliers:
+    the root's own error (its ``A1`` against the orbit's) and the saddle's true size.
+``transient``
+    A run to steady state from a disturbance, classified from its summary; a bounded run that
+    neither repeated nor decayed is ``irregular`` and measured (:mod:`tribosweep._irregular`).
+``census``
+    K disturbances per point, each run to its attractor; fractions with standard errors
+    (:mod:`tribosweep._census`); ``bistable`` is derived from it.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .. import _census, _core, _irregular
+from .._codes import BISTABLE, DECIDED_BY, OUTCOME_NAMES, REGIME, STATUS, STATUS_NAMES
+from .._settings import SweepSettings
+from .schema import empty_result
+
+#: A bounded run that did not settle, at a linearly stable point, whose z stays below this fraction
+#: of the static penetration |z_st| is taken for sliding's own mode still decaying (not irregular).
+SLOW_DECAY_FRACTION: float = 0.5
+
+#: Regimes of a periodic steady state.
+CYCLE_REGIMES: tuple[int, ...] = (REGIME["self_excited"], REGIME["contact_loss"], REGIME["stick_slip"])
+
+
+@dataclass
+class Points:
+    """The points of one chunk (or its speed-independent subset), their settings and their results."""
+
+    model_values: Mapping[str, float]
+    contact: str
+    friction_law: str
+    point_params: Mapping[str, np.ndarray]
+    settings: SweepSettings
+    n: int
+    out: dict = field(init=False)
+    reason: np.ndarray = field(init=False)
+    wall: np.ndarray = field(init=False)
+    to_transient: np.ndarray = field(init=False)
+    stable: np.ndarray = field(init=False)
+    lin_failed: np.ndarray = field(init=False)
+    eigenvalues: np.ndarray = field(init=False)
+
+    def __post_init__(self):
+        self.full = {k: np.asarray(v, dtype=np.float64) for k, v in self.model_values.items()}
+        for k, a in self.point_params.items():
+            self.full[k] = np.asarray(a, dtype=np.float64)
+        self.base = {k: float(v) for k, v in self.model_values.items()}
+        self.names = sorted(self.point_params)
+        self.values = np.column_stack([np.asarray(self.point_params[k], dtype=np.float64) for k in self.names])
+        self.out = empty_result(self.n)
+        self.reason = np.full(self.n, "", dtype=object)
+        self.wall = np.zeros(self.n)
+        self.to_transient = np.zeros(self.n, dtype=bool)
+        self.disturbance = float(np.abs(self.settings.y0[0]))
+
+    @property
+    def threads(self) -> int | None:
+        return self.settings.threads
+
+    def charge(self, sel: np.ndarray, t0: float) -> None:
+        """Share the wall time since ``t0`` evenly among the points ``sel``."""
+        if np.size(sel):
+            self.wall[sel] += (time.perf_counter() - t0) / np.size(sel)
+
+    def finish(self) -> dict:
+        out = self.out
+        with np.errstate(invalid="ignore", divide="ignore"):
+            out["cycle_period_ratio"] = out["linear_frequency"] / out["cycle_omega"]
+        out["wall_time"] = self.wall
+        out["reason"] = self.reason.astype(str)
+        return out
+
+
+def static_penetration(full: Mapping[str, np.ndarray], sel: np.ndarray) -> np.ndarray:
+    """Static penetration z_st [m] of the selected points (MODEL.md §3, cancellation-free form)."""
+    n = max(np.size(v) for v in full.values())
+    sub = {k: np.broadcast_to(full[k], (n,))[sel] for k in ("contact_stiffness", "contact_quadratic", "normal_load")}
+    return _census._static(sub)[0]
+
+
+def mode_start(full: Mapping[str, np.ndarray], friction_law: str, sel: np.ndarray, z_amp: np.ndarray,
+               eigenvalues: np.ndarray) -> np.ndarray:  # fmt: skip
+    """Initial states on the least stable linear mode of each selected point, with ``|z| = z_amp``.
+
+    A disturbance along the mode that self-excites (the torsion mode) reaches the attractor far
+    sooner than one in ``z`` alone, which mostly excites the heavily damped normal mode. The mode
+    shape is the census's closed form (no LAPACK: the same bits on every machine's BLAS);
+    ``eigenvalues`` are the core's, ``(sel.size, 6)``.
+    """
+    n = max(np.size(v) for v in full.values())
+    sub = {k: np.broadcast_to(np.asarray(full[k], dtype=np.float64), (n,))[sel] for k in full}
+    lam = np.asarray(eigenvalues)
+    k = np.argmax(lam.real + 1e-9 * lam.imag, axis=1)  # least stable; the +Im member of the pair
+    lam = lam[np.arange(sel.size), k]
+    if friction_law == "constant":
+        v = _census.mode_shape(sub, lam)
+    else:
+        v = _census._mode_shape_numeric(_census.jacobians(sub, friction_law), lam)
+    # Rotate so that z is real and positive at t = 0 (zd then follows from the mode), scale |z|.
+    v = v * np.exp(-1j * np.angle(v[:, 0]))[:, None]
+    y0 = v.real / np.maximum(np.abs(v[:, :1].real), 1e-300) * np.asarray(z_amp)[:, None]
+    return np.ascontiguousarray(y0)
+
+
+def linear(p: Points) -> None:
+    """Stage 1: linear stability of steady sliding at every point."""
+    t0 = time.perf_counter()
+    lin = _core.linear_stability(p.base, p.contact, p.friction_law, p.names, p.values, p.threads)
+    out = p.out
+    out["growth_rate"] = lin["max_growth_rate"]
+    out["linear_frequency"] = lin["least_stable_frequency"]
+    out["normal_mode_frequency"] = lin["normal_mode_frequency_hz"]
+    p.stable = np.asarray(lin["stable"], dtype=bool)
+    p.eigenvalues = np.asarray(lin["eigenvalues"])
+    out["status"][:] = lin["status"]
+    out["decided_by"][:] = DECIDED_BY["linear"]
+    out["regime"][:] = np.where(p.stable, REGIME["steady_sliding"], REGIME["unstable_undetermined"])
+    p.lin_failed = lin["status"] != STATUS["success"]
+    out["regime"][p.lin_failed] = REGIME["failed"]
+    p.reason[p.lin_failed] = "linear stability: eigenvalues failed"
+    p.wall[:] = (time.perf_counter() - t0) / max(p.n, 1)
+
+
+@dataclass
+class Roots:
+    """The describing function's result over the points ``sel`` and the physical root of each point."""
+
+    sel: np.ndarray
+    df: dict | None
+    root: np.ndarray  # per point: index of the physical root, -1 none
+    shoot: np.ndarray  # per point: shoot this root
+
+
+def describing_function(p: Points, *, unstable_too: bool, predict_cycles: bool, escalate: bool) -> Roots:
+    """Stage 2: the describing function (bilateral: the report's model).
+
+    ``unstable_too``: also at linearly unstable points (at such points ``auto`` needs none: the
+    Hopf bifurcation is subcritical, no cycle to find). ``predict_cycles``: at an unstable point a
+    root within the law's validity is the predicted cycle (``tidf``/``shooting`` strategies).
+    ``escalate``: a failure sends the point to a transient, and a disturbance within
+    ``SHOOT_MARGIN`` of the saddle amplitude marks the root for shooting (``auto``).
+    """
+    n, out, reason, stable = p.n, p.out, p.reason, p.stable
+    sel = np.flatnonzero(~p.lin_failed & (stable | unstable_too))
+    root = np.full(n, -1)
+    shoot = np.zeros(n, dtype=bool)
+    df = None
+    if not sel.size:
+        return Roots(sel, df, root, shoot)
+    t1 = time.perf_counter()
+    sh = p.settings.shooting
+    df = _core.describing_function(p.base, "bilateral", p.friction_law, p.names, p.values[sel], "consistent",
+                                   150.0, 3000.0, int(sh.tidf_grid), p.threads)  # fmt: skip
+    p.charge(sel, t1)
+    out["tidf_roots"][sel] = df["n_roots"]
+    iters = np.where(df["newton_iterations"] > 0, df["newton_iterations"], 0).sum(axis=1)
+    out["newton_iterations"][sel] += iters
+    for j, i in enumerate(sel):
+        k = np.flatnonzero(df["physical"][j] == 1)
+        if df["status"][j] != STATUS["success"]:
+            p.to_transient[i] = escalate
+            reason[i] = f"describing function failed: {STATUS_NAMES[df['status'][j]]}"
+            continue
+        if k.size:
+            root[i] = k[0]
+            out["tidf_omega"][i] = df["omega"][j, k[0]]
+            out["tidf_a1"][i] = df["A1"][j, k[0]]
+            out["tidf_contact_opens"][i] = df["contact_opens"][j, k[0]]
+        if stable[i]:
+            out["decided_by"][i] = DECIDED_BY["tidf"]
+            if k.size and p.disturbance * SHOOT_MARGIN >= out["tidf_a1"][i] and escalate:
+                shoot[i] = True  # the disturbance is near the saddle: its true size matters
+            elif df["search_outcome"][j] == "below_resolution":
+                reason[i] = "near a Hopf point: the describing function is below resolution"
+        elif k.size and predict_cycles and not out["tidf_contact_opens"][i]:
+            out["regime"][i] = REGIME["self_excited"]
+            out["decided_by"][i] = DECIDED_BY["tidf"]
+            out["cycle_omega"][i] = out["tidf_omega"][i]
+            out["z1_amplitude"][i] = out["tidf_a1"][i]
+            out["z2_amplitude"][i] = df["A2"][j, k[0]]
+            out["phi1_amplitude"][i] = df["phi1_amp"][j, k[0]]
+            reason[i] = "cycle predicted by the describing function"
+        elif predict_cycles:
+            reason[i] = "sliding unstable; no describing-function cycle within the law's validity"
+    return Roots(sel, df, root, shoot)
+
+
+#: ``auto`` shoots the saddle orbit when the disturbance's z exceeds the describing function's A1
+#: divided by this margin (the DF's A1 error grows with amplitude: 10-20 % at tens of um).
+SHOOT_MARGIN: float = 2.0
+
+
+def shooting(p: Points, roots: Roots, *, every_root: bool, escalate: bool) -> None:
+    """Stage 3: the periodic orbit near the marked roots (``every_root``: near every physical root).
+
+    ``escalate``: a failed shooting, or a disturbance at or beyond the saddle, sends the point to a
+    transient.
+    """
+    out, reason = p.out, p.reason
+    pick = roots.shoot | (every_root & (roots.root >= 0))
+    shoot = np.flatnonzero(pick)
+    if not shoot.size:
+        return
+    js = np.searchsorted(roots.sel, shoot)
+    ks = roots.root[shoot]
+    roots_arr = np.column_stack([roots.df[v][js, ks] for v in ("omega", "A0", "A1", "A2", "theta")])
+    sh = p.settings.shooting
+    t2 = time.perf_counter()
+    orbs = _core.periodic_orbits(p.base, "bilateral", p.friction_law, p.names, p.values[shoot], roots=roots_arr,
+                                 rtol=sh.rtol, tol=sh.tol, threads=p.threads)  # fmt: skip
+    p.charge(shoot, t2)
+    for r, i in enumerate(shoot):
+        orb = {k: v[r] for k, v in orbs.items()}
+        out["newton_iterations"][i] += orb["newton_iterations"]
+        out["n_rhs"][i] += orb["n_rhs"]
+        if orb["status"] != STATUS["success"]:
+            if escalate:
+                p.to_transient[i] = True
+                reason[i] = f"shooting from the describing-function root failed: {STATUS_NAMES[orb['status']]}"
+            continue
+        out["orbit_a1"][i] = orb["A1"]
+        out["orbit_stable"][i] = int(orb["stable"])
+        out["tidf_a1_error"][i] = out["tidf_a1"][i] / orb["A1"] - 1
+        if p.stable[i]:
+            if p.disturbance < orb["A1"]:
+                out["decided_by"][i] = DECIDED_BY["shooting"]
+                reason[i] = ""
+            elif escalate:
+                p.to_transient[i] = True
+                reason[i] = "the disturbance reaches the saddle cycle: integrated"
+
+
+def classify(summary: dict, stable: np.ndarray, t_max: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Regime, status, reason and deciding stage of transient runs from their steady-state summaries.
+
+    A run that stayed bounded (no escape, a finite end state) but neither repeated nor decayed by
+    ``t_max`` (outcome ``unsettled``) is an answer: sustained ``irregular`` motion, decided by the
+    transient, status ``success`` (its measurement follows in :func:`transient`). Only a failed
+    integration makes a point ``failed``.
+    """
+    status = np.asarray(summary["status"], dtype=np.uint8).copy()
+    outcome = np.asarray(summary["outcome"], dtype=np.uint8)
+    off = np.asarray(summary["fraction_off_disk"])
+    vmin = np.asarray(summary["min_slip_velocity"])
+    y_end = summary.get("y_end")
+    names = [OUTCOME_NAMES[o] for o in outcome]
+    n = len(names)
+    regime = np.full(n, REGIME["failed"], dtype=np.uint8)
+    decided = np.full(n, DECIDED_BY["transient"], dtype=np.uint8)
+    reason = np.asarray(summary["reason"], dtype=str).astype(object)
+    for i, name in enumerate(names):
+        st = STATUS_NAMES[status[i]] if status[i] < len(STATUS_NAMES) else str(status[i])
+        finite = y_end is None or bool(np.all(np.isfinite(np.asarray(y_end)[i])))
+        if name == "diverged" or st == "diverged":
+            regime[i] = REGIME["diverged"]
+        elif name == "unsettled" and st == "not_converged" and finite:
+            regime[i] = REGIME["irregular"]
+            status[i] = STATUS["success"]
+            reason[i] = f"bounded motion, neither periodic nor decayed by t_max = {t_max:g} s" + (
+                "" if not stable[i] else " (sliding is linearly stable: this motion coexists with it, or is a slow "
+                "transient)")  # fmt: skip
+        elif st != "success" or name in ("failed", "unsettled"):
+            regime[i] = REGIME["failed"]
+            if st == "success":
+                status[i] = STATUS["non_finite"]
+                st = "non_finite"
+            detail = f": {reason[i]}" if reason[i] else ""
+            reason[i] = f"transient {name}, status {st}{detail}"
+        elif name == "decayed":
+            regime[i] = REGIME["steady_sliding"]
+        elif name == "periodic":
+            if not (vmin[i] > 0):
+                regime[i] = REGIME["stick_slip"]
+            elif off[i] > 0:
+                regime[i] = REGIME["contact_loss"]
+            else:
+                regime[i] = REGIME["self_excited"]
+    return regime, status, reason.astype(str), decided
+
+
+def run_steady(p: Points, sel: np.ndarray, y0: np.ndarray, decay: np.ndarray | None = None) -> dict:
+    """Runs to steady state of the points ``sel`` from ``y0`` (one row, or one per point), in the core."""
+    it, st = p.settings.integration, p.settings.steady
+    return _core.ensemble(
+        p.base, p.contact, p.friction_law, p.names, np.ascontiguousarray(p.values[sel]),
+        np.ascontiguousarray(y0, dtype=np.float64), float(st.t_max), it.integrator, float(it.rtol),
+        None if it.atol is None else np.asarray(it.atol, dtype=np.float64), None, p.threads, "steady",
+        float(st.periodic_tol), st.decay_amplitude, 512, None, None,
+        None if decay is None else np.ascontiguousarray(decay, dtype=np.float64),
+    )  # fmt: skip
+
+
+def transient(p: Points, *, start_on_mode: bool) -> None:
+    """Stage 4: run the points marked ``to_transient`` to steady state and classify them.
+
+    ``start_on_mode``: linearly unstable points start on the unstable (torsion) mode with ``|z| =
+    unstable_disturbance |z_st|`` instead of the disturbance ``y0``: a small disturbance grows at
+    the linear rate (0.07 /s near the Hopf load), which would cost about 100 s of simulated time
+    for nothing. The attractor reached is the same where it is the only one; where it is not, the
+    census is what tells.
+    """
+    sel = np.flatnonzero(p.to_transient)
+    if not sel.size:
+        return
+    out, reason = p.out, p.reason
+    y0s = np.tile(np.asarray(p.settings.y0, dtype=np.float64), (sel.size, 1))
+    if start_on_mode:
+        unstable = ~p.stable[sel]
+        z_st = static_penetration(p.full, sel)
+        if unstable.any():
+            y0s[unstable] = mode_start(p.full, p.friction_law, sel[unstable],
+                                       p.settings.unstable_disturbance * np.abs(z_st[unstable]),
+                                       p.eigenvalues[sel[unstable]])  # fmt: skip
+    t1 = time.perf_counter()
+    summary = run_steady(p, sel, y0s)
+    p.charge(sel, t1)
+    t_max = float(p.settings.steady.t_max)
+    regime, status, why, decided = classify(summary, p.stable[sel], t_max)
+    out["regime"][sel] = regime
+    out["status"][sel] = status
+    reason[sel] = np.where(why != "", why, reason[sel].astype(str))
+    out["decided_by"][sel] = decided
+    periodic = np.isin(regime, CYCLE_REGIMES)
+    for key, src in (("z1_amplitude", "z1_amp"), ("z2_amplitude", "z2_amp"), ("phi1_amplitude", "phi1_amp"),
+                     ("fraction_off_disk", "fraction_off_disk")):  # fmt: skip
+        out[key][sel] = np.where(periodic, summary[src], np.nan)
+    out["cycle_omega"][sel] = np.where(periodic, summary["omega"], np.nan)
+    out["min_normal_force"][sel] = summary["min_normal_force"]
+    out["min_slip_velocity"][sel] = summary["min_slip_velocity"]
+    out["n_rhs"][sel] += np.asarray(summary["n_rhs"], dtype=np.int64)
+    irr = regime == REGIME["irregular"]
+    if irr.any():
+        irregular(p, sel[irr], np.asarray(summary["y_end"])[irr], t_max)
+
+
+def irregular(p: Points, pts: np.ndarray, y_end: np.ndarray, t_max: float) -> None:
+    """Stage 4b: what an irregular run measured, from where it ended (:mod:`tribosweep._irregular`).
+
+    The range and dominant frequency of z over a window, and the largest finite-time Lyapunov
+    exponent (about 0: quasi-periodic; > 0: chaotic). A failed measurement leaves the motion
+    undetermined: a failure status and its reason.
+    """
+    out, reason, stable = p.out, p.reason, p.stable
+    t1 = time.perf_counter()
+    meas = _irregular.measure(p.model_values, p.contact, p.friction_law, p.point_params, pts, y_end,
+                              integration=p.settings.integration, settings=p.settings.irregular,
+                              threads=p.threads)  # fmt: skip
+    p.charge(pts, t1)
+    out["n_rhs"][pts] += meas["n_rhs"]
+    # At a linearly stable point, a motion that stays well inside the contact (|z| below
+    # SLOW_DECAY_FRACTION |z_st|: the law nearly linear, no opening) is sliding's own
+    # least-damped mode still decaying, at the linear rate (0.03 1/s near a Hopf load): too
+    # slow for t_max, not sustained motion. Sliding, as linear stability says.
+    amp = np.maximum(np.abs(meas["irregular_z_min"]), np.abs(meas["irregular_z_max"]))
+    slow = stable[pts] & (amp < SLOW_DECAY_FRACTION * np.abs(static_penetration(p.full, pts)))
+    if slow.any():
+        q = pts[slow]
+        out["regime"][q] = REGIME["steady_sliding"]
+        out["decided_by"][q] = DECIDED_BY["linear"]
+        out["status"][q] = STATUS["not_converged"]
+        reason[q] = [f"the transient did not settle by t_max = {t_max:g} s; sliding is linearly stable and the "
+                     f"motion small (|z| <= {a:.3g} m, below {SLOW_DECAY_FRACTION:g} |z_st|): still decaying"
+                     for a in amp[slow]]  # fmt: skip
+    pts, meas = pts[~slow], {k: v[~slow] for k, v in meas.items()}
+    # Transient chaos: bounded until t_max, the motion left through the escape limit during the
+    # measurement window. That is an answer (the run diverged), not a failure.
+    esc = meas["status"] == STATUS["diverged"]
+    if esc.any():
+        q = pts[esc]
+        out["regime"][q] = REGIME["diverged"]
+        out["status"][q] = STATUS["success"]
+        reason[q] = [f"bounded until t_max = {t_max:g} s without settling (irregular), then |z| reached the "
+                     "escape limit during the measurement window after it: transient chaos"] * q.size
+    pts, meas = pts[~esc], {k: v[~esc] for k, v in meas.items()}
+    for key in _irregular.IRREGULAR_VARIABLES:
+        out[key][pts] = meas[key]
+    bad = meas["status"] != STATUS["success"]
+    if bad.any():
+        out["status"][pts[bad]] = meas["status"][bad]
+        out["regime"][pts[bad]] = np.where(stable[pts[bad]], REGIME["failed"], REGIME["unstable_undetermined"])
+        reason[pts[bad]] = [f"{a}; {b}" for a, b in zip(reason[pts[bad]], meas["reason"][bad])]
+    for j in np.flatnonzero(~bad):
+        f, se = meas["irregular_ftle"][j], meas["irregular_ftle_se"][j]
+        reason[pts[j]] += f"; largest FTLE {f:.3g} +- {se:.2g} 1/s"
+
+
+def census(p: Points) -> None:
+    """Stage 5: the attractor census where a saddle cycle surrounds stable sliding.
+
+    K disturbances, each run to its attractor with the point's contact law; fractions with
+    standard errors. Stable points without a saddle have nothing to find (``no_saddle``).
+    """
+    out, reason = p.out, p.reason
+    ok = p.stable & ~p.lin_failed
+    no_saddle = ok & ~np.isfinite(out["tidf_a1"])
+    out["bistable"][no_saddle] = BISTABLE["no_saddle"]
+    cand = np.flatnonzero(ok & (out["regime"] == REGIME["steady_sliding"]) & np.isfinite(out["tidf_a1"]))
+    if not cand.size:
+        return
+    it, cs = p.settings.integration, p.settings.census
+    t1 = time.perf_counter()
+    res, per = _census.run(
+        p.model_values, p.contact, p.friction_law, p.point_params, cand,
+        samples=cs.samples, scale=cs.disturbance_scale, t_max=cs.t_max,
+        integrator=it.integrator, rtol=it.rtol, atol=None if it.atol is None else list(it.atol),
+        periodic_tol=p.settings.steady.periodic_tol, threads=p.threads,
+        eigenvalues=p.eigenvalues[cand], linear_frequency=out["linear_frequency"][cand],
+        saddle_a1=out["tidf_a1"][cand],
+    )  # fmt: skip
+    p.charge(cand, t1)
+    out["n_rhs"][cand] += per["n_rhs"].sum(axis=1)
+    for key, arr in res.items():
+        out[key][cand] = arr
+    for j, i in enumerate(cand):
+        nv = int(res["census_samples"][j])
+        if nv == 0:
+            reason[i] = _census.failed_reason(per, j)
+            continue
+        out["bistable"][i] = BISTABLE["coexisting"] if res["n_attractors"][j] > 1 else BISTABLE["one_attractor"]
+        counts = np.rint(res["basin_fraction"][j] * nv).astype(int)
+        seen = ", ".join(f"{a} {c}/{nv}" for a, c in zip(_census.ATTRACTOR_NAMES, counts) if c)
+        if res["n_attractors"][j] > 1:
+            reason[i] = f"coexisting attractors (census): {seen}"
+        elif counts[0] < nv:
+            reason[i] = f"census: {seen}"

@@ -1,0 +1,16 @@
+"""The bench wing: work-precision charts, failure maps and model cost, reached by ``tribosweep bench``.
+
+Nothing in the product imports this package; it needs the ``[bench]`` extra (scipy, numba,
+matplotlib). Modules:
+
+``scenes``        the physical situations measured (small batches of trajectories)
+``runners``       one batch through the Rust core or a baseline, timed in this process
+``analysis``      rows -> time at matched error, speed ratios, fastest method, friction laws
+``charts``        the work-precision chart (a Figure) and the markdown summary
+``workprecision`` measure everything and write CSV/JSON/PNG/markdown (:func:`run_work_precision`)
+``failure``, ``status_map``, ``df_failure``, ``pd_failure``
+                  where each integrator, the describing function and shooting fail, as maps
+``model_cost``    cost and error of each analysis model over a sweep
+``reference``     the independent scipy oracle of the model (also the tests' reference)
+``baselines``     the numba Dormand-Prince kernel and scipy batches the benches compare with
+"""
