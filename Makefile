@@ -32,8 +32,10 @@ run: install
 test-rust:
 	cargo test --release --workspace --exclude tribosweep-py
 
+# The tests, then every `>>>` example of the package (the installed one: the extension lives there).
 test-python: install-test
 	$(BIN)/python -m pytest -q tests
+	$(BIN)/python -m pytest -q --doctest-modules --pyargs tribosweep
 
 # Everything the tests need, then every test (Rust numerics, then the Python package), release-built.
 test: test-rust test-python

@@ -62,7 +62,7 @@ REGIME_DOC: dict[str, str] = {
     "stick_slip": "the sliding velocity reached zero (outside the constant-friction law)",
     "diverged": "|z| reached the escape limit",
     "failed": "the computation failed (see status and reason)",
-    "unstable_undetermined": "sliding unstable and the motion not determined: method=linear computes no motion (by "
+    "unstable_undetermined": "sliding unstable and the motion not determined: strategy=linear computes no motion (by "
     "choice), or the run was bounded but its measurement failed numerically (see status and reason)",
     "irregular": "sustained irregular motion: bounded, neither periodic nor decayed by t_max (quasi-periodic: "
     "irregular_ftle about 0; chaotic: irregular_ftle > 0; see irregular_*)",

@@ -130,7 +130,7 @@ class SliderModel:
     >>> from tribosweep import SliderModel
     >>> m = SliderModel(normal_load=50.0, contact="unilateral")
     >>> round(m.static_point()[0] * 1e6, 3)
-    -10.579
+    -10.083
     """
 
     mass: float = _SEED["mass"]

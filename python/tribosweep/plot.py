@@ -110,7 +110,7 @@ def regime_map(ds: xr.Dataset, *, x: str | None = None, y: str | None = None, fa
     --------
     >>> import tribosweep as ts
     >>> from tribosweep.plot import regime_map
-    >>> ds = ts.sweep(normal_load=[10.0, 30.0, 60.0], arm_length=[0.05, 0.1], method="linear", progress=False)
+    >>> ds = ts.sweep(normal_load=[10.0, 30.0, 60.0], arm_length=[0.05, 0.1], strategy="linear", progress=False)
     >>> fig = regime_map(ds)
     >>> len(fig.axes)
     1
