@@ -99,3 +99,23 @@ def test_model_is_frozen_and_replace_revalidates():
         m.replace(mu=-1.0)
     # mu_static follows mu unless given.
     assert m.replace(mu=0.3).values()["mu_static"] == 0.3
+
+
+@pytest.mark.parametrize(
+    "call",
+    [
+        lambda m: ts.simulate(m, 0.01),
+        lambda m: ts.ensemble(m, 0.01, {"mu": [0.2]}),
+        lambda m: ts.linear_stability(m),
+        lambda m: ts.hopf_load(m),
+        lambda m: ts.describing_function(m),
+        lambda m: ts.periodic_orbit(m, None),
+        lambda m: ts.census(m),
+        lambda m: ts.sweep(m, progress=False),
+    ],
+    ids=["simulate", "ensemble", "linear_stability", "hopf_load", "describing_function", "periodic_orbit", "census",
+         "sweep"],
+)  # fmt: skip
+def test_a_model_of_the_wrong_type_is_a_type_error_everywhere(call):
+    with pytest.raises(TypeError, match="model = .* must be a tribosweep.SliderModel"):
+        call({"mu": 0.2})

@@ -21,7 +21,7 @@ FLIP_TOL = 0.05
 
 def _model(model) -> SliderModel:
     if not isinstance(model, SliderModel):
-        raise ValueError(f"model = {model!r} must be a tribosweep.SliderModel")
+        raise TypeError(f"model = {model!r} must be a tribosweep.SliderModel")
     return model
 
 

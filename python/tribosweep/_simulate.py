@@ -44,7 +44,7 @@ _STAT_VARS = {
 
 def _check_common(model, t_end, method, rtol, atol, t_eval):
     if not isinstance(model, SliderModel):
-        raise ValueError(f"model = {model!r} must be a tribosweep.SliderModel")
+        raise TypeError(f"model = {model!r} must be a tribosweep.SliderModel")
     t_end = _checks.positive("t_end", t_end)
     return (
         t_end,
