@@ -35,6 +35,7 @@ from .plan import (
     check_axis,
     check_extra_axes,
 )
+from .progress import Progress
 
 _D = DEFAULTS
 
@@ -326,7 +327,7 @@ def _windowed_map(executor, plan: Plan, chunks: list[int], threads):
 def _compute(plan: Plan, chunks, threads, executor, progress: bool, n_done: int, sink) -> None:
     """Run ``chunks`` and hand each result to ``sink(start, stop, arrays)`` in order."""
     chunks = list(chunks)
-    bar = _Progress(progress, plan.n_points, n_done)
+    bar = Progress(progress, plan.n_points, n_done)
     try:
         if executor is None:
             # Looked up at call time (not bound at import) so that tests can patch it.
@@ -346,38 +347,3 @@ def _compute(plan: Plan, chunks, threads, executor, progress: bool, n_done: int,
 def _run_task(task: tuple) -> dict[str, np.ndarray]:
     """Module-level (picklable) wrapper for executors."""
     return _chunk.compute_chunk(*task)
-
-
-class _Progress:
-    """tqdm if installed, else one updating stderr line; nothing when disabled."""
-
-    def __init__(self, enabled: bool, total: int, initial: int):
-        self.total, self.done, self.bar = total, initial, None
-        self.enabled = enabled
-        if not enabled:
-            return
-        try:
-            from tqdm import tqdm
-        except ImportError:
-            self._line()
-        else:
-            self.bar = tqdm(total=total, initial=initial, unit="pt", desc="sweep", file=sys.stderr, dynamic_ncols=True)
-
-    def _line(self) -> None:
-        pct = 100.0 * self.done / self.total if self.total else 100.0
-        sys.stderr.write(f"\rsweep: {self.done}/{self.total} points ({pct:.0f} %)")
-        sys.stderr.flush()
-
-    def update(self, n: int) -> None:
-        self.done += n
-        if self.bar is not None:
-            self.bar.update(n)
-        elif self.enabled:
-            self._line()
-
-    def close(self) -> None:
-        if self.bar is not None:
-            self.bar.close()
-        elif self.enabled:
-            sys.stderr.write("\n")
-            sys.stderr.flush()
