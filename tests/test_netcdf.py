@@ -216,3 +216,16 @@ def test_point_specs_cover_the_chunk_output():
     assert specs == set(_schema.POINT_VARIABLES) | set(_census.CENSUS_VARIABLES)
     assert {s.name: s.dims for s in _schema.point_specs(("x",))}["basin_fraction"] == ("x", "attractor")
     assert {s.name for s in _schema.point_specs(("x",), wear_rate=True)} == specs | {"wear_rate"}
+
+
+def test_labels_turn_every_flag_variable_into_its_names(sweep_file):
+    with xr.open_dataset(sweep_file) as ds:
+        for var in ("regime", "status", "decided_by", "bistable", "wear_applicability"):
+            names = str(ds[var].attrs["flag_meanings"]).split()
+            values = np.atleast_1d(ds[var].attrs["flag_values"]).tolist()
+            got = ts.labels(ds[var])
+            assert got.dims == ds[var].dims
+            for v, name in zip(ds[var].values.ravel().tolist(), got.values.ravel().tolist()):
+                assert name == names[values.index(v)]
+        with pytest.raises(ValueError, match="not a categorical variable"):
+            ts.labels(ds["growth_rate"])

@@ -12,11 +12,14 @@ from ._census import census
 from ._codes import (
     ATTRACTOR_NAMES,
     BISTABLE_NAMES,
+    DECIDED_BY_NAMES,
     INSTABILITY_NAMES,
     OUTCOME_NAMES,
     REGIME_NAMES,
     STATUS,
     STATUS_NAMES,
+    WEAR_APPLICABILITY_NAMES,
+    labels,
 )
 from ._frequency import describing_function, follow_cycle, hopf_load, linear_stability, periodic_orbit
 from ._model import PARAM_NAMES, SliderModel
@@ -30,6 +33,7 @@ __all__ = [
     "ARM_EXPONENTS",
     "ATTRACTOR_NAMES",
     "BISTABLE_NAMES",
+    "DECIDED_BY_NAMES",
     "DEFAULT_Y0",
     "INSTABILITY_NAMES",
     "OUTCOME_NAMES",
@@ -38,6 +42,7 @@ __all__ = [
     "STATUS",
     "STATUS_NAMES",
     "SliderModel",
+    "WEAR_APPLICABILITY_NAMES",
     "WearCalibration",
     "WearReference",
     "__version__",
@@ -48,6 +53,7 @@ __all__ = [
     "ensemble",
     "follow_cycle",
     "hopf_load",
+    "labels",
     "linear_stability",
     "normal_mode_frequency_hz",
     "periodic_orbit",

@@ -96,3 +96,27 @@ ATTRACTOR_DOC: dict[str, str] = {
     "escape": "|z| passed the escape limit (outside the model's validity)",
 }
 ATTRACTOR: dict[str, int] = {name: i for i, name in enumerate(ATTRACTOR_NAMES)}
+
+
+def labels(da):
+    """The names of a categorical (CF flag) variable's values, as a DataArray of strings.
+
+    Works on any variable with ``flag_values`` and ``flag_meanings`` (``regime``, ``status``,
+    ``decided_by``, ``bistable``, ``wear_applicability``, ...); a value outside the table is
+    labelled ``"?<value>"``.
+
+    Examples
+    --------
+    >>> import tribosweep as ts
+    >>> ds = ts.sweep(normal_load=[10.0, 50.0], strategy="linear", progress=False)
+    >>> ts.labels(ds.regime).values.ravel().tolist()
+    ['unstable_undetermined', 'steady_sliding']
+    """
+    import xarray as xr
+
+    if "flag_values" not in da.attrs or "flag_meanings" not in da.attrs:
+        raise ValueError(f"{da.name!r} is not a categorical variable: it has no flag_values/flag_meanings")
+    table = dict(zip(np.atleast_1d(da.attrs["flag_values"]).tolist(), str(da.attrs["flag_meanings"]).split()))
+    flat = [table.get(v, f"?{v}") for v in np.asarray(da.values).ravel().tolist()]
+    out = np.asarray(flat, dtype=object).reshape(np.shape(da.values)).astype(str)
+    return xr.DataArray(out, coords=da.coords, dims=da.dims, name=da.name, attrs={"long_name": da.attrs.get("long_name", "")})
