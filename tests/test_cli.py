@@ -236,3 +236,37 @@ def test_info_counts_bistable_points_and_multi_period_cycles(tmp_path, capsys):
     assert code == 0
     assert "cycles of several mode periods (period doubling, subharmonic): 1" in out
     assert "bistable:" in out and "not_checked" in out and "coexisting" in out
+
+
+def test_every_sweep_argument_is_a_cli_flag_and_a_config_key():
+    """The CLI equals the API: each sweep() argument has a flag (or is one of the named CLI-only
+    forms) and each analysis setting also a [solver] key, under the API's own name."""
+    import inspect
+
+    params = set(inspect.signature(ts.sweep).parameters)
+    parser = cli.build_parser()
+    sub = next(a for a in parser._subparsers._group_actions[0].choices.values() if a.prog.endswith("sweep"))
+    dests = {a.dest for a in sub._actions}
+    # Arguments with another form on the command line, and why:
+    other = {
+        "model": "the [model] table of --config",
+        "extra_axes": "--mu and --axis NAME=SPEC",
+        "executor": "an object: no command-line form (dask runs through the API)",
+        "progress": "--no-progress",
+        "census": "--no-census and [census] enabled",
+        "wear_reference": "the [wear_reference] table",
+        "wear_calibration": "an object of the API only",
+        "command": "the command line itself",
+        "method": "deprecated name of --strategy",
+        "check_bistability": "deprecated name of census",
+    }
+    missing = sorted(p for p in params - set(other) if p not in dests)
+    assert missing == []
+    settings = params - set(other) - {"normal_load", "arm_length", "sliding_speed", "strategy", "output", "chunk_size",
+                                      "threads", "resume"}  # fmt: skip
+    assert settings <= cli._SOLVER_KEYS
+    # The help states the API's default for each (one source of defaults).
+    for name in ("t_max", "rtol", "samples", "census_t_max", "ftle_tau", "shooting_rtol"):
+        default = inspect.signature(ts.sweep).parameters[name].default
+        action = next(a for a in sub._actions if a.dest == name)
+        assert f"(default {default:g})" in action.help

@@ -91,12 +91,56 @@ def _positive_int(text: str) -> int:
 
 # --- sweep -------------------------------------------------------------------------------------
 
-_CONFIG_KEYS = {"normal_load", "arm_length", "sliding_speed", "strategy", "method", "output", "chunk_size", "threads", "plot",
-                "axes", "model", "solver", "census", "wear_reference"}  # fmt: skip
-_SOLVER_KEYS = {"t_max", "integrator", "rtol", "atol", "periodic_tol", "decay_amplitude", "disturbance"}
+#: Every analysis setting of :func:`tribosweep.sweep`: a flag ``--name-with-dashes`` and a key of the
+#: [solver] table of --config, with the API's name and default (``tribosweep._settings``). The value:
+#: (argparse group, type, metavar, help).
+_SETTINGS: dict[str, tuple[str, object, str, str]] = {
+    "t_max": ("integration", float, "S", "longest transient run [s]"),
+    "integrator": ("integration", str, "NAME", "time integrator: dop853, dopri5 or rodas4"),
+    "rtol": ("integration", float, "R", "relative tolerance of every run"),
+    "atol": ("integration", "floats", "A", "absolute tolerance: one value or six (default rtol x each state's size)"),
+    "periodic_tol": ("integration", float, "R", "relative repetition tolerance that declares a cycle"),
+    "decay_amplitude": ("integration", float, "M", "amplitude below which a motion has decayed [m] (default "
+                        "1e-3 |z_st|)"),
+    "disturbance": ("integration", "floats", "Z", "initial z offset [m] of transients, or a state of six values "
+                    "(default 1e-6)"),
+    "unstable_disturbance": ("integration", float, "X", "auto: transients at unstable points start on the unstable "
+                             "mode with |z| = X |z_st|"),
+    "shooting_rtol": ("integration", float, "R", "integration tolerance of the shooting stage"),
+    "shooting_tol": ("integration", float, "R", "Newton tolerance of the shooting stage"),
+    "samples": ("census", int, "K", "census disturbances per point"),
+    "census_t_max": ("census", float, "S", "longest run of one census disturbance [s]"),
+    "disturbance_scale": ("census", float, "X", "largest modal amplitude of a census disturbance in units of |z_st|"),
+    "irregular_window": ("irregular", float, "S", "measurement window of irregular motion [s]"),
+    "irregular_sample_dt": ("irregular", float, "S", "its sampling interval [s]"),
+    "ftle_tau": ("irregular", float, "S", "segment of the Lyapunov exponent [s]"),
+    "ftle_segments": ("irregular", int, "M", "segments averaged into the exponent (>= 2)"),
+    "ftle_warmup": ("irregular", int, "M", "segments run first and not counted"),
+    "ftle_d0": ("irregular", float, "D", "separation of the two trajectories in characteristic sizes"),
+    "ftle_rtol": ("irregular", float, "R", "tolerance of the exponent's runs"),
+}
+_CONFIG_KEYS = {"normal_load", "arm_length", "sliding_speed", "strategy", "method", "output", "chunk_size", "threads",
+                "plot", "axes", "model", "solver", "census", "wear_reference"}  # fmt: skip
+_SOLVER_KEYS = set(_SETTINGS) | {"census"}
 #: [census] keys -> sweep() arguments.
 _CENSUS_KEYS = {"enabled": "census", "samples": "samples", "t_max": "census_t_max",
                 "disturbance_scale": "disturbance_scale"}  # fmt: skip
+
+
+def _default(name: str):
+    """The API's default of a setting, for the help text (one source: ``tribosweep._settings``)."""
+    from ._settings import DEFAULTS
+
+    opts = DEFAULTS.to_options()
+    return {"disturbance": None}.get(name, opts.get(name))
+
+
+def _floats(text: str) -> float | list[float]:
+    try:
+        vals = [float(x) for x in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number or a comma-separated list of numbers") from None
+    return vals[0] if len(vals) == 1 else vals
 
 
 def _load_config(path: str) -> dict:
@@ -152,37 +196,35 @@ def _add_sweep_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--threads", type=_positive_int, metavar="N", help="worker threads (default: all cores)")
     p.add_argument("--resume", action="store_true", help="finish an interrupted sweep from FILE.parts/")
     p.add_argument("--config", metavar="FILE.toml",
-                   help="TOML with keys normal_load, arm_length, sliding_speed, method, output, chunk_size, threads, "
-                   "plot and tables [axes], [model] (SliderModel fields), [solver] (t_max, integrator, rtol, atol, "
-                   "periodic_tol, decay_amplitude, disturbance), [wear_reference]; command-line options win")  # fmt: skip
+                   help="TOML with keys normal_load, arm_length, sliding_speed, strategy, output, chunk_size, "
+                   "threads, plot and tables [axes], [model] (SliderModel fields), [solver] (every setting below, "
+                   "with its flag's name in snake_case), [census], [wear_reference]; command-line options win")  # fmt: skip
     p.add_argument("--chunk-size", type=_positive_int, metavar="N", help="points per saved chunk")
     p.add_argument("--plot", metavar="PNG", help="also write the regime map to this image")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
-    solver = p.add_argument_group("integration (also the [solver] table of --config)")
-    solver.add_argument("--t-max", type=float, metavar="S", help="longest transient run [s] (default 100)")
-    solver.add_argument("--integrator", choices=("dop853", "dopri5", "rodas4"), help="time integrator (default dop853)")
-    solver.add_argument("--rtol", type=float, metavar="R", help="relative tolerance (default 1e-8)")
-    irregular = p.add_argument_group(
-        "irregular motion (also keys of the [solver] table: ftle_tau, ftle_segments, ftle_warmup, ftle_d0, ftle_rtol, "
-        "irregular_window, irregular_sample_dt)",
-        "a bounded run that neither repeats nor decays by --t-max is regime irregular, measured from where it ended: "
-        "z range and dominant frequency over a window, and the largest finite-time Lyapunov exponent (about 0: "
-        "quasi-periodic; > 0: chaotic) with its standard error.",
-    )
-    irregular.add_argument("--ftle-tau", type=float, metavar="S", help="segment of the exponent [s] (default 0.05)")
-    irregular.add_argument("--ftle-segments", type=int, metavar="M",
-                           help="segments averaged into the exponent (default 40, >= 2)")
-    census = p.add_argument_group(
-        "attractor census (also the [census] table of --config: enabled, samples, t_max, disturbance_scale)",
-        "auto: at stable points with a saddle cycle, K disturbances on the torsion and normal modes are each run to "
-        "their attractor; the sweep reports the fraction reaching sliding / a cycle / irregular motion / escape, with "
-        "standard errors. It is most of an auto sweep's cost (about K runs of up to --census-t-max seconds each).",
-    )
-    census.add_argument("--no-census", action="store_true", help="skip the census (fractions left empty)")
-    census.add_argument("--samples", type=_positive_int, metavar="K", help="disturbances per point (default 32)")
-    census.add_argument("--census-t-max", type=float, metavar="S", help="longest run of one disturbance [s] (default 30)")
-    census.add_argument("--disturbance-scale", type=float, metavar="X",
-                        help="largest modal amplitude of a disturbance in units of |z_st| (default 3)")
+    groups = {
+        "integration": p.add_argument_group("integration (also keys of the [solver] table of --config)"),
+        "irregular": p.add_argument_group(
+            "irregular motion (also keys of the [solver] table)",
+            "a bounded run that neither repeats nor decays by --t-max is regime irregular, measured from where it "
+            "ended: z range and dominant frequency over a window, and the largest finite-time Lyapunov exponent "
+            "(about 0: quasi-periodic; > 0: chaotic) with its standard error.",
+        ),
+        "census": p.add_argument_group(
+            "attractor census (also the [census] table: enabled, samples, t_max, disturbance_scale)",
+            "auto: at stable points with a saddle cycle, K disturbances on the torsion and normal modes are each run "
+            "to their attractor; the sweep reports the fraction reaching sliding / a cycle / irregular motion / "
+            "escape, with standard errors. It is most of an auto sweep's cost (about K runs of up to --census-t-max "
+            "seconds each).",
+        ),
+    }
+    groups["census"].add_argument("--no-census", action="store_true", help="skip the census (fractions left empty)")
+    for name, (group, kind, metavar, text) in _SETTINGS.items():
+        default = _default(name)
+        shown = "" if default is None or "(default" in text else f" (default {default:g})" if isinstance(
+            default, (int, float)) else f" (default {default})"  # fmt: skip
+        typ = _floats if kind == "floats" else _positive_int if kind is int and name != "ftle_warmup" else kind
+        groups[group].add_argument("--" + name.replace("_", "-"), type=typ, metavar=metavar, help=text + shown)
 
 
 def _strategy(args: argparse.Namespace, cfg: dict) -> str:
@@ -222,11 +264,9 @@ def _run_sweep(args: argparse.Namespace) -> int:
         raise UsageError(f"config [model]: {e}") from None
     solver = dict(cfg.get("solver", {}))
     solver.update({_CENSUS_KEYS[k]: v for k, v in cfg.get("census", {}).items()})
-    for flag, key in (("t_max", "t_max"), ("integrator", "integrator"), ("rtol", "rtol"), ("samples", "samples"),
-                      ("census_t_max", "census_t_max"), ("disturbance_scale", "disturbance_scale"),
-                      ("ftle_tau", "ftle_tau"), ("ftle_segments", "ftle_segments")):  # fmt: skip
-        if getattr(args, flag) is not None:
-            solver[key] = getattr(args, flag)
+    for key in _SETTINGS:
+        if getattr(args, key) is not None:
+            solver[key] = getattr(args, key)
     if args.no_census:
         solver["census"] = False
     try:
