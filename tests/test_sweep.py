@@ -522,30 +522,6 @@ def test_threads_do_not_enter_the_configuration(tmp_path, monkeypatch):
     ts.sweep(output=out, resume=True, threads=2, **GRID).close()
 
 
-def test_progress_line_without_tqdm(monkeypatch, capsys):
-    import builtins
-
-    real_import = builtins.__import__
-
-    def no_tqdm(name, *a, **k):
-        if name == "tqdm":
-            raise ImportError("no tqdm")
-        return real_import(name, *a, **k)
-
-    monkeypatch.setattr(builtins, "__import__", no_tqdm)
-    ts.sweep(normal_load=[10.0, 20.0], strategy="linear", chunk_size=1, progress=True)
-    err = capsys.readouterr().err
-    assert "sweep: 2/2 points (100 %)" in err
-    ts.sweep(normal_load=[10.0, 20.0], strategy="linear", progress=False)
-    assert capsys.readouterr().err == ""
-
-
-#: The grid on which auto and transient must agree (its verdicts are checked under ulp-moved loads
-#: and rtol +-1 % in test_robustness.py).
-AGREE_GRID = dict(normal_load=[8.0, 30.0, 70.0, 140.0], extra_axes={"mu": [0.2, 0.3, 0.4]}, progress=False, t_max=40.0)
-
-
-@requires_driver
 def test_auto_agrees_with_transient_where_the_transient_settles():
     # Issue 4: on a test grid, the regime of `auto` (cheapest model per point) equals the regime of
     # always integrating, at every point where the integration settled.
@@ -636,3 +612,12 @@ def test_stable_point_without_a_saddle_is_marked_no_saddle():
     assert names == ["no_saddle", "one_attractor"]
     assert ds.basin_stability.values.ravel()[1] == 1.0 and ds.census_samples.values.ravel().tolist() == [0, 32]
     assert np.isnan(ds.tidf_a1.values.ravel()[0]) and np.isfinite(ds.tidf_a1.values.ravel()[1])
+
+
+@pytest.mark.parametrize(
+    "axis, values, hint",
+    [("arm_length", [5.0, 7.0], "centimetres"), ("normal_load", [50e3], "newtons"), ("sliding_speed", [460.0], "mm/s")],
+)
+def test_a_likely_unit_mistake_is_named_in_a_warning(axis, values, hint):
+    with pytest.warns(UserWarning, match=f"{axis} reaches .*{hint}"):
+        ts.sweep(**{axis: values}, **LINEAR)

@@ -542,6 +542,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     except ImportError as e:
         print(f"{prog}: error: {e}", file=sys.stderr)
         return 1
+    except BrokenPipeError:
+        # The reader went away (``tribosweep info f.nc | head``): not an error of ours. Point stdout
+        # at devnull so that the interpreter's final flush does not raise again.
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
     except OSError as e:
         print(f"{prog}: error: {e}", file=sys.stderr)
         return 1

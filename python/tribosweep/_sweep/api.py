@@ -34,6 +34,7 @@ from .plan import (
     Plan,
     check_axis,
     check_extra_axes,
+    warn_units,
 )
 from .progress import Progress
 
@@ -239,6 +240,7 @@ def sweep(
     for name, values in (("normal_load", normal_load), ("arm_length", arm_length), ("sliding_speed", sliding_speed)):
         values = [SEED_AXES[name]] if values is None else values
         axes[name] = check_axis(name, values, units=AXIS_ATTRS[name]["units"])
+        warn_units(name, axes[name])
     axes.update(check_extra_axes(model, extra_axes))
     if chunk_size is None:
         chunk_size = DEFAULT_CHUNK_SIZE.get(strategy, DEFAULT_CHUNK_SIZE_OTHER)

@@ -69,6 +69,27 @@ def check_axis(name: str, values, *, positive: bool = True, units: str = "") -> 
     return a
 
 
+#: Values beyond these are far outside what the model means and most likely a unit mistake:
+#: name -> (largest sensible value, SI unit, the likely mistake). The report's arms are 5-12.7 cm
+#: and its loads 17-152 N.
+UNIT_HINTS: dict[str, tuple[float, str, str]] = {
+    "arm_length": (1.0, "m", "centimetres or millimetres given as metres? the report's arms are 0.05-0.127 m"),
+    "normal_load": (5000.0, "N", "newtons expected, not grams or millinewtons; the report's loads are 17-152 N"),
+    "sliding_speed": (50.0, "m/s", "metres per second expected, not mm/s or rpm; the report's speeds are 0.1-1 m/s"),
+}
+
+
+def warn_units(name: str, a: np.ndarray) -> None:
+    """Warn (``UserWarning``) when an axis reaches values no pin-on-disk rig has: a likely unit mistake."""
+    if name in UNIT_HINTS:
+        limit, unit, hint = UNIT_HINTS[name]
+        if np.max(a) > limit:
+            import warnings
+
+            warnings.warn(f"{name} reaches {float(np.max(a)):g} {unit}, above {limit:g} {unit}: {hint}", UserWarning,
+                          stacklevel=3)  # fmt: skip
+
+
 def check_extra_axes(model: SliderModel, extra_axes) -> dict[str, np.ndarray]:
     if extra_axes is None:
         return {}
