@@ -522,6 +522,11 @@ def test_threads_do_not_enter_the_configuration(tmp_path, monkeypatch):
     ts.sweep(output=out, resume=True, threads=2, **GRID).close()
 
 
+#: The grid on which auto and transient must agree (its verdicts are checked under ulp-moved loads
+#: and rtol +-1 % in test_robustness.py).
+AGREE_GRID = dict(normal_load=[8.0, 30.0, 70.0, 140.0], extra_axes={"mu": [0.2, 0.3, 0.4]}, progress=False, t_max=40.0)
+
+
 def test_auto_agrees_with_transient_where_the_transient_settles():
     # Issue 4: on a test grid, the regime of `auto` (cheapest model per point) equals the regime of
     # always integrating, at every point where the integration settled.
@@ -621,3 +626,18 @@ def test_stable_point_without_a_saddle_is_marked_no_saddle():
 def test_a_likely_unit_mistake_is_named_in_a_warning(axis, values, hint):
     with pytest.warns(UserWarning, match=f"{axis} reaches .*{hint}"):
         ts.sweep(**{axis: values}, **LINEAR)
+
+
+def test_results_do_not_depend_on_the_chunking_when_speeds_share_their_dynamics():
+    """Constant law: points that differ only in V share one computation at the model's V0, so a
+    point's numbers are the same whichever points its chunk holds (chunk sizes 1, 4 and 64)."""
+    kw = dict(normal_load=[15.0, 60.0], arm_length=[0.06, 0.1], sliding_speed=[0.2, 0.46, 0.9], strategy="transient",
+              t_max=0.5, progress=False)  # fmt: skip
+    runs = [strip(ts.sweep(chunk_size=c, **kw)) for c in (1, 4, 64)]
+    for other in runs[1:]:
+        xr.testing.assert_identical(runs[0], other)
+    # The speed only shifts the sliding velocity: V - min_slip_velocity is the same at every speed.
+    u = (runs[0].min_slip_velocity - runs[0].sliding_speed).transpose(*runs[0].min_slip_velocity.dims).values
+    assert runs[0].min_slip_velocity.dims[-1] == "sliding_speed"
+    # 1e-15 m/s: the shift V - V0 is one rounding of numbers below 1 m/s.
+    np.testing.assert_allclose(u, np.broadcast_to(u[..., :1], u.shape), rtol=0, atol=1e-15)

@@ -112,21 +112,25 @@ def compute_chunk(
     wear = options.get("wear") or {}
 
     # With the constant friction law the sliding speed enters neither the equations nor the
-    # static point: it only shifts the sliding velocity v_r = V - (xd + s L phid). Points that differ
-    # only in V share their dynamics, computed once (in a load x arm x speed sweep this divides the
-    # work by the number of speeds); min_slip_velocity is then shifted by V - V_rep and the
-    # stick-slip test redone.
+    # static point: it only shifts the sliding velocity v_r = V - (xd + s L phid). Every point's
+    # dynamics are therefore computed at one speed, the model's own V0, whatever the chunk holds
+    # (points that differ only in V share them: in a load x arm x speed sweep this divides the
+    # work by the number of speeds); min_slip_velocity is then shifted by V - V0 and the stick-slip
+    # test redone. Computing at V0 for every point, not at the first point of the chunk, keeps
+    # each result independent of how the sweep is cut into chunks (at V = V0 the shift is an
+    # exact 0).
     keys = sorted(point_params)
-    shared = [k for k in keys if not (friction_law == "constant" and k == "sliding_speed")]
-    if len(shared) < len(keys) and n > 1:
+    if friction_law == "constant" and "sliding_speed" in point_params:
+        shared = [k for k in keys if k != "sliding_speed"]
         rows = np.column_stack([np.asarray(point_params[k], dtype=np.float64) for k in shared]) if shared else np.zeros((n, 1))
         _, first, inverse = np.unique(rows, axis=0, return_index=True, return_inverse=True)
         inverse = inverse.ravel()
-        sub = {k: np.asarray(point_params[k], dtype=np.float64)[first] for k in keys}
+        v0 = float(model_values["sliding_speed"])
+        sub = {k: np.asarray(point_params[k], dtype=np.float64)[first] for k in shared}
+        sub["sliding_speed"] = np.full(first.size, v0)
         uniq = dynamics(model_values, contact, friction_law, sub, strategy, settings, n_points=first.size)
         out = {k: v[inverse] for k, v in uniq.items()}
-        v_rep = np.asarray(point_params["sliding_speed"], dtype=np.float64)[first][inverse]
-        dv = np.asarray(point_params["sliding_speed"], dtype=np.float64) - v_rep
+        dv = np.asarray(point_params["sliding_speed"], dtype=np.float64) - v0
         out["min_slip_velocity"] = out["min_slip_velocity"] + dv
         cyc = np.isin(out["regime"], stages.CYCLE_REGIMES)
         off = np.nan_to_num(out["fraction_off_disk"]) > 0
