@@ -114,7 +114,7 @@ def test_census_flags_and_config(tmp_path, capsys):
         (["sweep", "--normal-load=-5,2"], "> 0"),
         (["sweep", "--normal-load", "nan"], "finite"),
         (["sweep", "--normal-load", "a:b:c"], "not an axis"),
-        (["sweep", "--normal-load", "1:2:0"], "NUM must be"),
+        (["sweep", "--normal-load", "1:2:0"], "NUM = 0 is out of range"),
         (["sweep", "--arm-length", "1:2"], "not an axis"),
         (["sweep", "--method", "bogus"], "invalid choice"),
         (["sweep", "--threads", "0"], "must be >= 1"),
@@ -262,7 +262,7 @@ def test_every_sweep_argument_is_a_cli_flag_and_a_config_key():
     }
     missing = sorted(p for p in params - set(other) if p not in dests)
     assert missing == []
-    settings = params - set(other) - {"normal_load", "arm_length", "sliding_speed", "strategy", "output", "chunk_size",
+    settings = params - set(other) - {"normal_load", "arm_length", "sliding_speed", "strategy", "output", "chunk_size", "max_points",
                                       "threads", "resume"}  # fmt: skip
     assert settings <= cli._SOLVER_KEYS
     # The help states the API's default for each (one source of defaults).
@@ -270,3 +270,8 @@ def test_every_sweep_argument_is_a_cli_flag_and_a_config_key():
         default = inspect.signature(ts.sweep).parameters[name].default
         action = next(a for a in sub._actions if a.dest == name)
         assert f"(default {default:g})" in action.help
+
+
+def test_an_axis_of_a_hundred_million_values_is_refused_in_one_line(capsys):
+    code, _, err = run(["sweep", "--normal-load", "10:20:100000000", "--no-progress"], capsys)
+    assert code == 2 and "NUM = 100000000 is out of range" in err and "Traceback" not in err

@@ -641,3 +641,25 @@ def test_results_do_not_depend_on_the_chunking_when_speeds_share_their_dynamics(
     assert runs[0].min_slip_velocity.dims[-1] == "sliding_speed"
     # 1e-15 m/s: the shift V - V0 is one rounding of numbers below 1 m/s.
     np.testing.assert_allclose(u, np.broadcast_to(u[..., :1], u.shape), rtol=0, atol=1e-15)
+
+
+@pytest.mark.parametrize(
+    "kwargs, needle",
+    [
+        ({"threads": 2**62}, r"threads = 4611686018427387904 is out of range: must be an integer in \[1, 1024\]"),
+        ({"normal_load": np.linspace(10, 20, 2001), "arm_length": np.linspace(0.05, 0.1, 5000), "max_points": 10**7},
+         r"10005000 points \(shape \(2001, 5000, 1\)\), more than max_points = 10000000"),
+        ({"output": ""}, "output = '' is not a file name"),
+    ],
+)  # fmt: skip
+def test_bad_requests_are_refused_before_any_work(kwargs, needle, monkeypatch):
+    monkeypatch.setattr(_chunk, "compute_chunk", lambda *a: pytest.fail("work started"))
+    with pytest.raises(ValueError, match=needle):
+        ts.sweep(**{**LINEAR, **kwargs})
+
+
+def test_an_output_that_is_a_directory_is_refused_before_any_work(tmp_path, monkeypatch):
+    monkeypatch.setattr(_chunk, "compute_chunk", lambda *a: pytest.fail("work started"))
+    with pytest.raises(ValueError, match="is a directory: give a file name inside it"):
+        ts.sweep(output=tmp_path, **LINEAR)
+    assert list(tmp_path.iterdir()) == []

@@ -80,12 +80,17 @@ def times(name: str, value, t_end: float) -> np.ndarray | None:
     return a
 
 
+#: Most worker threads accepted: far above any machine's cores, far below what would exhaust
+#: memory on thread stacks (a huge value used to panic in the bindings or hang).
+MAX_THREADS: int = 1024
+
+
 def threads(value) -> int | None:
-    """None or a positive int."""
+    """None or an int in [1, MAX_THREADS]."""
     if value is None:
         return None
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-        raise ValueError(f"threads = {value!r} is out of range: must be an integer >= 1 or None")
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not 1 <= value <= MAX_THREADS:
+        raise ValueError(f"threads = {value!r} is out of range: must be an integer in [1, {MAX_THREADS}] or None")
     return int(value)
 
 

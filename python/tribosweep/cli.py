@@ -33,6 +33,11 @@ class UsageError(ValueError):
     """Bad command-line or config input (exit status 2)."""
 
 
+#: Most values along one axis from the command line (a typo's 10^8 would fill memory before the
+#: sweep's own point cap could refuse it).
+MAX_AXIS: int = 10_000_000
+
+
 def parse_axis(text: str) -> np.ndarray:
     """An axis from ``START:STOP:NUM`` (``numpy.linspace``), ``a,b,c`` or a single number.
 
@@ -48,8 +53,9 @@ def parse_axis(text: str) -> np.ndarray:
             if len(parts) != 3:
                 raise ValueError
             start, stop, num = float(parts[0]), float(parts[1]), int(parts[2])
-            if num < 1:
-                raise argparse.ArgumentTypeError(f"{text!r}: NUM must be an integer >= 1")
+            if not 1 <= num <= MAX_AXIS:
+                raise argparse.ArgumentTypeError(f"{text!r}: NUM = {num} is out of range: must be an integer in "
+                                                 f"[1, {MAX_AXIS}] (values along one axis)")  # fmt: skip
             return np.linspace(start, stop, num)
         return np.array([float(v) for v in text.split(",")])
     except ValueError:
@@ -120,6 +126,7 @@ _SETTINGS: dict[str, tuple[str, object, str, str]] = {
     "ftle_rtol": ("irregular", float, "R", "tolerance of the exponent's runs"),
 }
 _CONFIG_KEYS = {"normal_load", "arm_length", "sliding_speed", "strategy", "method", "output", "chunk_size", "threads",
+                "max_points",
                 "plot", "axes", "model", "solver", "census", "wear_reference"}  # fmt: skip
 _SOLVER_KEYS = set(_SETTINGS) | {"census"}
 #: [census] keys -> sweep() arguments.
@@ -200,6 +207,8 @@ def _add_sweep_arguments(p: argparse.ArgumentParser) -> None:
                    "threads, plot and tables [axes], [model] (SliderModel fields), [solver] (every setting below, "
                    "with its flag's name in snake_case), [census], [wear_reference]; command-line options win")  # fmt: skip
     p.add_argument("--chunk-size", type=_positive_int, metavar="N", help="points per saved chunk")
+    p.add_argument("--max-points", type=_positive_int, metavar="N",
+                   help="largest sweep accepted (default 10000000): a bigger one is refused before any work")
     p.add_argument("--plot", metavar="PNG", help="also write the regime map to this image")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     groups = {
@@ -283,6 +292,7 @@ def _run_sweep(args: argparse.Namespace) -> int:
         strategy=_strategy(args, cfg),
         output=output,
         chunk_size=args.chunk_size or cfg.get("chunk_size"),
+        max_points=args.max_points or cfg.get("max_points", 10_000_000),
         threads=args.threads or cfg.get("threads"),
         resume=args.resume,
         progress=not args.no_progress,

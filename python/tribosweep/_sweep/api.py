@@ -77,6 +77,7 @@ def sweep(
     ftle_warmup: int = _D.irregular.ftle_warmup,
     ftle_d0: float = _D.irregular.ftle_d0,
     ftle_rtol: float = _D.irregular.ftle_rtol,
+    max_points: int = 10_000_000,
     method: str | None = None,
     check_bistability: bool | None = None,
     command: str | None = None,
@@ -186,6 +187,9 @@ def sweep(
         Integration and Newton tolerances of the shooting stage (1e-10, 1e-8: the orbit's ``A1``
         is compared with the describing function's to a few 1e-3, and the monodromy matrix needs
         a few more digits than that).
+    max_points : int
+        Largest sweep accepted (10^7 points by default): a typo such as ``10:20:100000000`` is refused
+        before any work, naming the shape.
     method : str, optional
         Deprecated name of ``strategy`` (``method`` is the time integrator everywhere else).
     command : str, optional
@@ -254,6 +258,13 @@ def sweep(
         raise TypeError(f"wear_calibration = {wear_calibration!r} must be a tribosweep.WearCalibration or None")
     if resume and output is None:
         raise ValueError("resume=True needs output: the finished chunks are kept next to the output file")
+    if output is not None:
+        output = _check_output(output)
+    n_points = int(np.prod([a.size for a in axes.values()]))
+    if n_points > max_points:
+        raise ValueError(f"the sweep has {n_points} points (shape {tuple(a.size for a in axes.values())}), more than "
+                         f"max_points = {max_points}: check the axes (START:STOP:NUM gives NUM values), or raise "
+                         "max_points")  # fmt: skip
     settings = SweepSettings.from_flat(
         t_max=t_max, integrator=integrator, rtol=rtol, atol=atol, periodic_tol=periodic_tol,
         decay_amplitude=decay_amplitude, census=census, samples=samples, census_t_max=census_t_max,
@@ -349,3 +360,22 @@ def _compute(plan: Plan, chunks, threads, executor, progress: bool, n_done: int,
 def _run_task(task: tuple) -> dict[str, np.ndarray]:
     """Module-level (picklable) wrapper for executors."""
     return _chunk.compute_chunk(*task)
+
+
+def _check_output(output) -> Path:
+    """The output path, refused before any work if it cannot be written: empty, a directory, or in a
+    directory that does not exist and cannot be made, or one without write permission."""
+    if str(output).strip() == "":
+        raise ValueError("output = '' is not a file name: give a path such as sweep.nc, or None for no file")
+    path = Path(output)
+    if path.is_dir():
+        raise ValueError(f"output = {str(output)!r} is a directory: give a file name inside it, e.g. "
+                         f"{str(path / 'sweep.nc')!r}")  # fmt: skip
+    parent = path.parent if str(path.parent) else Path(".")
+    try:
+        parent.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise ValueError(f"output = {str(output)!r}: its folder cannot be made ({e.strerror or e})") from None
+    if not os.access(parent, os.W_OK):
+        raise ValueError(f"output = {str(output)!r}: the folder {str(parent)!r} is not writable")
+    return path
