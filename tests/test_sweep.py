@@ -663,3 +663,49 @@ def test_an_output_that_is_a_directory_is_refused_before_any_work(tmp_path, monk
     with pytest.raises(ValueError, match="is a directory: give a file name inside it"):
         ts.sweep(output=tmp_path, **LINEAR)
     assert list(tmp_path.iterdir()) == []
+
+
+def _interrupted_sweep(tmp_path, monkeypatch):
+    """A 6-point, 3-chunk sweep stopped after two chunks: its parts directory and keywords."""
+    out = tmp_path / "s.nc"
+    calls = {"n": 0}
+    real = _chunk.compute_chunk
+
+    def stop_after_two(*a):
+        calls["n"] += 1
+        if calls["n"] > 2:
+            raise KeyboardInterrupt
+        return real(*a)
+
+    monkeypatch.setattr(_chunk, "compute_chunk", stop_after_two)
+    with pytest.raises(KeyboardInterrupt):
+        ts.sweep(output=out, **GRID)
+    monkeypatch.setattr(_chunk, "compute_chunk", real)
+    return out, out.with_name(out.name + ".parts")
+
+
+def test_a_part_with_a_flipped_bit_or_foreign_values_is_recomputed_not_trusted(tmp_path, monkeypatch, caplog):
+    reference = strip(ts.sweep(**GRID))
+    out, parts = _interrupted_sweep(tmp_path, monkeypatch)
+    first, second = parts / "chunk_000000.npz", parts / "chunk_000001.npz"
+    data = bytearray(first.read_bytes())
+    data[len(data) // 2] ^= 0x01  # one bit, inside the arrays
+    first.write_bytes(bytes(data))
+    # A valid part of this configuration, but with other values: the checksum ledger rejects it.
+    with np.load(second) as z:
+        arrays = {k: z[k] for k in z.files}
+    arrays["growth_rate"] = arrays["growth_rate"] + 1.0
+    with open(second, "wb") as f:
+        np.savez(f, **arrays)
+    with caplog.at_level("WARNING", logger="tribosweep"):
+        ds = ts.sweep(output=out, resume=True, **GRID)
+    assert "chunk_000000.npz: its checksum does not match" in caplog.text
+    assert "chunk_000001.npz: its checksum does not match" in caplog.text
+    xr.testing.assert_identical(strip(ds.load()), reference)
+
+
+def test_resuming_with_another_core_build_is_refused(tmp_path, monkeypatch):
+    out, parts = _interrupted_sweep(tmp_path, monkeypatch)
+    monkeypatch.setattr(_plan, "core_build", lambda: "0123456789abcdef")
+    with pytest.raises(ValueError, match="core_build differs"):
+        ts.sweep(output=out, resume=True, **GRID)

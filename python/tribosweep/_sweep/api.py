@@ -298,7 +298,8 @@ def sweep(
     output = Path(output)
     output.parent.mkdir(parents=True, exist_ok=True)
     parts = Parts(output, plan, resume)
-    done = [k for k in range(plan.n_chunks) if parts.is_done(k)]
+    sums = parts._checksums()
+    done = [k for k in range(plan.n_chunks) if parts.is_done(k, sums)]
     todo = [k for k in range(plan.n_chunks) if k not in set(done)]
     n_done = sum(plan.chunk_range(k)[1] - plan.chunk_range(k)[0] for k in done)
 

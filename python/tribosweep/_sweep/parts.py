@@ -7,15 +7,21 @@ match the plan is removed and recomputed.
 
 from __future__ import annotations
 
+import hashlib
+import io
 import json
+import logging
 import os
 import shutil
+import tempfile
 from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
 
 from .plan import Plan
+
+_log = logging.getLogger("tribosweep")
 
 
 def compare_configs(saved: dict, now: dict, where: str) -> None:
@@ -79,35 +85,74 @@ class Parts:
 
     @staticmethod
     def _atomic_write(path: Path, write) -> None:
-        tmp = path.with_name(path.name + ".tmp")
-        with open(tmp, "wb") as f:
-            write(f)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
+        # A unique temporary name in the same folder (two writers never share one), fsynced, renamed.
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name + ".", suffix=".tmp")
+        try:
+            with os.fdopen(fd, "wb") as f:
+                write(f)
+                f.flush()
+                os.fsync(f.fileno())
+            os.replace(tmp, path)
+        except BaseException:
+            Path(tmp).unlink(missing_ok=True)
+            raise
+
+    @property
+    def ledger(self) -> Path:
+        """``checksums.txt``: one line ``k sha256`` per saved part, appended and fsynced after its rename."""
+        return self.dir / "checksums.txt"
 
     def save(self, k: int, arrays: Mapping[str, np.ndarray]) -> None:
         start, stop = self.plan.chunk_range(k)
         meta = {"__hash__": np.array(self.plan.hash), "__range__": np.array([start, stop])}
-        self._atomic_write(self.path(k), lambda f: np.savez(f, **meta, **arrays))
+        buf = io.BytesIO()
+        np.savez(buf, **meta, **arrays)
+        data = buf.getvalue()
+        self._atomic_write(self.path(k), lambda f: f.write(data))
+        with open(self.ledger, "a") as f:
+            f.write(f"{k} {hashlib.sha256(data).hexdigest()}\n")
+            f.flush()
+            os.fsync(f.fileno())
+
+    def _checksums(self) -> dict[int, str]:
+        out: dict[int, str] = {}
+        try:
+            lines = self.ledger.read_text().splitlines()
+        except OSError:
+            return out
+        for line in lines:
+            parts = line.split()
+            if len(parts) == 2 and parts[0].isdigit():
+                out[int(parts[0])] = parts[1]  # the last entry of a chunk wins (a recomputed part)
+        return out
 
     def load(self, k: int) -> dict[str, np.ndarray]:
         with np.load(self.path(k), allow_pickle=False) as z:
             return {name: z[name] for name in z.files if not name.startswith("__")}
 
-    def is_done(self, k: int) -> bool:
-        """True for a readable chunk file of this configuration and range (a bad one is removed)."""
+    def is_done(self, k: int, checksums: Mapping[int, str] | None = None) -> bool:
+        """True for a part whose bytes match its checksum in the ledger and that holds this
+        configuration's range; any other file (a flipped bit, a foreign file, a torn write) is
+        removed, logged and recomputed, never trusted."""
         p = self.path(k)
         if not p.exists():
             return False
+        sums = self._checksums() if checksums is None else checksums
+        why = ""
         try:
-            with np.load(p, allow_pickle=False) as z:
-                ok = str(z["__hash__"]) == self.plan.hash and list(z["__range__"]) == list(self.plan.chunk_range(k))
-        except Exception:  # noqa: BLE001 - any unreadable file is simply recomputed
-            ok = False
-        if not ok:
+            data = p.read_bytes()
+            if sums.get(k) != hashlib.sha256(data).hexdigest():
+                why = "its checksum does not match the ledger" if k in sums else "it has no checksum in the ledger"
+            else:
+                with np.load(io.BytesIO(data), allow_pickle=False) as z:
+                    if str(z["__hash__"]) != self.plan.hash or list(z["__range__"]) != list(self.plan.chunk_range(k)):
+                        why = "it belongs to another configuration or range"
+        except Exception as e:  # noqa: BLE001 - any unreadable file is simply recomputed
+            why = f"it is unreadable ({type(e).__name__})"
+        if why:
+            _log.warning("recomputing %s: %s", p, why)
             p.unlink()
-        return ok
+        return not why
 
     def remove(self) -> None:
         shutil.rmtree(self.dir)

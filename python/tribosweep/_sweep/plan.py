@@ -7,6 +7,7 @@ every saved chunk. :meth:`Plan.task` is the argument tuple of one call of the pu
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 from collections.abc import Mapping
@@ -113,6 +114,19 @@ def check_extra_axes(model: SliderModel, extra_axes) -> dict[str, np.ndarray]:
     return out
 
 
+@functools.cache
+def core_build() -> str:
+    """Identity of the compiled core: the SHA-256 (first 16 hex digits) of the extension's file.
+
+    A rebuilt core with other numerics has another identity, so a sweep refuses to resume parts
+    it computed (the manifest names the difference).
+    """
+    from .. import _core
+
+    with open(_core.__file__, "rb") as f:
+        return hashlib.file_digest(f, "sha256").hexdigest()[:16]
+
+
 class Plan:
     """Everything that fixes a sweep's results, as plain data (its JSON form is the manifest)."""
 
@@ -135,6 +149,7 @@ class Plan:
         self.config = {
             "format": PARTS_FORMAT,
             "tribosweep_version": __version__,
+            "core_build": core_build(),
             "dims": list(self.dims),
             "axes": {d: a.tolist() for d, a in axes.items()},
             "model": self.model_values,

@@ -83,6 +83,7 @@ def global_attrs(plan: Plan, command: str, f_ref: float) -> dict:
         "title": "tribosweep regime map of the 1985 pin-on-disk slider over normal load, arm length and sliding speed",
         "institution": "tribosweep",
         "source": f"tribosweep {__version__}",
+        "tribosweep_core_build": plan.config["core_build"],
         "history": f"{now} {command}",
         "references": REFERENCES,
         "comment": HOPF_CAVEAT,
