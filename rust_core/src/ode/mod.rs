@@ -12,13 +12,18 @@
 //!   the run. Sampling at output times, Poincare sections and running extrema live in observers.
 //! - The run ends with an [`Outcome`] and [`Stats`]; a failure is data, never a panic.
 
-pub mod batch;
 pub mod controller;
 pub mod dop853;
 pub mod dopri5;
 pub mod driver;
-pub mod lanes;
+pub(crate) mod events;
+pub(crate) mod lanes;
+#[cfg(test)]
+mod method_tests;
 pub mod rodas;
+pub(crate) mod stepper;
+#[cfg(test)]
+pub(crate) mod test_systems;
 
 use nalgebra::{SMatrix, SVector};
 
@@ -218,21 +223,6 @@ pub enum Outcome {
     NonFinite,
     /// More than `max_events` events.
     EventChatter,
-}
-
-impl Outcome {
-    /// The per-point status this outcome maps to (a stop by event or observer is a success of the
-    /// integrator; the caller decides what it means).
-    pub fn status(self) -> crate::status::Status {
-        use crate::status::Status;
-        match self {
-            Outcome::Finished | Outcome::StoppedByEvent | Outcome::StoppedByObserver => Status::Success,
-            Outcome::MaxSteps => Status::MaxSteps,
-            Outcome::StepTooSmall => Status::StepTooSmall,
-            Outcome::NonFinite => Status::NonFinite,
-            Outcome::EventChatter => Status::EventChatter,
-        }
-    }
 }
 
 /// End state of a run.
