@@ -48,7 +48,7 @@ use crate::ode::controller::{initial_step, FAC_MAX, FAC_MIN, SAFETY};
 use crate::ode::dopri5::Dopri5Dense;
 use crate::ode::events::locate;
 use crate::ode::lanes::{
-    dopri5_step, each6, exp_lanes, lane_state, ln_lanes, splat, ALPHA, BETA, L, LN_ERR_FLOOR, LN_SAFETY, V6, W,
+    dopri5_step, each6, exp_lanes, lane_state, ln_lanes, splat, LaneRhs, ALPHA, BETA, L, LN_ERR_FLOOR, LN_SAFETY, V6, W,
 };
 use crate::ode::{Dense, Options, Stats};
 use crate::status::Status;
@@ -88,6 +88,19 @@ fn rhs(c: &Coef, y: &V6, out: &mut V6, fz: &mut L) {
         out[4][l] = phd;
         out[5][l] = c.tg[l] * fx - c.dt[l] * phd - c.wt2[l] * ph;
         fz[l] = f;
+    }
+}
+
+/// [`rhs`] as the lane kit's [`LaneRhs`]: the law force of the last evaluation is left in `fz`.
+struct BatchRhs<'a> {
+    c: &'a Coef,
+    fz: &'a mut L,
+}
+
+impl LaneRhs for BatchRhs<'_> {
+    #[inline(always)]
+    fn eval(&mut self, y: &V6, out: &mut V6) {
+        rhs(self.c, y, out, self.fz);
     }
 }
 
@@ -213,16 +226,7 @@ fn run_impl(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances) -> 
         let k1 = &ln.f;
         // The squared RMS norm: `err <= 1` iff `err^2 <= 1`, and ln err = ln(err^2) / 2, so no
         // square root is needed.
-        let (err, fin) = dopri5_step(
-            &mut |ys: &V6, out: &mut V6| rhs(c, ys, out, &mut fz),
-            y,
-            k1,
-            &hh,
-            rtol,
-            &c.atol,
-            &mut k,
-            &mut yn,
-        );
+        let (err, fin) = dopri5_step(&mut BatchRhs { c, fz: &mut fz }, y, k1, &hh, rtol, &c.atol, &mut k, &mut yn);
 
         // ---- accept or reject, the controller, extremes, the end tests (branch-free) ----
         let mut ok = [false; W];

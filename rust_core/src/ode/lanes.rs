@@ -44,6 +44,14 @@ pub(crate) const LN_SAFETY: f64 = -0.105_360_515_657_826_3;
 /// `ln 1e-4`: the floor of the previous error in the PI formula.
 pub(crate) const LN_ERR_FLOOR: f64 = -9.210_340_371_976_184;
 
+/// A right-hand side on the lanes: `out = f(y)` for each lane. A trait rather than a closure so
+/// that the implementation can be `#[inline(always)]`: the steps below call it up to 16 times, and
+/// the cheap ones (the bilateral slider) lose a fifth of their speed when it is a call.
+pub(crate) trait LaneRhs {
+    /// `out = f(y)` on every lane.
+    fn eval(&mut self, y: &V6, out: &mut V6);
+}
+
 /// `x` in every lane.
 #[inline(always)]
 pub(crate) fn splat(x: f64) -> L {
@@ -179,11 +187,11 @@ pub(crate) fn comb<const K: usize>(y: &V6, hh: &L, a: [f64; K], ks: [&V6; K], ou
 /// One Dormand–Prince 5(4) attempt on the lanes from `y` with first stage `k1` and step sizes
 /// `hh`: the stages `k2..k7` into `k` (`k[5]` is the derivative at the new state, the FSAL stage),
 /// the new state into `yn`; returns the squared RMS error norm (`err <= 1` iff `err^2 <= 1`, no
-/// square root needed) and whether the new state and derivative are finite. `rhs(y, out)` is the
+/// square root needed) and whether the new state and derivative are finite. `rhs` is the
 /// right-hand side on the lanes.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-pub(crate) fn dopri5_step<F: FnMut(&V6, &mut V6)>(
+pub(crate) fn dopri5_step<F: LaneRhs>(
     rhs: &mut F,
     y: &V6,
     k1: &V6,
@@ -200,39 +208,39 @@ pub(crate) fn dopri5_step<F: FnMut(&V6, &mut V6)>(
             ys[i][l] = y[i][l] + hh[l] * (A21 * k1[i][l]);
         }
     });
-    rhs(&ys, &mut k[0]);
+    rhs.eval(&ys, &mut k[0]);
     each6!(i, {
         for l in 0..W {
             ys[i][l] = y[i][l] + hh[l] * (A31 * k1[i][l] + A32 * k[0][i][l]);
         }
     });
-    rhs(&ys, &mut k[1]);
+    rhs.eval(&ys, &mut k[1]);
     each6!(i, {
         for l in 0..W {
             ys[i][l] = y[i][l] + hh[l] * (A41 * k1[i][l] + A42 * k[0][i][l] + A43 * k[1][i][l]);
         }
     });
-    rhs(&ys, &mut k[2]);
+    rhs.eval(&ys, &mut k[2]);
     each6!(i, {
         for l in 0..W {
             ys[i][l] = y[i][l] + hh[l] * (A51 * k1[i][l] + A52 * k[0][i][l] + A53 * k[1][i][l] + A54 * k[2][i][l]);
         }
     });
-    rhs(&ys, &mut k[3]);
+    rhs.eval(&ys, &mut k[3]);
     each6!(i, {
         for l in 0..W {
             ys[i][l] = y[i][l]
                 + hh[l] * (A61 * k1[i][l] + A62 * k[0][i][l] + A63 * k[1][i][l] + A64 * k[2][i][l] + A65 * k[3][i][l]);
         }
     });
-    rhs(&ys, &mut k[4]);
+    rhs.eval(&ys, &mut k[4]);
     each6!(i, {
         for l in 0..W {
             yn[i][l] = y[i][l]
                 + hh[l] * (B1 * k1[i][l] + B3 * k[1][i][l] + B4 * k[2][i][l] + B5 * k[3][i][l] + B6 * k[4][i][l]);
         }
     });
-    rhs(&*yn, &mut k[5]);
+    rhs.eval(&*yn, &mut k[5]);
 
     // ---- error norm and finiteness ----
     let mut acc = zero;
@@ -261,10 +269,10 @@ pub(crate) fn dopri5_step<F: FnMut(&V6, &mut V6)>(
 
 /// One DOP853 attempt on the lanes: the twelve stages into `kk[1..12]`, the new state `yn`, the
 /// derivative there into `kk[12]`; returns Hairer's error measure and whether the state and
-/// derivative are finite. `rhs(y, out)` is the right-hand side on the lanes.
+/// derivative are finite. `rhs` is the right-hand side on the lanes.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-pub(crate) fn dop853_step<F: FnMut(&V6, &mut V6)>(
+pub(crate) fn dop853_step<F: LaneRhs>(
     rhs: &mut F,
     y: &V6,
     k1: &V6,
@@ -279,7 +287,7 @@ pub(crate) fn dop853_step<F: FnMut(&V6, &mut V6)>(
     macro_rules! stage {
         ($j:expr, $a:expr, $ks:expr) => {{
             comb(y, hh, $a, $ks, &mut ys);
-            rhs(&ys, &mut t);
+            rhs.eval(&ys, &mut t);
             kk[$j] = t;
         }};
     }
@@ -322,7 +330,7 @@ pub(crate) fn dop853_step<F: FnMut(&V6, &mut V6)>(
             s3[l] += q3 * q3;
         }
     }
-    rhs(yn, &mut t);
+    rhs.eval(yn, &mut t);
     kk[12] = t;
     let mut err = [0.0; W];
     let mut fin = [true; W];
@@ -408,11 +416,11 @@ pub(crate) fn dopri5_dense<const C: usize>(comps: &[usize; C], y0: &V6, y1: &V6,
 }
 
 /// The DOP853 interpolant of each lane's step from `y` to `y1`, for the components `comps`: the
-/// three extra stages (three calls of `rhs`), then the seven coefficients of each component.
+/// three extra stages (three evaluations of `rhs`), then the seven coefficients of each component.
 /// `k1` and `kk` are the stages of [`dop853_step`].
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-pub(crate) fn dop853_dense<F: FnMut(&V6, &mut V6), const C: usize>(
+pub(crate) fn dop853_dense<F: LaneRhs, const C: usize>(
     rhs: &mut F,
     comps: &[usize; C],
     y: &V6,
@@ -433,7 +441,7 @@ pub(crate) fn dop853_dense<F: FnMut(&V6, &mut V6), const C: usize>(
         [k1, k(7), k(8), k(9), k(10), k(11), k(12), k(13)],
         &mut ys,
     );
-    rhs(&ys, &mut k14);
+    rhs.eval(&ys, &mut k14);
     comb(
         y,
         hh,
@@ -441,7 +449,7 @@ pub(crate) fn dop853_dense<F: FnMut(&V6, &mut V6), const C: usize>(
         [k1, k(6), k(7), k(8), k(11), k(12), k(13), &k14],
         &mut ys,
     );
-    rhs(&ys, &mut k15);
+    rhs.eval(&ys, &mut k15);
     comb(
         y,
         hh,
@@ -449,7 +457,7 @@ pub(crate) fn dop853_dense<F: FnMut(&V6, &mut V6), const C: usize>(
         [k1, k(6), k(7), k(8), k(9), k(13), &k14, &k15],
         &mut ys,
     );
-    rhs(&ys, &mut k16);
+    rhs.eval(&ys, &mut k16);
     let st = [k1, k(6), k(7), k(8), k(9), k(10), k(11), k(12), k(13), &k14, &k15, &k16];
     let rows = [
         [D4_1, D4_6, D4_7, D4_8, D4_9, D4_10, D4_11, D4_12, D4_13, D4_14, D4_15, D4_16],

@@ -11,6 +11,19 @@
 //! - An [`Observer`] sees every accepted step (with its dense output) and every event, and may stop
 //!   the run. Sampling at output times, Poincare sections and running extrema live in observers.
 //! - The run ends with an [`Outcome`] and [`Stats`]; a failure is data, never a panic.
+//!
+//! Generic: nothing here knows the slider (the layering test `tests/architecture.rs` checks that
+//! `ode` refers to no other module of the crate). The files, bottom up:
+//! - `mod.rs`: the contract above; `controller.rs`: error norm, PI controller, starting step;
+//! - `stepper.rs`: the crate-private `Stepper` trait each method implements, and stage sums;
+//! - `dopri5.rs`, `dop853.rs`, `rodas.rs`: one method each (tableau, stepper, dense output);
+//! - `events.rs`: event location and processing on an accepted step (shared with the slider's
+//!   lane-batched paths in `crate::ensemble`);
+//! - `driver.rs`: [`integrate`], the adaptive loop, and fixed-step integration;
+//! - `lanes.rs`: the kit for lane-batched (SIMD) integration: lane types, one DOPRI5 or DOP853
+//!   attempt on eight trajectories, their interpolants, the PI controller in log form;
+//! - tests: `test_systems.rs` (problems with known solutions), `method_tests.rs` (orders of
+//!   convergence), `driver/tests.rs`, `driver/hidden_crossing_tests.rs`.
 
 pub mod controller;
 pub mod dop853;

@@ -2,7 +2,7 @@
 //! the controller, the common accepted step on the lanes, and the cold path for lanes that need
 //! their scalar side (the scalar driver's event code, observers, the end of a run).
 
-use super::slider::{events_lanes, hidden_crossings, rhs, Coef, EV_COMPS, NE};
+use super::slider::{events_lanes, hidden_crossings, Coef, SliderRhs, EV_COMPS, NE};
 use super::state::{finish, refill, sync_from_side, sync_to_side, Input, Lanes, Side, Watch};
 use crate::ensemble::{Task, TrajectoryResult};
 use crate::model::{event, idx, ContactMode, Slider, State};
@@ -125,13 +125,11 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
         let y = &ln.y;
         let k1 = &ln.f;
         // The error measure: the squared RMS norm for DP5 (`err <= 1` iff `err^2 <= 1`, no square
-        // root needed), Hairer's combined 5th/3rd-order norm for DOP853.
-        // The error measure: the squared RMS norm for DP5 (`err <= 1` iff `err^2 <= 1`, no square
         // root needed), Hairer's combined 5th/3rd-order norm for DOP853. The law force at the new
         // state is left in `fzl` by the last right-hand side.
         let (err, fin) = if M8 {
             dop853_step(
-                &mut |ys: &V6, out: &mut V6| rhs::<UNI, COUL>(c, cm, ys, out, &mut fzl),
+                &mut SliderRhs::<UNI, COUL> { c, contact: cm, fzl: &mut fzl },
                 y,
                 k1,
                 &hh,
@@ -142,7 +140,7 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
             )
         } else {
             dopri5_step(
-                &mut |ys: &V6, out: &mut V6| rhs::<UNI, COUL>(c, cm, ys, out, &mut fzl),
+                &mut SliderRhs::<UNI, COUL> { c, contact: cm, fzl: &mut fzl },
                 y,
                 k1,
                 &hh,
@@ -169,7 +167,7 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
                 for l in 0..W {
                     ln.n_extra[l] += 3 * ok[l] as u64;
                 }
-                let mut f = |ys: &V6, out: &mut V6| rhs::<UNI, COUL>(c, cm, ys, out, &mut fzl_scratch);
+                let mut f = SliderRhs::<UNI, COUL> { c, contact: cm, fzl: &mut fzl_scratch };
                 dop853_dense(&mut f, &EV_COMPS, y, &yn, k1, &hh, &kk)
             } else {
                 dopri5_dense(&EV_COMPS, y, &yn, [k1, &k[1], &k[2], &k[3], &k[4], &k[5]], &hh)

@@ -4,7 +4,7 @@
 //! at once.
 
 use crate::model::{event, idx, Slider};
-use crate::ode::lanes::{cross, exp_lanes, splat, LaneDense, L, V6, W};
+use crate::ode::lanes::{cross, exp_lanes, splat, LaneDense, LaneRhs, L, V6, W};
 
 /// Event functions of the slider (gap, law normal force, sliding velocity, escape).
 pub(super) const NE: usize = 4;
@@ -154,6 +154,20 @@ pub(super) fn rhs<const UNI: bool, const COUL: bool>(c: &Coef, contact: &[bool; 
         out[3][l] = fx[l] * c.inv_m[l] - c.dx[l] * xd - c.wx2[l] * x;
         out[4][l] = phd;
         out[5][l] = c.tg[l] * fx[l] - c.dt[l] * phd - c.wt2[l] * ph;
+    }
+}
+
+/// [`rhs`] as the lane kit's [`LaneRhs`]: the law force of the last evaluation is left in `fzl`.
+pub(super) struct SliderRhs<'a, const UNI: bool, const COUL: bool> {
+    pub(super) c: &'a Coef,
+    pub(super) contact: &'a [bool; W],
+    pub(super) fzl: &'a mut L,
+}
+
+impl<const UNI: bool, const COUL: bool> LaneRhs for SliderRhs<'_, UNI, COUL> {
+    #[inline(always)]
+    fn eval(&mut self, y: &V6, out: &mut V6) {
+        rhs::<UNI, COUL>(self.c, self.contact, y, out, self.fzl);
     }
 }
 
