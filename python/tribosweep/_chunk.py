@@ -472,9 +472,9 @@ def _transient(model_values, contact, friction_law, point_params, sel, options, 
         {k: float(v) for k, v in model_values.items()}, contact, friction_law, names, values,
         np.ascontiguousarray(y0, dtype=np.float64),
         float(options.get("t_max", T_MAX)), options.get("integrator", "dop853"), float(options.get("rtol", 1e-8)),
-        None if atol is None else np.asarray(atol, dtype=np.float64), None, options.get("threads"), "steady",
-        float(options.get("periodic_tol", 1e-5)), options.get("decay_amplitude"), 512, None, None,
-        None if decay is None else np.ascontiguousarray(decay, dtype=np.float64),
+        atol=None if atol is None else np.asarray(atol, dtype=np.float64), threads=options.get("threads"), kind="steady",
+        periodic_tol=float(options.get("periodic_tol", 1e-5)), decay_amplitude=options.get("decay_amplitude"), n_fourier=512,
+        decay_amplitudes=None if decay is None else np.ascontiguousarray(decay, dtype=np.float64),
     )  # fmt: skip
 
 
@@ -495,7 +495,7 @@ def _dynamics(model_values, contact, friction_law, point_params, method, options
 
     # Stage 1: linear stability of steady sliding (every point).
     t0 = time.perf_counter()
-    lin = _core.linear_stability(base, contact, friction_law, names, values, threads)
+    lin = _core.linear_stability(base, contact, friction_law, names, values, threads=threads)
     out["growth_rate"] = lin["max_growth_rate"]
     out["linear_frequency"] = lin["least_stable_frequency"]
     out["normal_mode_frequency"] = lin["normal_mode_frequency_hz"]
@@ -521,8 +521,8 @@ def _dynamics(model_values, contact, friction_law, point_params, method, options
         phys = np.full(n, -1)
         if sel.size:
             t1 = time.perf_counter()
-            df = _core.describing_function(base, "bilateral", friction_law, names, values[sel], "consistent",
-                                           150.0, 3000.0, int(options.get("tidf_grid", 1000)), threads)
+            df = _core.describing_function(base, "bilateral", friction_law, names, values[sel], variant="consistent",
+                                           w_min=150.0, w_max=3000.0, n_base=int(options.get("tidf_grid", 1000)), threads=threads)
             wall[sel] += (time.perf_counter() - t1) / sel.size
             out["tidf_roots"][sel] = df["n_roots"]
             iters = np.where(df["newton_iterations"] > 0, df["newton_iterations"], 0).sum(axis=1)
