@@ -40,11 +40,13 @@ test-python: install-test
 # Everything the tests need, then every test (Rust numerics, then the Python package), release-built.
 test: test-rust test-python
 
-lint: $(BIN)/python
+# stubtest checks python/tribosweep/_core.pyi against the built extension, so lint installs it first.
+lint: install-test
 	$(BIN)/python -m pip install -q ruff
 	cargo fmt --all -- --check
 	cargo clippy --release --workspace --all-targets -- -D warnings
 	$(BIN)/python -m ruff check python tests benches
+	$(BIN)/python -m mypy.stubtest tribosweep._core
 
 bench: install-test
 	$(BIN)/python benches/bench_trajectories.py --n 1000

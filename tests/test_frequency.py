@@ -43,7 +43,7 @@ def test_no_hopf_load_outside_the_band(mu, stable):
     m = ts.SliderModel(mu=mu)
     assert ts.hopf_load(m, (1.0, 250.0)) == []
     loads = np.geomspace(1, 250, 25)
-    out = _core.linear_stability(m.values(), "bilateral", "constant", ["normal_load"], loads[:, None], 2)
+    out = _core.linear_stability(m.values(), "bilateral", "constant", ["normal_load"], loads[:, None], threads=2)
     assert np.all(out["stable"] == stable)
 
 

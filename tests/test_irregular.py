@@ -124,7 +124,7 @@ def test_a_stribeck_point_is_chaotic():
     ends = []
     for z0, t_end in ((1e-6, 20.0), (2e-6, 25.0), (-3e-6, 30.0)):
         r = _core.ensemble(m.values(), m.contact, m.friction_law, names, vals, np.array([[z0, 0, 0, 0, 0, 0]]),
-                           t_end, "dop853", 1e-8, None, None, None, "final")  # fmt: skip
+                           t_end, "dop853", 1e-8, kind="final")  # fmt: skip
         assert r["status"][0] == ts.STATUS["success"]
         ends.append(r["y_end"][0])
     pp3 = {k: np.repeat(v, 3) for k, v in pp.items()}

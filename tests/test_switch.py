@@ -59,7 +59,7 @@ def test_switch_law_matches_scipy_event_reference(cfg, method):
         assert kinds.count(("stick", "transition")) >= 3
 
     rtol = 1e-12 if method == "dop853" else 1e-10
-    out = _core.simulate(m.values(), m.contact, m.friction_law, y0, t_end, method, rtol, None, t_eval)
+    out = _core.simulate(m.values(), m.contact, m.friction_law, y0, t_end, method, rtol, t_eval=t_eval)
     assert out["status"][0] == 0
     y = np.asarray(out["y"])
     amplitude = np.abs(y_ref).max(axis=0)
@@ -73,7 +73,7 @@ def _cycle(m: SliderModel) -> tuple[np.ndarray, float]:
     y0 = np.zeros(6)
     y0[3] = m.sliding_speed
     t_eval = np.linspace(0.8, 1.0, 20001)
-    out = _core.simulate(m.values(), m.contact, m.friction_law, y0, 1.0, "dop853", 1e-11, None, t_eval)
+    out = _core.simulate(m.values(), m.contact, m.friction_law, y0, 1.0, "dop853", 1e-11, t_eval=t_eval)
     y = np.asarray(out["y"])
     v_r = m.sliding_speed - (y[:, 3] + m.torsion_sign * m.moment_arm * y[:, 5])
     slip = np.abs(v_r) > 2.0 * m.stick_band
@@ -96,7 +96,7 @@ def _fd_monodromy(m: SliderModel, y0: np.ndarray, period: float, rel: float = 1e
         for sgn in (1.0, -1.0):
             y = np.array(y0, dtype=float)
             y[j] += sgn * h
-            out = _core.simulate(m.values(), m.contact, m.friction_law, y, period, "dop853", 1e-13, None, None)
+            out = _core.simulate(m.values(), m.contact, m.friction_law, y, period, "dop853", 1e-13)
             assert out["status"][0] == 0
             ends.append(np.asarray(out["y_end"]).ravel())
         phi[:, j] = (ends[0] - ends[1]) / (2.0 * h)

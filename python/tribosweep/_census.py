@@ -349,8 +349,8 @@ def run(
     res = _core.ensemble(
         {k: float(v) for k, v in model_values.items()}, contact, friction_law, names,
         np.repeat(values, samples, axis=0), np.ascontiguousarray(y0.reshape(m * samples, 6)), float(t_max),
-        integrator, float(rtol), None if atol is None else np.asarray(atol, dtype=np.float64), None, threads,
-        "steady", float(periodic_tol), None, 512, None, None, np.repeat(decay, samples),
+        integrator, float(rtol), atol=None if atol is None else np.asarray(atol, dtype=np.float64), threads=threads,
+        kind="steady", periodic_tol=float(periodic_tol), n_fourier=512, decay_amplitudes=np.repeat(decay, samples),
     )  # fmt: skip
     outcome = np.asarray(res["outcome"]).reshape(m, samples)
     status = np.asarray(res["status"]).reshape(m, samples)
@@ -419,8 +419,8 @@ def saddle_amplitude(base: Mapping[str, float], friction_law: str, names, values
     a1 = np.full(values.shape[0], np.nan)
     sel = np.flatnonzero(stable)
     if sel.size:
-        df = _core.describing_function(dict(base), "bilateral", friction_law, list(names), values[sel], "consistent",
-                                       150.0, 3000.0, grid, threads)  # fmt: skip
+        df = _core.describing_function(dict(base), "bilateral", friction_law, list(names), values[sel],
+                                       variant="consistent", w_min=150.0, w_max=3000.0, n_base=grid, threads=threads)  # fmt: skip
         for j, i in enumerate(sel):
             k = np.flatnonzero(df["physical"][j] == 1)
             if df["status"][j] == STATUS["success"] and k.size:
@@ -502,7 +502,7 @@ def census(
     base = model.values()
     names = ["normal_load"]
     values = np.array([[base["normal_load"]]])
-    lin = _core.linear_stability(base, model.contact, model.friction_law, names, values, threads)
+    lin = _core.linear_stability(base, model.contact, model.friction_law, names, values, threads=threads)
     stable = np.asarray(lin["stable"], dtype=bool)
     a1 = saddle_amplitude(base, model.friction_law, names, values, stable, threads)
     res, per = run(

@@ -5,12 +5,40 @@ from typing import Any, Literal
 import numpy as np
 import numpy.typing as npt
 
+__all__ = [
+    "__version__",
+    "TribosweepError",
+    "InvalidArgumentError",
+    "param_names",
+    "seed_params",
+    "status_names",
+    "method_names",
+    "steady_outcome_names",
+    "instability_names",
+    "validate_params",
+    "static_point",
+    "simulate",
+    "ensemble",
+    "linear_stability",
+    "hopf_loads",
+    "describing_function",
+    "tidf_solve",
+    "periodic_orbit",
+    "periodic_orbits",
+]
+
 __version__: str
 
-#: Friction laws the core parses (anything else raises ValueError naming the argument and the valid names).
-FrictionLawName = Literal["constant", "coulomb", "switch"]
+class TribosweepError(Exception):
+    """Base class of every error tribosweep raises on purpose."""
+
+class InvalidArgumentError(TribosweepError, ValueError):
+    """An argument is out of its valid range or of the wrong shape; the message names it, its value and the valid range."""
+
+#: Friction laws the core parses (anything else raises InvalidArgumentError naming the argument and the valid names).
+_FrictionLawName = Literal["constant", "coulomb", "switch"]
 #: Contact models the core parses.
-ContactName = Literal["bilateral", "unilateral"]
+_ContactName = Literal["bilateral", "unilateral"]
 
 def param_names() -> list[str]: ...
 def seed_params() -> dict[str, float]: ...
@@ -18,16 +46,17 @@ def status_names() -> list[str]: ...
 def method_names() -> list[str]: ...
 def steady_outcome_names() -> list[str]: ...
 def instability_names() -> list[str]: ...
-def validate_params(values: dict[str, float], contact: str, friction_law: FrictionLawName) -> None: ...
+def validate_params(values: dict[str, float], contact: str, friction_law: _FrictionLawName) -> None: ...
 def static_point(values: dict[str, float]) -> tuple[float, float]: ...
 def simulate(
     values: dict[str, float],
     contact: str,
-    friction_law: FrictionLawName,
+    friction_law: _FrictionLawName,
     y0: npt.NDArray[np.float64],
     t_end: float,
     method: str,
     rtol: float,
+    *,
     atol: npt.NDArray[np.float64] | None = None,
     t_eval: npt.NDArray[np.float64] | None = None,
     max_steps: int | None = None,
@@ -36,13 +65,14 @@ def simulate(
 def ensemble(
     base: dict[str, float],
     contact: str,
-    friction_law: FrictionLawName,
+    friction_law: _FrictionLawName,
     names: list[str],
     values: npt.NDArray[np.float64],
     y0: npt.NDArray[np.float64],
     t_end: float,
     method: str,
     rtol: float,
+    *,
     atol: npt.NDArray[np.float64] | None = None,
     t_eval: npt.NDArray[np.float64] | None = None,
     threads: int | None = None,
@@ -57,20 +87,22 @@ def ensemble(
 def linear_stability(
     base: dict[str, float],
     contact: str,
-    friction_law: FrictionLawName,
+    friction_law: _FrictionLawName,
     names: list[str],
     values: npt.NDArray[np.float64],
+    *,
     threads: int | None = None,
 ) -> dict[str, Any]: ...
 def hopf_loads(
-    values: dict[str, float], friction_law: FrictionLawName, load_min: float, load_max: float, n_grid: int
+    values: dict[str, float], friction_law: _FrictionLawName, load_min: float, load_max: float, n_grid: int
 ) -> list[dict[str, Any]]: ...
 def describing_function(
     base: dict[str, float],
     contact: str,
-    friction_law: FrictionLawName,
+    friction_law: _FrictionLawName,
     names: list[str],
     values: npt.NDArray[np.float64],
+    *,
     variant: str = "consistent",
     w_min: float = 150.0,
     w_max: float = 3000.0,
@@ -80,7 +112,8 @@ def describing_function(
 def periodic_orbit(
     values: dict[str, float],
     contact: str,
-    friction_law: FrictionLawName,
+    friction_law: _FrictionLawName,
+    *,
     y0: npt.NDArray[np.float64] | None = None,
     period: float | None = None,
     root: npt.NDArray[np.float64] | None = None,
@@ -92,9 +125,10 @@ def periodic_orbit(
 def periodic_orbits(
     base: dict[str, float],
     contact: str,
-    friction_law: FrictionLawName,
+    friction_law: _FrictionLawName,
     names: list[str],
     values: npt.NDArray[np.float64],
+    *,
     roots: npt.NDArray[np.float64] | None = None,
     y0: npt.NDArray[np.float64] | None = None,
     periods: npt.NDArray[np.float64] | None = None,
@@ -106,8 +140,9 @@ def periodic_orbits(
 ) -> dict[str, Any]: ...
 def tidf_solve(
     values: dict[str, float],
-    friction_law: FrictionLawName,
+    friction_law: _FrictionLawName,
     guesses: npt.NDArray[np.float64],
+    *,
     variant: str = "consistent",
     threads: int | None = None,
 ) -> dict[str, Any]: ...

@@ -50,7 +50,7 @@ def linear_stability(model: SliderModel) -> xr.Dataset:
     """
     model = _model(model)
     names, values = _one(model)
-    out = _core.linear_stability(model.values(), model.contact, model.friction_law, names, values, 1)
+    out = _core.linear_stability(model.values(), model.contact, model.friction_law, names, values, threads=1)
     return xr.Dataset(
         {
             "eigenvalue_real": (("eigenvalue",), out["eigenvalues"][0].real, {"units": "s-1", "long_name": "real part of the eigenvalue (growth rate)"}),
@@ -172,8 +172,8 @@ def describing_function(
     if not (isinstance(n_grid, int) and n_grid >= 10):
         raise ValueError(f"n_grid = {n_grid!r} is out of range: must be an integer >= 10")
     names, values = _one(model)
-    out = _core.describing_function(model.values(), model.contact, model.friction_law, names, values, variant,
-                                    w_min, w_max, n_grid, 1)
+    out = _core.describing_function(model.values(), model.contact, model.friction_law, names, values, variant=variant,
+                                    w_min=w_min, w_max=w_max, n_base=n_grid, threads=1)
     n = int(out["n_roots"][0])
     data = {k: (("root",), out[k][0, :n], {"units": u, "long_name": t}) for k, (u, t) in _ROOT_VARS.items()}
     data["physical"] = (("root",), out["physical"][0, :n], {"long_name": "root near the torsion mode with |A0| < |z_st|", "flag_values": np.array([0, 1], dtype=np.int8), "flag_meanings": "flagged physical"})

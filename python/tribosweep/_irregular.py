@@ -211,7 +211,7 @@ def slider_propagator(
         rows = np.concatenate([rows, rows])
         res = _core.ensemble(base, contact, friction_law, names, np.ascontiguousarray(values[rows]),
                              np.ascontiguousarray(states, dtype=np.float64), float(tau), integrator, float(rtol),
-                             None, None, threads, "final")  # fmt: skip
+                             threads=threads, kind="final")  # fmt: skip
         status = np.asarray(res["status"])
         ok = status == STATUS["success"]
         if record is not None:
@@ -282,7 +282,7 @@ def measure(
     t_eval = np.arange(n_samples) * s.sample_dt
     win = _core.ensemble({k: float(v) for k, v in base.items()}, contact, friction_law, names, values,
                          np.ascontiguousarray(y_start, dtype=np.float64), float(t_eval[-1]), integrator, float(rtol),
-                         None, np.ascontiguousarray(t_eval), threads, "sampled")  # fmt: skip
+                         t_eval=np.ascontiguousarray(t_eval), threads=threads, kind="sampled")  # fmt: skip
     out["n_rhs"] += np.asarray(win["n_rhs"], dtype=np.int64)
     w_status = np.asarray(win["status"])
     z = np.asarray(win["y"])[:, :, 0]

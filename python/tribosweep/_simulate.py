@@ -134,8 +134,8 @@ def simulate(
     y0 = _checks.state("y0", DEFAULT_Y0 if y0 is None else y0)
     max_steps = _checks.budget("max_steps", max_steps)
     max_events = _checks.budget("max_events", max_events)
-    out = _core.simulate(model.values(), model.contact, model.friction_law, y0, t_end, method, rtol, atol, t_eval,
-                         max_steps, max_events)
+    out = _core.simulate(model.values(), model.contact, model.friction_law, y0, t_end, method, rtol, atol=atol,
+                         t_eval=t_eval, max_steps=max_steps, max_events=max_events)
     data = {
         name: (("time",), out["y"][:, i], {"units": units, "long_name": text})
         for i, (name, units, text) in enumerate(STATE_VARS)
@@ -219,7 +219,8 @@ def ensemble(
         raise ValueError("t_eval cannot be combined with steady=True: a steady run returns a summary")
     out = _core.ensemble(
         model.values(), model.contact, model.friction_law, names, values, np.atleast_2d(y0), t_end, method, rtol,
-        atol, t_eval, threads, kind, periodic_tol, decay_amplitude, 512, max_steps, max_events,
+        atol=atol, t_eval=t_eval, threads=threads, kind=kind, periodic_tol=periodic_tol,
+        decay_amplitude=decay_amplitude, n_fourier=512, max_steps=max_steps, max_events=max_events,
     )
     dims = ("trajectory",)
     coords = {"trajectory": ("trajectory", np.arange(n))}

@@ -7,11 +7,14 @@
 //!   their valid ranges, the static point, the right-hand side for bilateral and unilateral contact,
 //!   constant or regularised Coulomb/Stribeck friction, its analytic Jacobian and contact events.
 //! - [`ode`]: adaptive integrators on stack states (Dormand-Prince 5(4), DOP853, Rodas4) with dense
-//!   output and event location, so that contact switches are integrated through, never stepped across.
+//!   output and event location, so that contact switches are integrated through, never stepped
+//!   across; and the kit of lane-batched (SIMD) integration. Generic: it knows nothing of the slider.
 //! - [`steady`]: run a trajectory to its steady state (decay to sliding, periodic cycle, escape) and
 //!   summarise it: frequency, harmonics of `z`, `phi`, `x`, minimum normal force, time off the disk.
-//! - [`ensemble`]: many trajectories in parallel (rayon), deterministic for any thread count, one
-//!   panic caught per point.
+//! - [`parallel`]: many independent computations on a thread pool (rayon), deterministic for any
+//!   thread count, one panic caught per point.
+//! - [`ensemble`]: many slider trajectories at once: the routing policy between the lane-batched
+//!   paths (`ensemble::batch`, `ensemble::lanes`) and the scalar driver, one entry point.
 //! - [`linear`], [`tidf`], [`shooting`]: linear stability of steady sliding, the triple-input
 //!   describing function with all its roots, periodic orbits with Floquet multipliers.
 //! - [`status`]: the per-point status codes, defined in one place.
@@ -20,6 +23,7 @@ pub mod ensemble;
 pub mod linear;
 pub mod model;
 pub mod ode;
+pub mod parallel;
 pub mod shooting;
 pub mod status;
 pub mod steady;

@@ -5,6 +5,8 @@
 //! sweep goes on. The integer values are part of the output format (netCDF
 //! `flag_values`), so they never change meaning; new codes get new numbers.
 
+use crate::ode::Outcome;
+
 /// Outcome of one numerical task (a trajectory, a Newton solve, a shooting solve).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[repr(u8)]
@@ -80,6 +82,22 @@ impl Status {
     /// True only for [`Status::Success`].
     pub fn is_ok(self) -> bool {
         self == Status::Success
+    }
+}
+
+/// The per-point meaning of an integrator's [`Outcome`]. Defined here rather than in `ode`, so that the
+/// generic integrators know nothing of the sweep's status codes.
+impl Outcome {
+    /// The per-point status this outcome maps to (a stop by event or observer is a success of the
+    /// integrator; the caller decides what it means).
+    pub fn status(self) -> Status {
+        match self {
+            Outcome::Finished | Outcome::StoppedByEvent | Outcome::StoppedByObserver => Status::Success,
+            Outcome::MaxSteps => Status::MaxSteps,
+            Outcome::StepTooSmall => Status::StepTooSmall,
+            Outcome::NonFinite => Status::NonFinite,
+            Outcome::EventChatter => Status::EventChatter,
+        }
     }
 }
 

@@ -126,7 +126,7 @@ def mode_start(full: Mapping[str, np.ndarray], friction_law: str, sel: np.ndarra
 def linear(p: Points) -> None:
     """Stage 1: linear stability of steady sliding at every point."""
     t0 = time.perf_counter()
-    lin = _core.linear_stability(p.base, p.contact, p.friction_law, p.names, p.values, p.threads)
+    lin = _core.linear_stability(p.base, p.contact, p.friction_law, p.names, p.values, threads=p.threads)
     out = p.out
     out["growth_rate"] = lin["max_growth_rate"]
     out["linear_frequency"] = lin["least_stable_frequency"]
@@ -170,8 +170,8 @@ def describing_function(p: Points, *, unstable_too: bool, predict_cycles: bool, 
         return Roots(sel, df, root, shoot)
     t1 = time.perf_counter()
     sh = p.settings.shooting
-    df = _core.describing_function(p.base, "bilateral", p.friction_law, p.names, p.values[sel], "consistent",
-                                   150.0, 3000.0, int(sh.tidf_grid), p.threads)  # fmt: skip
+    df = _core.describing_function(p.base, "bilateral", p.friction_law, p.names, p.values[sel], variant="consistent",
+                                   w_min=150.0, w_max=3000.0, n_base=int(sh.tidf_grid), threads=p.threads)  # fmt: skip
     p.charge(sel, t1)
     out["tidf_roots"][sel] = df["n_roots"]
     iters = np.where(df["newton_iterations"] > 0, df["newton_iterations"], 0).sum(axis=1)
@@ -305,9 +305,9 @@ def run_steady(p: Points, sel: np.ndarray, y0: np.ndarray, decay: np.ndarray | N
     return _core.ensemble(
         p.base, p.contact, p.friction_law, p.names, np.ascontiguousarray(p.values[sel]),
         np.ascontiguousarray(y0, dtype=np.float64), float(st.t_max), it.integrator, float(it.rtol),
-        None if it.atol is None else np.asarray(it.atol, dtype=np.float64), None, p.threads, "steady",
-        float(st.periodic_tol), st.decay_amplitude, 512, None, None,
-        None if decay is None else np.ascontiguousarray(decay, dtype=np.float64),
+        atol=None if it.atol is None else np.asarray(it.atol, dtype=np.float64), threads=p.threads, kind="steady",
+        periodic_tol=float(st.periodic_tol), decay_amplitude=st.decay_amplitude, n_fourier=512,
+        decay_amplitudes=None if decay is None else np.ascontiguousarray(decay, dtype=np.float64),
     )  # fmt: skip
 
 

@@ -15,7 +15,7 @@
 #![allow(clippy::excessive_precision, clippy::unreadable_literal)]
 
 use super::controller::error_norm;
-use super::driver::{combine, weighted, StepDense, Stepper};
+use super::stepper::{combine, weighted, StepDense, Stepper};
 use super::{Dense, OdeSystem, Stats};
 use nalgebra::SVector;
 use std::cell::{Cell, OnceCell};
@@ -404,38 +404,5 @@ impl<const N: usize, S: OdeSystem<N>> Stepper<N, S> for Dop853<N> {
         y1: &'a SVector<f64, N>,
     ) -> Dop853Dense<'a, N, S> {
         Dop853Dense::from_stages(sys, mode, &self.k, y0, y1, t, h)
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::Dop853;
-    use crate::ode::driver::test_systems::*;
-    use crate::ode::Method;
-    use nalgebra::SVector;
-
-    #[test]
-    fn order_eight_on_lotka_volterra() {
-        // DOP853 reaches rounding fast: few steps over a long interval (t = 20, about 3 cycles),
-        // step counts in ratios of sqrt(2). Measured: errors 5e-7 .. 4e-13, order about 8.2.
-        let p = observed_order(
-            &LotkaVolterra,
-            Method::Dop853,
-            SVector::<f64, 2>::new(1.0, 3.0),
-            20.0,
-            &[40, 56, 80, 113, 160, 226],
-        );
-        assert!((p - 8.0).abs() < 0.3, "observed order {p}");
-    }
-
-    #[test]
-    fn dense_output_is_seventh_order() {
-        // Local interpolation error at mid-step ~ h^8.
-        let y0 = SVector::<f64, 2>::new(1.0, 3.0);
-        let hs = [0.4, 0.2, 0.1];
-        let errs: Vec<f64> = hs.iter().map(|&h| midpoint_error::<Dop853<2>, _, 2>(&LotkaVolterra, y0, h)).collect();
-        let p = (errs[0] / errs[2]).log2() / 2.0;
-        println!("Dop853 dense: {} -> {p:.2}", sci(&errs));
-        assert!(p > 7.5 && p < 9.5, "dense order {p} ({errs:?})");
     }
 }

@@ -7,7 +7,7 @@
 //! Hairer, Nørsett & Wanner, *Solving ODEs I*, §II.5–II.6.
 
 use super::controller::error_norm;
-use super::driver::{combine, weighted, StepDense, Stepper};
+use super::stepper::{combine, weighted, StepDense, Stepper};
 use super::{Dense, OdeSystem, Stats};
 use nalgebra::SVector;
 
@@ -164,46 +164,5 @@ impl<const N: usize, S: OdeSystem<N>> Stepper<N, S> for Dopri5<N> {
         y1: &'a SVector<f64, N>,
     ) -> Dopri5Dense<'a, N> {
         Dopri5Dense { k: &self.k, y0, y1, t0: t, h }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::Dopri5;
-    use crate::ode::driver::test_systems::*;
-    use crate::ode::Method;
-    use nalgebra::SVector;
-
-    #[test]
-    fn order_five_on_forced_duffing() {
-        // Measured: errors 2.1e-8 .. 6.4e-13 for n = 200 .. 1600, order 4.98.
-        let p =
-            observed_order(&DUFFING, Method::Dopri5, SVector::<f64, 2>::new(1.0, 0.0), 10.0, &[200, 400, 800, 1600]);
-        assert!((p - 5.0).abs() < 0.3, "observed order {p}");
-    }
-
-    #[test]
-    fn order_five_on_two_body_problem() {
-        // Kepler, e = 0.5, one orbit. Measured: errors 6.1e-7 .. 1.3e-11, order 5.18 (approached
-        // from above; at n = 3200 the error, 3e-13, is near the reference's rounding).
-        let p = observed_order(
-            &Kepler,
-            Method::Dopri5,
-            Kepler::y0(0.5),
-            2.0 * std::f64::consts::PI,
-            &[200, 400, 800, 1600],
-        );
-        assert!((p - 5.0).abs() < 0.3, "observed order {p}");
-    }
-
-    #[test]
-    fn dense_output_is_fourth_order() {
-        // Local interpolation error at mid-step ~ h^5.
-        let y0 = SVector::<f64, 2>::new(1.0, 3.0);
-        let hs = [0.1, 0.05, 0.025];
-        let errs: Vec<f64> = hs.iter().map(|&h| midpoint_error::<Dopri5<2>, _, 2>(&LotkaVolterra, y0, h)).collect();
-        let p = (errs[0] / errs[2]).log2() / 2.0;
-        println!("Dopri5 dense: {} -> {p:.2}", sci(&errs));
-        assert!(p > 4.5 && p < 6.5, "dense order {p} ({errs:?})");
     }
 }

@@ -11,14 +11,32 @@
 //! - An [`Observer`] sees every accepted step (with its dense output) and every event, and may stop
 //!   the run. Sampling at output times, Poincare sections and running extrema live in observers.
 //! - The run ends with an [`Outcome`] and [`Stats`]; a failure is data, never a panic.
+//!
+//! Generic: nothing here knows the slider (the layering test `tests/architecture.rs` checks that
+//! `ode` refers to no other module of the crate). The files, bottom up:
+//! - `mod.rs`: the contract above; `controller.rs`: error norm, PI controller, starting step;
+//! - `stepper.rs`: the crate-private `Stepper` trait each method implements, and stage sums;
+//! - `dopri5.rs`, `dop853.rs`, `rodas.rs`: one method each (tableau, stepper, dense output);
+//! - `events.rs`: event location and processing on an accepted step (shared with the slider's
+//!   lane-batched paths in `crate::ensemble`);
+//! - `driver.rs`: [`integrate`], the adaptive loop, and fixed-step integration;
+//! - `lanes.rs`: the kit for lane-batched (SIMD) integration: lane types, one DOPRI5 or DOP853
+//!   attempt on eight trajectories, their interpolants, the PI controller in log form;
+//! - tests: `test_systems.rs` (problems with known solutions), `method_tests.rs` (orders of
+//!   convergence), `driver/tests.rs`, `driver/hidden_crossing_tests.rs`.
 
-pub mod batch;
 pub mod controller;
 pub mod dop853;
 pub mod dopri5;
 pub mod driver;
-pub mod lanes;
+pub(crate) mod events;
+pub(crate) mod lanes;
+#[cfg(test)]
+mod method_tests;
 pub mod rodas;
+pub(crate) mod stepper;
+#[cfg(test)]
+pub(crate) mod test_systems;
 
 use nalgebra::{SMatrix, SVector};
 
@@ -218,21 +236,6 @@ pub enum Outcome {
     NonFinite,
     /// More than `max_events` events.
     EventChatter,
-}
-
-impl Outcome {
-    /// The per-point status this outcome maps to (a stop by event or observer is a success of the
-    /// integrator; the caller decides what it means).
-    pub fn status(self) -> crate::status::Status {
-        use crate::status::Status;
-        match self {
-            Outcome::Finished | Outcome::StoppedByEvent | Outcome::StoppedByObserver => Status::Success,
-            Outcome::MaxSteps => Status::MaxSteps,
-            Outcome::StepTooSmall => Status::StepTooSmall,
-            Outcome::NonFinite => Status::NonFinite,
-            Outcome::EventChatter => Status::EventChatter,
-        }
-    }
 }
 
 /// End state of a run.

@@ -17,7 +17,7 @@
 //! `rodas.f`), transcribed as published numbers; order verified empirically in the tests.
 
 use super::controller::error_norm;
-use super::driver::{StepDense, Stepper};
+use super::stepper::{StepDense, Stepper};
 use super::{Dense, OdeSystem, Stats};
 use nalgebra::{SMatrix, SVector};
 
@@ -270,30 +270,8 @@ impl<const N: usize, S: OdeSystem<N>> Stepper<N, S> for Rodas4<N> {
 
 #[cfg(test)]
 mod tests {
-    use super::{Lu, Rodas4};
-    use crate::ode::driver::test_systems::*;
-    use crate::ode::Method;
+    use super::Lu;
     use nalgebra::{SMatrix, SVector};
-
-    #[test]
-    fn order_four_on_forced_duffing() {
-        // Non-autonomous (exercises the df/dt term) with an analytic Jacobian.
-        // Measured: errors 1.5e-8 .. 3.4e-12 for n = 200 .. 1600, order 4.03.
-        let p =
-            observed_order(&DUFFING, Method::Rodas4, SVector::<f64, 2>::new(1.0, 0.0), 10.0, &[200, 400, 800, 1600]);
-        assert!((p - 4.0).abs() < 0.3, "observed order {p}");
-    }
-
-    #[test]
-    fn dense_output_is_third_order() {
-        // Local interpolation error at mid-step ~ h^4.
-        let y0 = SVector::<f64, 2>::new(1.0, 3.0);
-        let hs = [0.1, 0.05, 0.025];
-        let errs: Vec<f64> = hs.iter().map(|&h| midpoint_error::<Rodas4<2>, _, 2>(&LotkaVolterra, y0, h)).collect();
-        let p = (errs[0] / errs[2]).log2() / 2.0;
-        println!("Rodas4 dense: {} -> {p:.2}", sci(&errs));
-        assert!(p > 3.5 && p < 5.5, "dense order {p} ({errs:?})");
-    }
 
     #[test]
     fn lu_solves_with_pivoting() {

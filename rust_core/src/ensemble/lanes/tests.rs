@@ -1,15 +1,15 @@
 use super::*;
-use crate::model::Params;
-use crate::ode::Method;
+use crate::model::{ContactMode, Params};
+use crate::ode::{Control, Observer};
 use crate::status::Status;
-use crate::steady::{run, run_observed, run_sampled, run_to_steady, SteadyOutcome};
+use crate::steady::{run, run_observed, run_sampled, run_to_steady, SteadyOptions, SteadyOutcome};
 
 /// The lane path with DP5.
-fn lanes5(s: &[Slider], y0: &[State], t_end: f64, tol: &Tolerances, task: Task<'_>) -> Vec<LaneResult> {
+fn lanes5(s: &[Slider], y0: &[State], t_end: f64, tol: &Tolerances, task: Task<'_>) -> Vec<TrajectoryResult> {
     run_lanes(s, y0, t_end, Method::Dopri5, tol, task)
 }
 
-fn sorted(mut v: Vec<(usize, LaneResult)>) -> Vec<LaneResult> {
+fn sorted(mut v: Vec<(usize, TrajectoryResult)>) -> Vec<TrajectoryResult> {
     v.sort_unstable_by_key(|r| r.0);
     v.into_iter().map(|r| r.1).collect()
 }
@@ -53,7 +53,7 @@ fn scenes(n: usize) -> Vec<(&'static str, Vec<Slider>, Vec<State>, f64)> {
     ]
 }
 
-fn bits(r: &LaneResult) -> Vec<u64> {
+fn bits(r: &TrajectoryResult) -> Vec<u64> {
     let mut v: Vec<u64> = r.run.y.iter().map(|x| x.to_bits()).collect();
     v.push(r.run.t.to_bits());
     let e = r.run.extremes;
@@ -241,7 +241,7 @@ fn steady_outcomes_agree_with_the_scalar_path() {
     }
     let opts = SteadyOptions { t_max: 10.0, tol: tol(1e-8), ..SteadyOptions::default() };
     // One call per contact model (a call shares the model).
-    let mut r: Vec<Option<LaneResult>> = vec![None; s.len()];
+    let mut r: Vec<Option<TrajectoryResult>> = vec![None; s.len()];
     for k in 0..2 {
         let idx: Vec<usize> = (k..s.len()).step_by(2).collect();
         let sk: Vec<Slider> = idx.iter().map(|&i| s[i]).collect();
@@ -252,7 +252,7 @@ fn steady_outcomes_agree_with_the_scalar_path() {
             r[idx[j]] = Some(x);
         }
     }
-    let r: Vec<LaneResult> = r.into_iter().map(|x| x.unwrap()).collect();
+    let r: Vec<TrajectoryResult> = r.into_iter().map(|x| x.unwrap()).collect();
     let mut outcomes = Vec::new();
     for i in 0..s.len() {
         let m = r[i].summary.expect("steady");

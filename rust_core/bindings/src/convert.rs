@@ -1,0 +1,277 @@
+//! Conversions between Python arguments and the core's types, and the preamble every pyfunction
+//! shares ([`Call`]: validated parameters, the thread count, the GIL released around the numerics).
+//!
+//! Every check here raises `InvalidArgumentError` (a `ValueError`) through [`CoreError`], before any
+//! work, with a message that names the argument, its value and what is valid.
+
+use crate::errors::CoreError;
+use numpy::ndarray::{Array1, Array2, ArrayView2};
+use numpy::{IntoPyArray, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::collections::HashMap;
+use tribosweep_core::model::{ContactModel, FrictionLaw, Params, Slider, State};
+use tribosweep_core::ode::{Method, Stats};
+use tribosweep_core::parallel::par_map;
+use tribosweep_core::steady::{RunResult, Summary, Tolerances};
+use tribosweep_core::tidf::Variant;
+
+/// `contact` by name.
+pub(crate) fn contact_from(name: &str) -> Result<ContactModel, CoreError> {
+    match name {
+        "bilateral" => Ok(ContactModel::Bilateral),
+        "unilateral" => Ok(ContactModel::Unilateral),
+        _ => Err(CoreError(format!("contact = {name:?} is not valid: must be 'bilateral' or 'unilateral'"))),
+    }
+}
+
+/// `friction_law` by name.
+pub(crate) fn friction_from(name: &str) -> Result<FrictionLaw, CoreError> {
+    match name {
+        "constant" => Ok(FrictionLaw::Constant),
+        "coulomb" => Ok(FrictionLaw::Coulomb),
+        "switch" => Ok(FrictionLaw::Switch),
+        _ => Err(CoreError(format!("friction_law = {name:?} is not valid: must be 'constant', 'coulomb' or 'switch'"))),
+    }
+}
+
+/// The integrator `method` by name.
+pub(crate) fn method_from(name: &str) -> Result<Method, CoreError> {
+    Method::from_name(name).ok_or_else(|| {
+        let all: Vec<&str> = Method::ALL.iter().map(|m| m.name()).collect();
+        CoreError(format!("method = {name:?} is not valid: must be one of {}", all.join(", ")))
+    })
+}
+
+/// The describing-function `variant` by name.
+pub(crate) fn variant_from(name: &str) -> Result<Variant, CoreError> {
+    match name {
+        "consistent" => Ok(Variant::Consistent),
+        "dead_load" => Ok(Variant::DeadLoad),
+        _ => Err(CoreError(format!("variant = {name:?} is not valid: must be 'consistent' or 'dead_load'"))),
+    }
+}
+
+/// Validated parameters from a name -> value map plus the two categorical settings.
+pub(crate) fn params_from(
+    values: &HashMap<String, f64>,
+    contact: &str,
+    friction_law: &str,
+) -> Result<Params, CoreError> {
+    let mut p = Params::seed();
+    for (k, v) in values {
+        p.set(k, *v)?;
+    }
+    p.contact = contact_from(contact)?;
+    p.friction_law = friction_from(friction_law)?;
+    p.validate()?;
+    Ok(p)
+}
+
+/// Per-row parameter sets: the base map with the columns `names` of `values` (n, k) overriding.
+fn param_rows(
+    base: &HashMap<String, f64>,
+    contact: &str,
+    friction_law: &str,
+    names: &[String],
+    values: &ArrayView2<'_, f64>,
+) -> Result<Vec<Params>, CoreError> {
+    let p0 = params_from(base, contact, friction_law)?;
+    if values.ncols() != names.len() {
+        return Err(CoreError(format!(
+            "values has {} columns but {} parameter names were given",
+            values.ncols(),
+            names.len()
+        )));
+    }
+    let mut out = Vec::with_capacity(values.nrows());
+    for i in 0..values.nrows() {
+        let mut p = p0;
+        for (k, name) in names.iter().enumerate() {
+            p.set(name, values[(i, k)])?;
+        }
+        p.validate().map_err(|e| CoreError(format!("trajectory {i}: {e}")))?;
+        out.push(p);
+    }
+    Ok(out)
+}
+
+/// Start states: `y0` of shape (1, 6) for every row, or (n, 6) one per row.
+pub(crate) fn y0_rows(y0: &ArrayView2<'_, f64>, n: usize) -> Result<Vec<State>, CoreError> {
+    if y0.ncols() != 6 || (y0.nrows() != 1 && y0.nrows() != n) {
+        return Err(CoreError(format!(
+            "y0 has shape ({}, {}): must be (6,), (1, 6) or ({n}, 6)",
+            y0.nrows(),
+            y0.ncols()
+        )));
+    }
+    Ok((0..n)
+        .map(|i| {
+            let r = if y0.nrows() == 1 { 0 } else { i };
+            State::from_fn(|c, _| y0[(r, c)])
+        })
+        .collect())
+}
+
+/// Tolerances and limits of an integration; `atol` has one entry per state component.
+pub(crate) fn tolerances(
+    rtol: f64,
+    atol: Option<PyReadonlyArray1<'_, f64>>,
+    max_steps: Option<u64>,
+    max_events: Option<u64>,
+) -> Result<Tolerances, CoreError> {
+    let atol = match atol {
+        None => None,
+        Some(a) => {
+            let s = a.as_slice().map_err(|e| CoreError(format!("atol: {e}")))?;
+            let arr: [f64; 6] = s.try_into().map_err(|_| {
+                CoreError(format!("atol has {} entries: must have 6 (one per state component)", s.len()))
+            })?;
+            Some(arr)
+        }
+    };
+    Ok(Tolerances { rtol, atol, max_steps, max_events })
+}
+
+/// The preamble every pyfunction shares: the validated parameters of the call (one set, or one
+/// per row of a batch), the worker threads, and the GIL released around the numerics.
+pub(crate) struct Call<'py> {
+    py: Python<'py>,
+    params: Vec<Params>,
+    threads: Option<usize>,
+}
+
+impl<'py> Call<'py> {
+    /// One parameter set: `values` over the seed, with `contact` and `friction_law`.
+    pub(crate) fn one(
+        py: Python<'py>,
+        values: &HashMap<String, f64>,
+        contact: &str,
+        friction_law: &str,
+        threads: Option<usize>,
+    ) -> Result<Self, CoreError> {
+        Ok(Call { py, params: vec![params_from(values, contact, friction_law)?], threads })
+    }
+
+    /// One parameter set per row: `base` with the columns `names` of `values` (n, k) overriding.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn rows(
+        py: Python<'py>,
+        base: &HashMap<String, f64>,
+        contact: &str,
+        friction_law: &str,
+        names: &[String],
+        values: &PyReadonlyArray2<'py, f64>,
+        threads: Option<usize>,
+    ) -> Result<Self, CoreError> {
+        Ok(Call { py, params: param_rows(base, contact, friction_law, names, &values.as_array())?, threads })
+    }
+
+    /// Number of parameter sets.
+    pub(crate) fn len(&self) -> usize {
+        self.params.len()
+    }
+
+    /// The first (for [`Call::one`]: the only) parameter set.
+    pub(crate) fn params(&self) -> Params {
+        self.params[0]
+    }
+
+    /// The slider of the first (the only) parameter set.
+    pub(crate) fn slider(&self) -> Result<Slider, CoreError> {
+        Ok(Slider::new(self.params())?)
+    }
+
+    /// The slider of every parameter set.
+    pub(crate) fn sliders(&self) -> Result<Vec<Slider>, CoreError> {
+        self.params.iter().map(|p| Slider::new(*p).map_err(CoreError::from)).collect()
+    }
+
+    /// `f` with the GIL released.
+    pub(crate) fn detach<R: Send>(&self, f: impl FnOnce() -> R + Send) -> R {
+        self.py.detach(f)
+    }
+
+    /// `f` of every item on the core's thread pool, in item order, with the GIL released; a panic
+    /// in `f` becomes `on_panic(message)` for its item.
+    pub(crate) fn map<T: Sync, R: Send>(
+        &self,
+        items: &[T],
+        f: impl Fn(&T) -> R + Sync + Send,
+        on_panic: impl Fn(String) -> R + Sync + Send,
+    ) -> Vec<R> {
+        let threads = self.threads;
+        self.py.detach(move || par_map(items, threads, f, on_panic))
+    }
+}
+
+/// Work counters as columns `n_rhs`, `n_jac`, `n_lu`, `n_accept`, `n_reject`, `n_events`.
+pub(crate) fn stats_into(d: &Bound<'_, PyDict>, stats: &[Stats]) -> PyResult<()> {
+    let py = d.py();
+    let col = |f: fn(&Stats) -> u64| Array1::from_iter(stats.iter().map(f)).into_pyarray(py);
+    d.set_item("n_rhs", col(|s| s.n_rhs))?;
+    d.set_item("n_jac", col(|s| s.n_jac))?;
+    d.set_item("n_lu", col(|s| s.n_lu))?;
+    d.set_item("n_accept", col(|s| s.n_accept))?;
+    d.set_item("n_reject", col(|s| s.n_reject))?;
+    d.set_item("n_events", col(|s| s.n_events))?;
+    Ok(())
+}
+
+/// Plain runs as columns: status, reason, time and state reached, extremes, work counters.
+pub(crate) fn runs_into(d: &Bound<'_, PyDict>, runs: &[RunResult], reasons: &[String]) -> PyResult<()> {
+    let py = d.py();
+    let n = runs.len();
+    let f = |g: fn(&RunResult) -> f64| Array1::from_iter(runs.iter().map(g)).into_pyarray(py);
+    d.set_item("status", Array1::from_iter(runs.iter().map(|r| r.status.code())).into_pyarray(py))?;
+    d.set_item("reason", reasons.to_vec())?;
+    d.set_item("t_reached", f(|r| r.t))?;
+    d.set_item("min_normal_force", f(|r| r.extremes.min_normal_force))?;
+    d.set_item("max_gap", f(|r| r.extremes.max_gap))?;
+    d.set_item("min_slip_velocity", f(|r| r.extremes.min_slip_velocity))?;
+    d.set_item("max_abs_z", f(|r| r.extremes.max_abs_z))?;
+    d.set_item("y_end", states(runs.iter().map(|r| &r.y), n).into_pyarray(py))?;
+    let stats: Vec<Stats> = runs.iter().map(|r| r.stats).collect();
+    stats_into(d, &stats)
+}
+
+/// Summaries of runs to steady state as columns.
+pub(crate) fn summaries_into(d: &Bound<'_, PyDict>, out: &[(Summary, String)]) -> PyResult<()> {
+    let py = d.py();
+    let f = |g: &dyn Fn(&Summary) -> f64| Array1::from_iter(out.iter().map(|o| g(&o.0))).into_pyarray(py);
+    d.set_item("status", Array1::from_iter(out.iter().map(|o| o.0.status.code())).into_pyarray(py))?;
+    d.set_item("reason", out.iter().map(|o| o.1.clone()).collect::<Vec<_>>())?;
+    d.set_item("outcome", Array1::from_iter(out.iter().map(|o| o.0.outcome as u8)).into_pyarray(py))?;
+    d.set_item("t_end", f(&|s| s.t_end))?;
+    d.set_item("omega", f(&|s| s.omega))?;
+    d.set_item("period", f(&|s| s.period))?;
+    d.set_item("multiplicity", Array1::from_iter(out.iter().map(|o| o.0.multiplicity)).into_pyarray(py))?;
+    d.set_item("y_end", states(out.iter().map(|o| &o.0.y_end), out.len()).into_pyarray(py))?;
+    d.set_item("z0", f(&|s| s.z0))?;
+    for k in 0..3 {
+        d.set_item(format!("z{}_amp", k + 1), f(&|s| s.z_amp[k]))?;
+        d.set_item(format!("z{}_phase", k + 1), f(&|s| s.z_phase[k]))?;
+    }
+    d.set_item("phi1_amp", f(&|s| s.phi_amp))?;
+    d.set_item("phi1_phase", f(&|s| s.phi_phase))?;
+    d.set_item("x1_amp", f(&|s| s.x_amp))?;
+    d.set_item("x1_phase", f(&|s| s.x_phase))?;
+    d.set_item("min_normal_force", f(&|s| s.min_normal_force))?;
+    d.set_item("fraction_off_disk", f(&|s| s.fraction_off_disk))?;
+    d.set_item("min_slip_velocity", f(&|s| s.min_slip_velocity))?;
+    d.set_item("max_gap", f(&|s| s.extremes.max_gap))?;
+    d.set_item("max_abs_z", f(&|s| s.extremes.max_abs_z))?;
+    let stats: Vec<Stats> = out.iter().map(|o| o.0.stats).collect();
+    stats_into(d, &stats)
+}
+
+/// States as an (n, 6) array.
+pub(crate) fn states<'a>(ys: impl Iterator<Item = &'a State>, n: usize) -> Array2<f64> {
+    let mut a = Array2::<f64>::zeros((n, 6));
+    for (i, s) in ys.enumerate() {
+        for c in 0..6 {
+            a[(i, c)] = s[c];
+        }
+    }
+    a
+}

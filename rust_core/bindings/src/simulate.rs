@@ -1,0 +1,190 @@
+//! Trajectories: one (`simulate`) or many (`ensemble`, routed by the core's `ensemble::run`).
+
+use crate::convert::{method_from, runs_into, states, summaries_into, tolerances, y0_rows, Call};
+use crate::errors::CoreError;
+use numpy::ndarray::{Array1, Array3};
+use numpy::{IntoPyArray, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::collections::HashMap;
+use tribosweep_core::ensemble::{run as run_ensemble, Settings, Task, TrajectoryResult};
+use tribosweep_core::model::State;
+use tribosweep_core::status::Status;
+use tribosweep_core::steady::{self, RunResult, SteadyOptions, Summary};
+
+/// One trajectory. Returns a dict: `t` (n,), `y` (n, 6), and the run's status, counters, extremes.
+/// With `t_eval` the states are sampled there; otherwise every accepted step end is returned.
+#[pyfunction]
+#[pyo3(signature = (values, contact, friction_law, y0, t_end, method, rtol, *, atol=None, t_eval=None, max_steps=None, max_events=None))]
+#[allow(clippy::too_many_arguments)]
+fn simulate<'py>(
+    py: Python<'py>,
+    values: HashMap<String, f64>,
+    contact: &str,
+    friction_law: &str,
+    y0: PyReadonlyArray1<'py, f64>,
+    t_end: f64,
+    method: &str,
+    rtol: f64,
+    atol: Option<PyReadonlyArray1<'py, f64>>,
+    t_eval: Option<PyReadonlyArray1<'py, f64>>,
+    max_steps: Option<u64>,
+    max_events: Option<u64>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let call = Call::one(py, &values, contact, friction_law, None)?;
+    let method = method_from(method)?;
+    let tol = tolerances(rtol, atol, max_steps, max_events)?;
+    let y0 = State::from_column_slice(y0.as_slice()?);
+    let t_eval: Option<Vec<f64>> = t_eval.map(|a| a.as_slice().map(|s| s.to_vec())).transpose()?;
+    let slider = call.slider()?;
+    let (run, t, ys) = call.detach(move || match t_eval {
+        Some(te) => {
+            let (r, ys) = steady::run_sampled(&slider, &y0, t_end, method, &tol, &te);
+            (r, te, ys)
+        }
+        None => {
+            let rec = steady::StepRecorder { t: Vec::new(), y: Vec::new() };
+            let (r, rec) = steady::run_observed(&slider, &y0, t_end, method, &tol, rec);
+            (r, rec.t, rec.y)
+        }
+    });
+    let d = PyDict::new(py);
+    d.set_item("t", Array1::from_vec(t).into_pyarray(py))?;
+    d.set_item("y", states(ys.iter(), ys.len()).into_pyarray(py))?;
+    runs_into(&d, &[run], &[String::new()])?;
+    Ok(d)
+}
+
+/// What `ensemble` computes per trajectory (its `kind`).
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Kind {
+    /// The end state, or with `t_eval` also the states there.
+    Plain,
+    /// A run to steady state and its summary.
+    Steady,
+}
+
+impl Kind {
+    fn parse(kind: &str, has_t_eval: bool) -> Result<Kind, CoreError> {
+        match kind {
+            "final" => Ok(Kind::Plain),
+            "sampled" if has_t_eval => Ok(Kind::Plain),
+            "sampled" => Err(CoreError("kind = 'sampled' needs t_eval".into())),
+            "steady" => Ok(Kind::Steady),
+            _ => Err(CoreError(format!("kind = {kind:?} is not valid: must be 'final', 'sampled' or 'steady'"))),
+        }
+    }
+}
+
+/// Per-trajectory decay thresholds of the steady kind (they override `decay_amplitude`).
+fn decays(a: Option<PyReadonlyArray1<'_, f64>>, n: usize) -> PyResult<Option<Vec<f64>>> {
+    let Some(a) = a else { return Ok(None) };
+    let v = a.as_slice()?.to_vec();
+    if v.len() != n || v.iter().any(|x| !(x.is_finite() && *x > 0.0)) {
+        return Err(CoreError(format!(
+            "decay_amplitudes must hold {n} finite values > 0 (one per trajectory); got {} values",
+            v.len()
+        ))
+        .into());
+    }
+    Ok(Some(v))
+}
+
+/// Results with their reasons: a trajectory whose computation panicked gets `Status::Panic` and
+/// the message.
+fn with_reasons(out: Vec<Result<TrajectoryResult, String>>) -> Vec<(TrajectoryResult, String)> {
+    out.into_iter()
+        .map(|r| match r {
+            Ok(x) => (x, String::new()),
+            Err(msg) => (TrajectoryResult::failed(Status::Panic), format!("panic: {msg}")),
+        })
+        .collect()
+}
+
+/// Many trajectories in parallel (GIL released). `kind` is "final" (end state), "sampled"
+/// (states at `t_eval`) or "steady" (run to steady state and summarise; `t_end` is then `t_max`).
+/// The core picks the path (lane-batched or scalar) and the grouping; results do not depend on it
+/// beyond integration accuracy, nor on the thread count at all.
+#[pyfunction]
+#[pyo3(signature = (base, contact, friction_law, names, values, y0, t_end, method, rtol, *, atol=None, t_eval=None, threads=None, kind="final", periodic_tol=1e-5, decay_amplitude=None, n_fourier=512, max_steps=None, max_events=None, decay_amplitudes=None))]
+#[allow(clippy::too_many_arguments)]
+fn ensemble<'py>(
+    py: Python<'py>,
+    base: HashMap<String, f64>,
+    contact: &str,
+    friction_law: &str,
+    names: Vec<String>,
+    values: PyReadonlyArray2<'py, f64>,
+    y0: PyReadonlyArray2<'py, f64>,
+    t_end: f64,
+    method: &str,
+    rtol: f64,
+    atol: Option<PyReadonlyArray1<'py, f64>>,
+    t_eval: Option<PyReadonlyArray1<'py, f64>>,
+    threads: Option<usize>,
+    kind: &str,
+    periodic_tol: f64,
+    decay_amplitude: Option<f64>,
+    n_fourier: usize,
+    max_steps: Option<u64>,
+    max_events: Option<u64>,
+    decay_amplitudes: Option<PyReadonlyArray1<'py, f64>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let call = Call::rows(py, &base, contact, friction_law, &names, &values, threads)?;
+    let n = call.len();
+    let y0s = y0_rows(&y0.as_array(), n)?;
+    let decays = decays(decay_amplitudes, n)?;
+    let settings =
+        Settings { t_end, method: method_from(method)?, tol: tolerances(rtol, atol, max_steps, max_events)?, threads };
+    let t_eval: Option<Vec<f64>> = t_eval.map(|a| a.as_slice().map(|s| s.to_vec())).transpose()?;
+    let kind = Kind::parse(kind, t_eval.is_some())?;
+    let sliders = call.sliders()?;
+    let d = PyDict::new(py);
+    match kind {
+        Kind::Plain => {
+            let te = t_eval.unwrap_or_default();
+            let task = if te.is_empty() { Task::Final } else { Task::Sampled(&te) };
+            let out = with_reasons(call.detach(|| run_ensemble(&sliders, &y0s, &settings, task)));
+            let runs: Vec<RunResult> = out.iter().map(|o| o.0.run).collect();
+            let reasons: Vec<String> = out.iter().map(|o| o.1.clone()).collect();
+            runs_into(&d, &runs, &reasons)?;
+            if !te.is_empty() {
+                let mut y = Array3::<f64>::from_elem((n, te.len(), 6), f64::NAN);
+                for (i, o) in out.iter().enumerate() {
+                    for (j, s) in o.0.samples.iter().enumerate() {
+                        for c in 0..6 {
+                            y[(i, j, c)] = s[c];
+                        }
+                    }
+                }
+                d.set_item("y", y.into_pyarray(py))?;
+            }
+        }
+        Kind::Steady => {
+            let opts = SteadyOptions {
+                t_max: t_end,
+                method: settings.method,
+                tol: settings.tol,
+                periodic_tol,
+                decay_amplitude,
+                n_fourier,
+                ..SteadyOptions::default()
+            };
+            let task = Task::Steady { opts: &opts, decay: decays.as_deref() };
+            let out = with_reasons(call.detach(|| run_ensemble(&sliders, &y0s, &settings, task)));
+            let sums: Vec<(Summary, String)> = out
+                .into_iter()
+                .map(|(r, reason)| (r.summary.unwrap_or_else(|| Summary::failed(r.run.status)), reason))
+                .collect();
+            summaries_into(&d, &sums)?;
+        }
+    }
+    Ok(d)
+}
+
+/// Add this group's functions to the module.
+pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(simulate, m)?)?;
+    m.add_function(wrap_pyfunction!(ensemble, m)?)?;
+    Ok(())
+}

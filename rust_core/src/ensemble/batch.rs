@@ -1,0 +1,494 @@
+//! Lane-batched Dormand–Prince 5(4) for the bilateral, constant-`mu` slider: the fast path of
+//! ensembles that only need the end state.
+//!
+//! [`run_bilateral_batch`] integrates many trajectories at once, `W` = 8 at a time in
+//! structure-of-arrays form (`[f64; 8]` per state component and per parameter), so that the
+//! stage arithmetic of eight trajectories runs in SIMD registers (plain loops over the lanes that
+//! LLVM vectorises; on x86-64 a copy compiled for AVX2/AVX-512 is picked at run time, std only).
+//! Each lane has its own time, step size, error estimate, controller history and accept/reject
+//! decision; when a lane's trajectory ends the lane is refilled at once with the next trajectory of
+//! the input, so no lane idles while others run long.
+//!
+//! # Semantics (those of `steady::run(s, y0, t_end, Method::Dopri5, tol)`, to integration accuracy)
+//! - Same tolerances (`atol` per component from [`characteristic_sizes`] when `tol.atol` is
+//!   `None`), same error norm (Hairer's RMS), same PI controller (`beta = 0.04`, safety 0.9,
+//!   factors in `[0.2, 10]`, no growth right after a rejection), same starting step (the scalar
+//!   [`initial_step`] on the same right-hand side, so the first step is bitwise the scalar one), same
+//!   landing rule on `t_end` (the last step is stretched by up to 1 %), same step floor
+//!   (`h_min_rel * max(|t|, 1)`) and step budget ([`Options::new`] defaults).
+//! - The right-hand side is the slider's in contact mode, with the dynamic law force used directly
+//!   instead of `(F_st + F_z) - F_st`, so states agree with the scalar path to rounding per step,
+//!   not bitwise; step counts agree to a few per cent (they are identical on most trajectories).
+//! - **Only the escape is located.** The bilateral constant-`mu` model never switches mode, so only
+//!   the escape event matters: when `|z| >= escape_limit` at the end of an accepted step, the
+//!   crossing is located on the step's interpolant as the scalar path's event is (Illinois to
+//!   `event_tol`, the far side of the crossing) and the lane stops there with `Status::Diverged`.
+//!   `Stats::n_events` is 0 (the scalar path counts the located, non-acting gap, normal-force and
+//!   slip crossings too). A run that starts at `|z| >= escape_limit` stops after its first step.
+//! - [`Extremes`] are updated at the initial state and at every accepted step end (the scalar path
+//!   also sees the located event points, where `max_gap` and `min_slip_velocity` can differ by the
+//!   interpolation between a step end and the crossing; this path only sees step ends).
+//! - Failures: non-finite state or derivative (after cutting the step to the floor) ->
+//!   `NonFinite`, a step below the floor -> `StepTooSmall`, the step budget -> `MaxSteps`, as in
+//!   the scalar driver.
+//!
+//! # Determinism
+//! Every lane's arithmetic is the same sequence of IEEE operations on that lane's values only
+//! (masks only select; no reduction across lanes, no fused multiply-add), and lane set-up and
+//! teardown are scalar code on one trajectory. The result for a trajectory is therefore bitwise
+//! the same whatever trajectories share its batch, in whatever order, on whatever thread count
+//! (tested), and on any x86-64 code path (the AVX copies only widen the same operations).
+
+// Index loops over lanes and components are the point here: they are what LLVM vectorises.
+#![allow(clippy::needless_range_loop)]
+
+use super::lanes::Coef;
+use crate::model::{idx, ContactMode, ContactModel, FrictionLaw, Slider, State};
+use crate::ode::controller::{initial_step, FAC_MAX, FAC_MIN, SAFETY};
+use crate::ode::dopri5::Dopri5Dense;
+use crate::ode::events::locate;
+use crate::ode::lanes::{
+    dopri5_step, each6, exp_lanes, lane_state, ln_lanes, splat, LaneRhs, ALPHA, BETA, L, LN_ERR_FLOOR, LN_SAFETY, V6, W,
+};
+use crate::ode::{Dense, Options, Stats};
+use crate::status::Status;
+use crate::steady::{characteristic_sizes, options_for, Extremes, RunResult, Tolerances};
+
+/// The state of the eight lanes.
+struct Lanes {
+    c: Coef,
+    y: V6,
+    /// f(t, y): the FSAL stage.
+    f: V6,
+    t: L,
+    h: L,
+    ln_err_old: L,
+    rejected: [bool; W],
+    n_acc: [u64; W],
+    n_rej: [u64; W],
+    min_n: L,
+    max_gap: L,
+    min_vr: L,
+    max_z: L,
+    /// Input index of each lane's trajectory (`usize::MAX`: idle).
+    who: [usize; W],
+}
+
+/// Right-hand side of the eight lanes, and the dynamic law force `F_z` of each.
+#[inline(always)]
+fn rhs(c: &Coef, y: &V6, out: &mut V6, fz: &mut L) {
+    for l in 0..W {
+        let (z, zd, x, xd, ph, phd) = (y[0][l], y[1][l], y[2][l], y[3][l], y[4][l], y[5][l]);
+        let f = -c.ks[l] * z + c.ka[l] * z * z - c.c[l] * zd + c.kphi[l] * ph;
+        let fx = c.mu[l] * f;
+        out[0][l] = zd;
+        out[1][l] = f * c.inv_m[l] - c.dz[l] * zd - c.wz2[l] * z;
+        out[2][l] = xd;
+        out[3][l] = fx * c.inv_m[l] - c.dx[l] * xd - c.wx2[l] * x;
+        out[4][l] = phd;
+        out[5][l] = c.tg[l] * fx - c.dt[l] * phd - c.wt2[l] * ph;
+        fz[l] = f;
+    }
+}
+
+/// [`rhs`] as the lane kit's [`LaneRhs`]: the law force of the last evaluation is left in `fz`.
+struct BatchRhs<'a> {
+    c: &'a Coef,
+    fz: &'a mut L,
+}
+
+impl LaneRhs for BatchRhs<'_> {
+    #[inline(always)]
+    fn eval(&mut self, y: &V6, out: &mut V6) {
+        rhs(self.c, y, out, self.fz);
+    }
+}
+
+/// Integrate each `sliders[i]` from `y0s[i]` at `t = 0` to `t_end` with Dormand–Prince 5(4),
+/// eight trajectories at a time; the result for each trajectory, in input order.
+///
+/// Precondition (the caller checks): every slider has `ContactModel::Bilateral` and
+/// `FrictionLaw::Constant`; `sliders.len() == y0s.len()`. Panics otherwise. See the module
+/// documentation for how the results relate to `steady::run(s, y0, t_end, Method::Dopri5, tol)`.
+pub fn run_bilateral_batch(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances) -> Vec<RunResult> {
+    assert_eq!(sliders.len(), y0s.len(), "run_bilateral_batch: one initial state per slider");
+    for s in sliders {
+        assert!(
+            s.p.contact == ContactModel::Bilateral && s.p.friction_law == FrictionLaw::Constant,
+            "run_bilateral_batch: only bilateral contact with constant friction"
+        );
+    }
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the CPU supports the features the function is compiled for.
+            return unsafe { run_avx512(sliders, y0s, t_end, tol) };
+        }
+        if std::is_x86_feature_detected!("avx2") {
+            // SAFETY: as above.
+            return unsafe { run_avx2(sliders, y0s, t_end, tol) };
+        }
+    }
+    run_impl(sliders, y0s, t_end, tol)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+unsafe fn run_avx512(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances) -> Vec<RunResult> {
+    run_impl(sliders, y0s, t_end, tol)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn run_avx2(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances) -> Vec<RunResult> {
+    run_impl(sliders, y0s, t_end, tol)
+}
+
+/// The portable path (also used by the tests to check that the SIMD copies agree bitwise).
+#[inline(always)]
+fn run_impl(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances) -> Vec<RunResult> {
+    let n = sliders.len();
+    let opts = Options::<6>::new(tol.rtol, 1.0);
+    let rtol = tol.rtol;
+    let max_steps = opts.max_steps;
+    let event_tol = opts.event_tol;
+    let h_min_rel = opts.h_min_rel;
+    let mut out: Vec<Option<RunResult>> = vec![None; n];
+    let zero = [0.0; W];
+    let mut ln = Lanes {
+        c: Coef::zero(),
+        y: [zero; 6],
+        f: [zero; 6],
+        t: zero,
+        h: zero,
+        ln_err_old: splat(LN_ERR_FLOOR),
+        rejected: [false; W],
+        n_acc: [0; W],
+        n_rej: [0; W],
+        min_n: zero,
+        max_gap: zero,
+        min_vr: zero,
+        max_z: zero,
+        who: [usize::MAX; W],
+    };
+    let mut next = 0usize;
+    for l in 0..W {
+        refill(&mut ln, l, &mut next, sliders, y0s, t_end, tol, &mut out);
+    }
+
+    // Scratch of the step: the stages k2..k7 and the new state.
+    let mut k = [[zero; 6]; 6];
+    let mut yn = [zero; 6];
+    let mut fz = zero;
+
+    while ln.who.iter().any(|&w| w != usize::MAX) {
+        // ---- before the attempt: landing on t_end, the step floor, the step budget ----
+        let mut hh = zero;
+        let mut last = [false; W];
+        let mut floor = zero;
+        let mut bad = false;
+        for l in 0..W {
+            let h = ln.h[l];
+            let rem = t_end - ln.t[l];
+            let la = h >= rem || 1.01 * h >= rem;
+            last[l] = la;
+            hh[l] = if la { rem } else { h };
+            floor[l] = h_min_rel * ln.t[l].abs().max(1.0);
+            let too_small = (hh[l].is_nan() || hh[l] < floor[l]) && !la;
+            bad |= ln.who[l] != usize::MAX && (too_small || ln.n_acc[l] + ln.n_rej[l] >= max_steps);
+        }
+        if bad {
+            for l in 0..W {
+                if ln.who[l] == usize::MAX {
+                    continue;
+                }
+                let too_small = (hh[l].is_nan() || hh[l] < floor[l]) && !last[l];
+                let status = if too_small {
+                    if hh[l].is_finite() {
+                        Status::StepTooSmall
+                    } else {
+                        Status::NonFinite
+                    }
+                } else if ln.n_acc[l] + ln.n_rej[l] >= max_steps {
+                    Status::MaxSteps
+                } else {
+                    continue;
+                };
+                finish(&mut ln, l, status, &mut out);
+                refill(&mut ln, l, &mut next, sliders, y0s, t_end, tol, &mut out);
+            }
+            continue;
+        }
+
+        // ---- the step: six new right-hand sides per lane, the error norm and finiteness ----
+        let c = &ln.c;
+        let y = &ln.y;
+        let k1 = &ln.f;
+        // The squared RMS norm: `err <= 1` iff `err^2 <= 1`, and ln err = ln(err^2) / 2, so no
+        // square root is needed.
+        let (err, fin) = dopri5_step(&mut BatchRhs { c, fz: &mut fz }, y, k1, &hh, rtol, &c.atol, &mut k, &mut yn);
+
+        // ---- accept or reject, the controller, extremes, the end tests (branch-free) ----
+        let mut ok = [false; W];
+        let mut lnx = zero;
+        for l in 0..W {
+            ok[l] = err[l] <= 1.0 && fin[l];
+            // ln of the error, floored far below anything that matters (a zero or subnormal error
+            // gives the largest growth either way); non-finite errors are not used below.
+            lnx[l] = err[l].max(1e-300);
+        }
+        let mut ln_err = ln_lanes(&lnx);
+        for v in ln_err.iter_mut() {
+            *v *= 0.5;
+        }
+        let mut arg = zero;
+        for l in 0..W {
+            // One exp per lane: the accept factor err^-alpha err_old^beta / safety, or the reject
+            // factor err^-alpha (times safety), as in `Controller::accept` / `Controller::reject`.
+            arg[l] =
+                if ok[l] { -(ALPHA * ln_err[l] - BETA * ln.ln_err_old[l] - LN_SAFETY) } else { -ALPHA * ln_err[l] };
+        }
+        let r = exp_lanes(&arg);
+        // Kept as several simple loops over the lanes: each vectorises on its own.
+        let t_start = ln.t;
+        let mut ended = [false; W];
+        for l in 0..W {
+            let ok = ok[l];
+            let e = err[l];
+            // Accepted: the PI ratio, no growth right after a rejection.
+            let ra = if e <= 0.0 { FAC_MAX } else { r[l].clamp(FAC_MIN, FAC_MAX) };
+            let ratio_a = if ln.rejected[l] { ra.min(1.0) } else { ra };
+            // Rejected: an ordinary rejection or, for anything non-finite, the largest cut.
+            let ordinary = e.is_finite() && fin[l];
+            let ratio_r = if ordinary { (SAFETY * r[l]).clamp(FAC_MIN, 1.0) } else { FAC_MIN };
+            let h_new = hh[l] * if ok { ratio_a } else { ratio_r };
+            ln.h[l] = h_new;
+            let lo = if e <= 0.0 { LN_ERR_FLOOR } else { ln_err[l].max(LN_ERR_FLOOR) };
+            ln.ln_err_old[l] = if ok { lo } else { ln.ln_err_old[l] };
+            ln.rejected[l] = !ok;
+            let t_new = if last[l] { t_end } else { ln.t[l] + hh[l] };
+            ln.t[l] = if ok { t_new } else { ln.t[l] };
+            let z = yn[idx::Z][l].abs();
+            let end_a = last[l] || z >= c.esc[l];
+            let end_r = h_new.is_nan() || h_new < floor[l];
+            ended[l] = if ok { end_a } else { end_r };
+        }
+        // Off the common path: only when some lane ends this step.
+        let attention = ended.iter().fold(false, |a, &b| a | b);
+        if attention && (0..W).any(|l| ok[l] && ended[l] && yn[idx::Z][l].abs() >= c.esc[l]) {
+            let stages = [&ln.f, &k[0], &k[1], &k[2], &k[3], &k[4], &k[5]];
+            let step = Step { t0: &t_start, h: &hh, ok: &ok };
+            locate_escapes(c, &ln.who, &ln.y, &stages, &step, &mut yn, &mut fz, &mut ln.t, sliders, event_tol);
+        }
+        for l in 0..W {
+            ln.n_acc[l] += ok[l] as u64;
+            ln.n_rej[l] += (!ok[l]) as u64;
+        }
+        each6!(i, {
+            for l in 0..W {
+                ln.y[i][l] = if ok[l] { yn[i][l] } else { ln.y[i][l] };
+                ln.f[i][l] = if ok[l] { k[5][i][l] } else { ln.f[i][l] };
+            }
+        });
+        for l in 0..W {
+            let ok = ok[l];
+            let z = yn[idx::Z][l];
+            let normal = c.fst[l] + fz[l];
+            let gap = c.zst[l] + z;
+            let vr = c.v[l] - (yn[idx::XD][l] + c.sl[l] * yn[idx::PHID][l]);
+            ln.min_n[l] = if ok { ln.min_n[l].min(normal) } else { ln.min_n[l] };
+            ln.max_gap[l] = if ok { ln.max_gap[l].max(gap) } else { ln.max_gap[l] };
+            ln.min_vr[l] = if ok { ln.min_vr[l].min(vr) } else { ln.min_vr[l] };
+            ln.max_z[l] = if ok { ln.max_z[l].max(z.abs()) } else { ln.max_z[l] };
+        }
+        if attention {
+            for l in 0..W {
+                if !ended[l] || ln.who[l] == usize::MAX {
+                    continue;
+                }
+                let status = if ln.rejected[l] {
+                    let ordinary = fin[l] && err[l].is_finite();
+                    if ordinary {
+                        Status::StepTooSmall
+                    } else {
+                        Status::NonFinite
+                    }
+                } else if ln.y[idx::Z][l].abs() >= ln.c.esc[l] {
+                    Status::Diverged
+                } else {
+                    Status::Success
+                };
+                finish(&mut ln, l, status, &mut out);
+                refill(&mut ln, l, &mut next, sliders, y0s, t_end, tol, &mut out);
+            }
+        }
+    }
+    out.into_iter().map(|r| r.expect("every trajectory has a result")).collect()
+}
+
+/// Lanes whose accepted step ends at `|z| >= escape_limit`: locate the crossing on the step's
+/// interpolant, as the scalar path's escape event does (Illinois to `event_tol`, the time on the
+/// far side of the crossing), and make the lane's step end there: `yn`, the contact force `fz`
+/// and `t` of those lanes are replaced, so that the state, the extremes and the time reported are
+/// the located ones. Called before the lane state is overwritten (`ln.y`, `ln.f` still hold the
+/// step's start and first stage). Cold: diverging runs are rare.
+/// The attempted step of every lane: start times, step sizes, accepted or not.
+struct Step<'a> {
+    t0: &'a L,
+    h: &'a L,
+    ok: &'a [bool; W],
+}
+
+#[cold]
+#[inline(never)]
+#[allow(clippy::too_many_arguments)]
+fn locate_escapes(
+    c: &Coef,
+    who: &[usize; W],
+    y: &V6,
+    stages: &[&V6; 7],
+    step: &Step<'_>,
+    yn: &mut V6,
+    fz: &mut L,
+    t: &mut L,
+    sliders: &[Slider],
+    event_tol: f64,
+) {
+    for l in 0..W {
+        if who[l] == usize::MAX || !step.ok[l] || yn[idx::Z][l].abs() < c.esc[l] {
+            continue;
+        }
+        let esc = c.esc[l];
+        let k: [State; 7] = std::array::from_fn(|j| lane_state(stages[j], l));
+        let (y0, y1) = (lane_state(y, l), lane_state(yn, l));
+        // `t` already holds the accepted step's end.
+        let (t0, t1) = (step.t0[l], t[l]);
+        let dense = Dopri5Dense::from_stages(&k, &y0, &y1, t0, step.h[l]);
+        let g = |tt: f64| esc - dense.eval(tt)[idx::Z].abs();
+        let (g0, g1) = (esc - y0[idx::Z].abs(), esc - y1[idx::Z].abs());
+        let te = if g0 > 0.0 { locate(g, t0, g0, t1, g1, event_tol) } else { t1 };
+        let ye = if te == t1 { y1 } else { dense.eval(te) };
+        for i in 0..6 {
+            yn[i][l] = ye[i];
+        }
+        fz[l] = sliders[who[l]].forces(&ye, ContactMode::Contact).normal - c.fst[l];
+        t[l] = te;
+    }
+}
+
+/// Write lane `l`'s result and mark it idle.
+#[cold]
+fn finish(ln: &mut Lanes, l: usize, status: Status, out: &mut [Option<RunResult>]) {
+    let i = ln.who[l];
+    let steps = ln.n_acc[l] + ln.n_rej[l];
+    out[i] = Some(RunResult {
+        status,
+        t: ln.t[l],
+        y: lane_state(&ln.y, l),
+        extremes: Extremes {
+            min_normal_force: ln.min_n[l],
+            max_gap: ln.max_gap[l],
+            min_slip_velocity: ln.min_vr[l],
+            max_abs_z: ln.max_z[l],
+        },
+        stats: Stats { n_rhs: 2 + 6 * steps, n_accept: ln.n_acc[l], n_reject: ln.n_rej[l], ..Stats::default() },
+    });
+    ln.who[l] = usize::MAX;
+}
+
+/// Load the next trajectory that needs a step into lane `l` (trajectories that end before their
+/// first step get their result here); leave the lane idle (harmless values) when none is left.
+#[cold]
+#[allow(clippy::too_many_arguments)]
+fn refill(
+    ln: &mut Lanes,
+    l: usize,
+    next: &mut usize,
+    sliders: &[Slider],
+    y0s: &[State],
+    t_end: f64,
+    tol: &Tolerances,
+    out: &mut [Option<RunResult>],
+) {
+    while *next < sliders.len() {
+        let i = *next;
+        *next += 1;
+        let s = &sliders[i];
+        let y0 = y0s[i];
+        let mut ext = Extremes::default();
+        let f = s.forces(&y0, ContactMode::Contact);
+        ext.min_normal_force = f.normal;
+        ext.max_gap = s.gap(&y0);
+        ext.min_slip_velocity = f.slip_velocity;
+        ext.max_abs_z = y0[idx::Z].abs();
+        let early = |status, n_rhs| RunResult {
+            status,
+            t: 0.0,
+            y: y0,
+            extremes: ext,
+            stats: Stats { n_rhs, ..Stats::default() },
+        };
+        if !t_end.is_finite() || !y0.iter().all(|v| v.is_finite()) {
+            out[i] = Some(early(Status::NonFinite, 0));
+            continue;
+        }
+        if t_end < 0.0 {
+            out[i] = Some(early(Status::StepTooSmall, 0));
+            continue;
+        }
+        if t_end == 0.0 {
+            out[i] = Some(early(Status::Success, 0));
+            continue;
+        }
+        let f0 = s.rhs(&y0, ContactMode::Contact);
+        if !f0.iter().all(|v| v.is_finite()) {
+            out[i] = Some(early(Status::NonFinite, 1));
+            continue;
+        }
+        let opts = options_for(s, tol);
+        let mut n_rhs = 1;
+        let h0 = initial_step(
+            s,
+            ContactMode::Contact,
+            0.0,
+            &y0,
+            &f0,
+            t_end,
+            5,
+            &opts.atol,
+            tol.rtol,
+            f64::INFINITY,
+            &mut n_rhs,
+        );
+        let atol = tol.atol.unwrap_or(characteristic_sizes(s).map(|v| v * tol.rtol));
+        ln.c.set(l, s, &atol);
+        for k in 0..6 {
+            ln.y[k][l] = y0[k];
+            ln.f[k][l] = f0[k];
+        }
+        ln.t[l] = 0.0;
+        ln.h[l] = h0;
+        ln.ln_err_old[l] = LN_ERR_FLOOR;
+        ln.rejected[l] = false;
+        ln.n_acc[l] = 0;
+        ln.n_rej[l] = 0;
+        ln.min_n[l] = ext.min_normal_force;
+        ln.max_gap[l] = ext.max_gap;
+        ln.min_vr[l] = ext.min_slip_velocity;
+        ln.max_z[l] = ext.max_abs_z;
+        ln.who[l] = i;
+        return;
+    }
+    // Idle: a state at rest far from any end condition, so the lane computes harmless numbers.
+    for k in 0..6 {
+        ln.y[k][l] = 0.0;
+        ln.f[k][l] = 0.0;
+    }
+    ln.t[l] = 0.0;
+    ln.h[l] = 0.0;
+    ln.c.esc[l] = f64::INFINITY;
+    ln.who[l] = usize::MAX;
+}
+
+#[cfg(test)]
+mod tests;

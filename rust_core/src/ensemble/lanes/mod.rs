@@ -1,0 +1,234 @@
+//! Lane-batched Dormand–Prince 5(4) for the whole slider model: unilateral contact, the
+//! regularised Coulomb/Stribeck law, output at `t_eval`, and runs to a steady state.
+//!
+//! [`run_lanes`] integrates many trajectories [`W`] = 8 at a time in structure-of-arrays form (the
+//! generic lane kit `ode::lanes`), as [`super::batch`] does for the bilateral constant-`mu` end
+//! state, and refills a lane as soon as its trajectory ends. What it adds is everything the scalar driver does around the step:
+//!
+//! - **Modes per lane.** Each lane knows whether its pin is on or off the disk; the contact force
+//!   is selected branch-free from a per-lane mask, so lanes in different modes share the step.
+//! - **Events per lane, never stepped across.** After every accepted step the four event
+//!   functions of the slider (gap, law normal force, sliding velocity, escape) are evaluated on all
+//!   lanes at once; for the unilateral model they are also evaluated at the three interior points of
+//!   each step's dense output (the scalar driver's hidden-crossing check), and a lane with a
+//!   crossing and its return inside its step redoes the step ending inside the excursion. A lane
+//!   whose step shows a crossing (or has an event pending after a switch) goes to a cold path that
+//!   builds that lane's Dormand–Prince interpolant and runs **the scalar driver's own event code**
+//!   (`ode::events::step_events`: Illinois location, time order, actions, the re-trigger guard) on it,
+//!   then restarts the lane in its new mode with a fresh derivative, as the scalar driver does.
+//! - **Observers per lane.** Sampling at `t_eval` and the steady-state watcher (Poincare section
+//!   `zd = 0` falling, decay, cycle detection) are the scalar path's observers, called on the cold
+//!   path only for lanes that need them this step: a lane whose `t_eval` point falls inside its
+//!   step, whose `zd` changes sign downwards, or whose motion fell below the rest floor. On all
+//!   other steps the bookkeeping those observers do per step (extremes, the peaks since the last
+//!   section) runs vectorised on the lanes.
+//!
+//! The result of a trajectory is that of `steady::run`, `steady::run_sampled` or
+//! `steady::run_to_steady` with `Method::Dopri5` to integration accuracy (tested on every scene of
+//! the work-precision bench and on the seed's bouncing cycle): the right-hand side is the same
+//! algebra with the dynamic law force used directly, and `exp`/`tanh` of the Stribeck law are
+//! branch-free lane polynomials, so states differ from the scalar path's by rounding per step.
+//!
+//! # Determinism
+//! Every lane's arithmetic depends on that lane's values only, and the cold paths are scalar code
+//! on one trajectory, so a trajectory's result is bitwise the same whatever trajectories share its
+//!
+//! # Files
+//! - `mod.rs`: the entry points, their preconditions, the dispatch to a monomorphised,
+//!   CPU-feature-specific copy of the loop;
+//! - `slider.rs`: the slider on the lanes (coefficients, right-hand side, event functions,
+//!   hidden-crossing check);
+//! - `state.rs`: the lanes' vector side and each lane's scalar side (observers, events), loading
+//!   and finishing trajectories;
+//! - `run.rs`: the loop over steps of the eight lanes, with the cold path.
+
+// Index loops over lanes and components are the point here: they are what LLVM vectorises.
+#![allow(clippy::needless_range_loop)]
+
+mod run;
+mod slider;
+mod state;
+
+pub(crate) use slider::Coef;
+
+use super::{Task, TrajectoryResult};
+use crate::model::{ContactModel, FrictionLaw, Params, Slider, State};
+use crate::ode::lanes::W;
+use crate::ode::Method;
+use crate::steady::Tolerances;
+use run::run_impl;
+use std::sync::atomic::AtomicUsize;
+
+/// Whether [`run_lanes`] integrates sliders with these parameters (the contact models and
+/// friction laws it knows).
+pub fn supports(p: &Params) -> bool {
+    matches!(p.friction_law, FrictionLaw::Constant | FrictionLaw::Coulomb)
+}
+
+/// Whether [`run_lanes`] integrates with this method (the explicit Dormand–Prince pair and DOP853).
+pub fn supports_method(m: Method) -> bool {
+    matches!(m, Method::Dopri5 | Method::Dop853)
+}
+
+/// Integrate each `sliders[i]` from `y0s[i]` at `t = 0` with `method` (Dormand–Prince 5(4) or
+/// DOP853), eight trajectories at a time on this thread, and compute `task` for each; results in
+/// input order.
+///
+/// Precondition (the caller checks): all sliders share one contact model and one friction law,
+/// which [`supports`] accepts; [`supports_method`] accepts `method`; `sliders.len() ==
+/// y0s.len()`. Panics otherwise.
+pub fn run_lanes(
+    sliders: &[Slider],
+    y0s: &[State],
+    t_end: f64,
+    method: Method,
+    tol: &Tolerances,
+    task: Task<'_>,
+) -> Vec<TrajectoryResult> {
+    check(sliders, y0s, method, &task);
+    let feed = AtomicUsize::new(0);
+    let mut out = dispatch(sliders, y0s, t_end, method, tol, task, &feed);
+    out.sort_unstable_by_key(|r| r.0);
+    out.into_iter().map(|r| r.1).collect()
+}
+
+/// [`run_lanes`] on `threads` threads (`None`: [`crate::parallel::default_threads`]): every
+/// thread runs its own eight lanes and takes the next trajectory of the call whenever one of its
+/// lanes ends, so the threads stay busy to the end however unequal the runs. A trajectory's
+/// result does not depend on which lanes or thread ran it (bitwise; tested), so results are the
+/// same for any thread count. A panic on a thread becomes `Err(message)` for the trajectories
+/// that thread had not finished.
+pub fn run_lanes_threads(
+    sliders: &[Slider],
+    y0s: &[State],
+    t_end: f64,
+    method: Method,
+    tol: &Tolerances,
+    task: Task<'_>,
+    threads: Option<usize>,
+) -> Vec<Result<TrajectoryResult, String>> {
+    check(sliders, y0s, method, &task);
+    let n = sliders.len();
+    let nthreads = threads.unwrap_or_else(crate::parallel::default_threads).max(1).min(n.div_ceil(W).max(1));
+    let feed = AtomicUsize::new(0);
+    let workers: Vec<usize> = (0..nthreads).collect();
+    let parts = crate::parallel::par_map(
+        &workers,
+        Some(nthreads),
+        |_| Ok(dispatch(sliders, y0s, t_end, method, tol, task, &feed)),
+        Err,
+    );
+    let mut out: Vec<Option<Result<TrajectoryResult, String>>> = vec![None; n];
+    let mut panic = None;
+    for p in parts {
+        match p {
+            Ok(v) => {
+                for (i, r) in v {
+                    out[i] = Some(Ok(r));
+                }
+            }
+            Err(msg) => panic = Some(msg),
+        }
+    }
+    let msg = panic.unwrap_or_default();
+    out.into_iter().map(|r| r.unwrap_or_else(|| Err(msg.clone()))).collect()
+}
+
+fn check(sliders: &[Slider], y0s: &[State], method: Method, task: &Task<'_>) {
+    assert_eq!(sliders.len(), y0s.len(), "run_lanes: one initial state per slider");
+    assert!(supports_method(method), "run_lanes: method {method:?} is not lane-batched");
+    if let Some(first) = sliders.first() {
+        for s in sliders {
+            assert!(supports(&s.p), "run_lanes: friction law {:?} is not lane-batched", s.p.friction_law);
+            assert!(
+                s.p.contact == first.p.contact && s.p.friction_law == first.p.friction_law,
+                "run_lanes: every slider of one call shares the contact model and friction law"
+            );
+        }
+    }
+    if let Task::Steady { decay: Some(d), .. } = task {
+        assert_eq!(d.len(), sliders.len(), "run_lanes: one decay amplitude per slider");
+    }
+}
+
+/// The monomorphised, CPU-dispatched lane driver for the sliders' model and `method`.
+fn dispatch(
+    sliders: &[Slider],
+    y0s: &[State],
+    t_end: f64,
+    method: Method,
+    tol: &Tolerances,
+    task: Task<'_>,
+    feed: &AtomicUsize,
+) -> Vec<(usize, TrajectoryResult)> {
+    let Some(first) = sliders.first() else { return Vec::new() };
+    let uni = first.p.contact == ContactModel::Unilateral;
+    let coul = first.p.friction_law == FrictionLaw::Coulomb;
+    let m8 = method == Method::Dop853;
+    macro_rules! go {
+        ($u:literal, $c:literal, $m:literal) => {
+            dispatch_cpu::<$u, $c, $m>(sliders, y0s, t_end, tol, task, feed)
+        };
+    }
+    match (uni, coul, m8) {
+        (false, false, false) => go!(false, false, false),
+        (false, true, false) => go!(false, true, false),
+        (true, false, false) => go!(true, false, false),
+        (true, true, false) => go!(true, true, false),
+        (false, false, true) => go!(false, false, true),
+        (false, true, true) => go!(false, true, true),
+        (true, false, true) => go!(true, false, true),
+        (true, true, true) => go!(true, true, true),
+    }
+}
+
+fn dispatch_cpu<const UNI: bool, const COUL: bool, const M8: bool>(
+    sliders: &[Slider],
+    y0s: &[State],
+    t_end: f64,
+    tol: &Tolerances,
+    task: Task<'_>,
+    feed: &AtomicUsize,
+) -> Vec<(usize, TrajectoryResult)> {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the CPU supports the features the function is compiled for.
+            return unsafe { run_avx512::<UNI, COUL, M8>(sliders, y0s, t_end, tol, task, feed) };
+        }
+        if std::is_x86_feature_detected!("avx2") {
+            // SAFETY: as above.
+            return unsafe { run_avx2::<UNI, COUL, M8>(sliders, y0s, t_end, tol, task, feed) };
+        }
+    }
+    run_impl::<UNI, COUL, M8>(sliders, y0s, t_end, tol, task, feed)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+unsafe fn run_avx512<const UNI: bool, const COUL: bool, const M8: bool>(
+    sliders: &[Slider],
+    y0s: &[State],
+    t_end: f64,
+    tol: &Tolerances,
+    task: Task<'_>,
+    feed: &AtomicUsize,
+) -> Vec<(usize, TrajectoryResult)> {
+    run_impl::<UNI, COUL, M8>(sliders, y0s, t_end, tol, task, feed)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn run_avx2<const UNI: bool, const COUL: bool, const M8: bool>(
+    sliders: &[Slider],
+    y0s: &[State],
+    t_end: f64,
+    tol: &Tolerances,
+    task: Task<'_>,
+    feed: &AtomicUsize,
+) -> Vec<(usize, TrajectoryResult)> {
+    run_impl::<UNI, COUL, M8>(sliders, y0s, t_end, tol, task, feed)
+}
+
+#[cfg(test)]
+mod tests;

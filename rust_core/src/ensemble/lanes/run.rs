@@ -1,0 +1,443 @@
+//! The loop over steps of the eight lanes: the attempt, the events at the step end and inside it,
+//! the controller, the common accepted step on the lanes, and the cold path for lanes that need
+//! their scalar side (the scalar driver's event code, observers, the end of a run).
+
+use super::slider::{events_lanes, hidden_crossings, Coef, SliderRhs, EV_COMPS, NE};
+use super::state::{finish, refill, sync_from_side, sync_to_side, Input, Lanes, Side, Watch};
+use crate::ensemble::{Task, TrajectoryResult};
+use crate::model::{event, idx, ContactMode, Slider, State};
+use crate::ode::controller::{FAC_MAX, FAC_MIN, SAFETY};
+use crate::ode::dop853::Dop853Dense;
+use crate::ode::dopri5::Dopri5Dense;
+use crate::ode::events::{step_events, StepEnd};
+use crate::ode::lanes::{
+    cross, dop853_dense, dop853_step, dopri5_dense, dopri5_step, each6, exp_lanes, lane_state, ln_lanes, splat, ALPHA,
+    ALPHA8, BETA, LN_ERR_FLOOR, LN_SAFETY, V6, W,
+};
+use crate::ode::stepper::StepDense;
+use crate::ode::{Control, Observer, OdeSystem, Options, Outcome, StepView, MAX_EVENTS};
+use crate::steady::Tolerances;
+use std::sync::atomic::AtomicUsize;
+
+/// The portable path (the tests check that the SIMD copies agree bitwise).
+#[inline(always)]
+pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
+    sliders: &[Slider],
+    y0s: &[State],
+    t_end: f64,
+    tol: &Tolerances,
+    task: Task<'_>,
+    feed: &AtomicUsize,
+) -> Vec<(usize, TrajectoryResult)> {
+    let (t_end, tol) = match task {
+        Task::Steady { opts, .. } => (opts.t_max, opts.tol),
+        _ => (t_end, *tol),
+    };
+    let inp = Input { sliders, y0s, t_end, tol, task, feed };
+    let n = sliders.len();
+    let rtol = tol.rtol;
+    let mut out: Vec<(usize, TrajectoryResult)> = Vec::with_capacity(n);
+    let zero = [0.0; W];
+    let mut ln = Lanes {
+        c: Coef::zero(),
+        y: [zero; 6],
+        f: [zero; 6],
+        t: zero,
+        h: zero,
+        ln_err_old: splat(LN_ERR_FLOOR),
+        rejected: [false; W],
+        n_acc: [0; W],
+        n_rej: [0; W],
+        n_extra: [0; W],
+        m8: M8,
+        contact: [true; W],
+        g0: [splat(1.0); NE],
+        pend: [[false; W]; NE],
+        min_n: zero,
+        max_gap: zero,
+        min_vr: zero,
+        max_z: zero,
+        peak: zero,
+        peaks: [zero; 6],
+        rest: splat(f64::NEG_INFINITY),
+        next_sample: splat(f64::INFINITY),
+        side: std::array::from_fn(|_| None),
+    };
+    let steady = matches!(task, Task::Steady { .. });
+    let sampled = matches!(task, Task::Sampled(_));
+    let h_min_rel = Options::<6>::new(rtol, 1.0).h_min_rel;
+    for l in 0..W {
+        refill(&mut ln, l, &inp, &mut out);
+    }
+
+    // Stages of the step: DP5's k2..k7, DOP853's (see `ode::lanes::dop853_step`).
+    let mut k = [[zero; 6]; 6];
+    let mut kk = [[zero; 6]; 16];
+    let mut yn = [zero; 6];
+    let mut fzl = zero;
+    let mut fzl_scratch = zero;
+
+    while ln.side.iter().any(|s| s.is_some()) {
+        let live: [bool; W] = std::array::from_fn(|l| ln.side[l].is_some());
+        // ---- before the attempt: landing on t_end, the step floor, the step budget ----
+        let mut hh = zero;
+        let mut last = [false; W];
+        let mut floor = zero;
+        let mut bad = false;
+        for l in 0..W {
+            let h = ln.h[l];
+            let rem = t_end - ln.t[l];
+            let la = h >= rem || 1.01 * h >= rem;
+            last[l] = la;
+            hh[l] = if la { rem } else { h };
+            floor[l] = h_min_rel * ln.t[l].abs().max(1.0);
+        }
+        for l in 0..W {
+            if let Some(sd) = &ln.side[l] {
+                let too_small = (hh[l].is_nan() || hh[l] < floor[l]) && !last[l];
+                bad |= too_small || ln.n_acc[l] + ln.n_rej[l] >= sd.opts.max_steps;
+            }
+        }
+        if bad {
+            for l in 0..W {
+                let Some(sd) = &ln.side[l] else { continue };
+                let too_small = (hh[l].is_nan() || hh[l] < floor[l]) && !last[l];
+                let outcome = if too_small {
+                    if hh[l].is_finite() {
+                        Outcome::StepTooSmall
+                    } else {
+                        Outcome::NonFinite
+                    }
+                } else if ln.n_acc[l] + ln.n_rej[l] >= sd.opts.max_steps {
+                    Outcome::MaxSteps
+                } else {
+                    continue;
+                };
+                let (t, y) = (ln.t[l], lane_state(&ln.y, l));
+                finish(&mut ln, l, t, y, outcome, &mut out);
+                refill(&mut ln, l, &inp, &mut out);
+            }
+            continue;
+        }
+
+        let c = &ln.c;
+        let cm = &ln.contact;
+        let y = &ln.y;
+        let k1 = &ln.f;
+        // The error measure: the squared RMS norm for DP5 (`err <= 1` iff `err^2 <= 1`, no square
+        // root needed), Hairer's combined 5th/3rd-order norm for DOP853. The law force at the new
+        // state is left in `fzl` by the last right-hand side.
+        let (err, fin) = if M8 {
+            dop853_step(
+                &mut SliderRhs::<UNI, COUL> { c, contact: cm, fzl: &mut fzl },
+                y,
+                k1,
+                &hh,
+                rtol,
+                &c.atol,
+                &mut kk,
+                &mut yn,
+            )
+        } else {
+            dopri5_step(
+                &mut SliderRhs::<UNI, COUL> { c, contact: cm, fzl: &mut fzl },
+                y,
+                k1,
+                &hh,
+                rtol,
+                &c.atol,
+                &mut k,
+                &mut yn,
+            )
+        };
+        let fnew: &V6 = if M8 { &kk[12] } else { &k[5] };
+        let mut ok = [false; W];
+        for l in 0..W {
+            ok[l] = err[l] <= 1.0 && fin[l] && live[l];
+        }
+
+        // ---- events at the step end; hidden crossings inside the step (unilateral) ----
+        let mut g1 = [zero; NE];
+        events_lanes::<COUL>(c, &yn, &fzl, &mut g1);
+        let mut hidden = zero; // theta of the interior point to end a redone step at (0: none)
+        if UNI {
+            // The interpolant at three interior points: DP5's from its stages, DOP853's needs
+            // three more right-hand sides (its 7th-order dense output), counted as work.
+            let dense = if M8 {
+                for l in 0..W {
+                    ln.n_extra[l] += 3 * ok[l] as u64;
+                }
+                let mut f = SliderRhs::<UNI, COUL> { c, contact: cm, fzl: &mut fzl_scratch };
+                dop853_dense(&mut f, &EV_COMPS, y, &yn, k1, &hh, &kk)
+            } else {
+                dopri5_dense(&EV_COMPS, y, &yn, [k1, &k[1], &k[2], &k[3], &k[4], &k[5]], &hh)
+            };
+            hidden_crossings::<COUL>(c, &dense, &ln.g0, &g1, &ln.pend, &ok, &mut hidden);
+        }
+
+        // ---- accept or reject, the controller (branch-free) ----
+        let mut lnx = zero;
+        for l in 0..W {
+            lnx[l] = err[l].max(1e-300);
+        }
+        let mut ln_err = ln_lanes(&lnx);
+        if !M8 {
+            for v in ln_err.iter_mut() {
+                *v *= 0.5;
+            }
+        }
+        let alpha = if M8 { ALPHA8 } else { ALPHA };
+        let mut arg = zero;
+        for l in 0..W {
+            arg[l] =
+                if ok[l] { -(alpha * ln_err[l] - BETA * ln.ln_err_old[l] - LN_SAFETY) } else { -alpha * ln_err[l] };
+        }
+        let r = exp_lanes(&arg);
+        let t_start = ln.t;
+        let mut acc_ok = [false; W];
+        let mut t_new = zero;
+        for l in 0..W {
+            let okl = ok[l];
+            let hid = hidden[l] > 0.0;
+            let e = err[l];
+            let ra = if e <= 0.0 { FAC_MAX } else { r[l].clamp(FAC_MIN, FAC_MAX) };
+            let ratio_a = if ln.rejected[l] { ra.min(1.0) } else { ra };
+            let ordinary = e.is_finite() && fin[l];
+            let ratio_r = if ordinary { (SAFETY * r[l]).clamp(FAC_MIN, 1.0) } else { FAC_MIN };
+            // A hidden crossing redoes the step ending inside the excursion; the controller's
+            // history is left as it was (the scalar driver's `h = t_in - t; continue`).
+            let h_new = if hid { hh[l] * hidden[l] } else { hh[l] * if okl { ratio_a } else { ratio_r } };
+            ln.h[l] = h_new;
+            let accepted = okl && !hid;
+            acc_ok[l] = accepted;
+            let lo = if e <= 0.0 { LN_ERR_FLOOR } else { ln_err[l].max(LN_ERR_FLOOR) };
+            ln.ln_err_old[l] = if accepted { lo } else { ln.ln_err_old[l] };
+            ln.rejected[l] = if hid { ln.rejected[l] } else { !okl };
+            t_new[l] = if last[l] { t_end } else { ln.t[l] + hh[l] };
+        }
+        for l in 0..W {
+            ln.n_acc[l] += acc_ok[l] as u64;
+            ln.n_rej[l] += (live[l] && !acc_ok[l]) as u64;
+        }
+
+        // ---- which accepted lanes need the cold path ----
+        let mut busy = [false; W];
+        let mut attn = [false; W];
+        for e in 0..NE {
+            for l in 0..W {
+                busy[l] |= ln.pend[e][l] | cross(ln.g0[e][l], g1[e][l]);
+            }
+        }
+        for l in 0..W {
+            let mut a = busy[l] | last[l];
+            if steady {
+                let section = (ln.y[idx::ZD][l] > 0.0) & (yn[idx::ZD][l] <= 0.0);
+                let pk = ln.peak[l].max(yn[idx::Z][l].abs());
+                let mut rest = true;
+                for i in 0..6 {
+                    rest &= yn[i][l] == 0.0;
+                }
+                a |= section | (pk < ln.rest[l]) | rest;
+            }
+            if sampled {
+                a |= t_new[l] >= ln.next_sample[l];
+            }
+            attn[l] = a & acc_ok[l];
+        }
+        // A step end where the floor of the step rejects (the scalar driver's check after a
+        // rejection): the lane ends with StepTooSmall / NonFinite.
+        for l in 0..W {
+            if !live[l] || acc_ok[l] || hidden[l] > 0.0 {
+                continue;
+            }
+            let h_new = ln.h[l];
+            if h_new.is_nan() || h_new < floor[l] {
+                let ordinary = fin[l] && err[l].is_finite();
+                let outcome = if ordinary { Outcome::StepTooSmall } else { Outcome::NonFinite };
+                let (t, y) = (ln.t[l], lane_state(&ln.y, l));
+                finish(&mut ln, l, t, y, outcome, &mut out);
+                refill(&mut ln, l, &inp, &mut out);
+            }
+        }
+
+        // ---- the common accepted step: commit on the lanes ----
+        let plain: [bool; W] = std::array::from_fn(|l| acc_ok[l] && !attn[l]);
+        each6!(i, {
+            for l in 0..W {
+                ln.y[i][l] = if plain[l] { yn[i][l] } else { ln.y[i][l] };
+                ln.f[i][l] = if plain[l] { fnew[i][l] } else { ln.f[i][l] };
+            }
+        });
+        for e in 0..NE {
+            for l in 0..W {
+                ln.g0[e][l] = if plain[l] { g1[e][l] } else { ln.g0[e][l] };
+            }
+        }
+        for l in 0..W {
+            let p = plain[l];
+            ln.t[l] = if p { t_new[l] } else { ln.t[l] };
+            let z = yn[idx::Z][l];
+            let normal = if UNI && !ln.contact[l] { 0.0 } else { ln.c.fst[l] + fzl[l] };
+            let gap = g1[event::GAP][l];
+            let vr = ln.c.v[l] - (yn[idx::XD][l] + ln.c.sl[l] * yn[idx::PHID][l]);
+            ln.min_n[l] = if p { ln.min_n[l].min(normal) } else { ln.min_n[l] };
+            ln.max_gap[l] = if p { ln.max_gap[l].max(gap) } else { ln.max_gap[l] };
+            ln.min_vr[l] = if p { ln.min_vr[l].min(vr) } else { ln.min_vr[l] };
+            ln.max_z[l] = if p { ln.max_z[l].max(z.abs()) } else { ln.max_z[l] };
+        }
+        if steady {
+            for l in 0..W {
+                let p = plain[l];
+                ln.peak[l] = if p { ln.peak[l].max(yn[idx::Z][l].abs()) } else { ln.peak[l] };
+            }
+            each6!(i, {
+                for l in 0..W {
+                    ln.peaks[i][l] = if plain[l] { ln.peaks[i][l].max(yn[i][l].abs()) } else { ln.peaks[i][l] };
+                }
+            });
+        }
+
+        // ---- the cold path: events, observers, the end of a run ----
+        if attn.iter().any(|&a| a) {
+            let stages: [&V6; 13] = if M8 {
+                let mut a = [&ln.f; 13];
+                for j in 1..13 {
+                    a[j] = &kk[j];
+                }
+                a
+            } else {
+                [&ln.f, &k[0], &k[1], &k[2], &k[3], &k[4], &k[5], &k[5], &k[5], &k[5], &k[5], &k[5], &k[5]]
+            };
+            let ks: [[State; 13]; W] = std::array::from_fn(|l| {
+                if attn[l] {
+                    std::array::from_fn(|j| lane_state(stages[j], l))
+                } else {
+                    [State::zeros(); 13]
+                }
+            });
+            for l in 0..W {
+                if !attn[l] {
+                    continue;
+                }
+                let y0 = lane_state(&ln.y, l);
+                let y1 = lane_state(&yn, l);
+                let g0: [f64; MAX_EVENTS] = std::array::from_fn(|e| if e < NE { ln.g0[e][l] } else { 0.0 });
+                let g1l: [f64; MAX_EVENTS] = std::array::from_fn(|e| if e < NE { g1[e][l] } else { 0.0 });
+                let ln_ref = &mut ln;
+                let sd = ln_ref.side[l].as_mut().expect("attention only on live lanes");
+                sync_to_side(&ln_ref.min_n, &ln_ref.max_gap, &ln_ref.min_vr, &ln_ref.max_z, l, sd);
+                if steady {
+                    if let Watch::Steady(o, _) = &mut sd.obs.inner {
+                        o.w.peak_since = ln_ref.peak[l];
+                        o.w.peaks_since = lane_state(&ln_ref.peaks, l);
+                    }
+                }
+                let span = ((t_start[l], &y0), (t_new[l], &y1));
+                let ev: StepEnd<6, ContactMode> = if M8 {
+                    let dense = Dop853Dense::from_stages(sd.s, sd.mode, &ks[l], &y0, &y1, t_start[l], hh[l]);
+                    let ev = cold_step(sd, &dense, busy[l], span, &g0, &g1l);
+                    sd.stats.n_rhs += dense.extra_rhs();
+                    ev
+                } else {
+                    let k7s: &[State; 7] = ks[l][..7].try_into().expect("seven stages");
+                    let dense = Dopri5Dense::from_stages(k7s, &y0, &y1, t_start[l], hh[l]);
+                    cold_step(sd, &dense, busy[l], span, &g0, &g1l)
+                };
+                sync_from_side(&mut ln, l, steady, sampled);
+                if let Some(outcome) = ev.end {
+                    finish(&mut ln, l, ev.t1, ev.y1, outcome, &mut out);
+                    refill(&mut ln, l, &inp, &mut out);
+                    continue;
+                }
+                if let Some(sw) = ev.switched {
+                    // Restart at the event in the new mode: fresh derivative, fresh event values.
+                    let sd = ln.side[l].as_mut().expect("live");
+                    let (t, y1, mode) = (ev.t1, ev.y1, ev.new_mode);
+                    sd.mode = mode;
+                    let f = sd.s.rhs(&y1, mode);
+                    sd.stats.n_rhs += 1;
+                    if !f.iter().all(|v| v.is_finite()) {
+                        finish(&mut ln, l, t, y1, Outcome::NonFinite, &mut out);
+                        refill(&mut ln, l, &inp, &mut out);
+                        continue;
+                    }
+                    let mut g = [0.0; MAX_EVENTS];
+                    sd.s.events(t, &y1, mode, &mut g);
+                    for e in 0..NE {
+                        sd.pend[e] = match sw.pend_before[e] {
+                            Some(ts) if t <= sw.t_check[e] => Some(ts),
+                            _ if e == sw.index || g[e] == 0.0 => Some(t),
+                            _ => None,
+                        };
+                    }
+                    let contact = mode.in_contact();
+                    let pend = sd.pend;
+                    for i in 0..6 {
+                        ln.y[i][l] = y1[i];
+                        ln.f[i][l] = f[i];
+                    }
+                    for e in 0..NE {
+                        ln.g0[e][l] = g[e];
+                        ln.pend[e][l] = pend[e].is_some();
+                    }
+                    ln.t[l] = t;
+                    ln.contact[l] = contact;
+                    ln.ln_err_old[l] = LN_ERR_FLOOR;
+                } else {
+                    for i in 0..6 {
+                        ln.y[i][l] = y1[i];
+                        ln.f[i][l] = fnew[i][l];
+                    }
+                    ln.t[l] = t_new[l];
+                    let sd = ln.side[l].as_mut().expect("live");
+                    for e in 0..NE {
+                        ln.g0[e][l] = g1[e][l];
+                        if sd.pend[e].is_none() && g1[e][l] == 0.0 {
+                            sd.pend[e] = Some(t_new[l]);
+                        }
+                        ln.pend[e][l] = sd.pend[e].is_some();
+                    }
+                    if last[l] {
+                        finish(&mut ln, l, t_new[l], y1, Outcome::Finished, &mut out);
+                        refill(&mut ln, l, &inp, &mut out);
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+/// The scalar driver's handling of one accepted step of one lane: its events (located on the
+/// step's interpolant, acted on in time order) or, without any, the observer's look at the step.
+#[inline(never)]
+fn cold_step<D: StepDense<6>>(
+    sd: &mut Side<'_>,
+    dense: &D,
+    busy: bool,
+    ((t0, y0), (t1, y1)): ((f64, &State), (f64, &State)),
+    g0: &[f64; MAX_EVENTS],
+    g1: &[f64; MAX_EVENTS],
+) -> StepEnd<6, ContactMode> {
+    let mode = sd.mode;
+    if busy {
+        step_events(
+            sd.s,
+            &mut sd.obs,
+            &sd.opts,
+            &mut sd.stats,
+            dense,
+            mode,
+            (t0, y0),
+            (t1, y1),
+            NE,
+            g0,
+            g1,
+            &mut sd.pend,
+        )
+    } else {
+        let view = StepView { t0, t1, y0, y1, mode, dense };
+        let end = if sd.obs.on_step(&view) == Control::Stop { Some(Outcome::StoppedByObserver) } else { None };
+        StepEnd { t1, y1: *y1, new_mode: mode, end, switched: None }
+    }
+}

@@ -1,0 +1,227 @@
+//! The slider on the lanes: per-lane coefficients, the right-hand side of MODEL.md §2-3 for
+//! bilateral or unilateral contact and the constant or Coulomb/Stribeck law, the event functions
+//! (`model::Slider::events`) and the scalar driver's hidden-crossing check, on eight trajectories
+//! at once.
+
+use crate::model::{event, idx, Slider};
+use crate::ode::lanes::{cross, exp_lanes, splat, LaneDense, LaneRhs, L, V6, W};
+
+/// Event functions of the slider (gap, law normal force, sliding velocity, escape).
+pub(super) const NE: usize = 4;
+
+/// The components the event functions read (z, zd, xd, phi, phid): the lane interpolants are
+/// built for these only.
+pub(super) const EV_COMPS: [usize; 5] = [idx::Z, idx::ZD, idx::XD, idx::PHI, idx::PHID];
+
+/// Per-lane coefficients of the right-hand side and the tolerances (shared with `batch`).
+#[derive(Clone, Copy)]
+pub(crate) struct Coef {
+    pub(crate) ks: L,
+    pub(crate) ka: L,
+    pub(crate) c: L,
+    pub(crate) kphi: L,
+    pub(crate) mu: L,
+    pub(crate) inv_m: L,
+    pub(crate) wz2: L,
+    pub(crate) dz: L,
+    pub(crate) wx2: L,
+    pub(crate) dx: L,
+    pub(crate) wt2: L,
+    pub(crate) dt: L,
+    /// s L / I
+    pub(crate) tg: L,
+    pub(crate) atol: V6,
+    /// F_st, z_st, V, s L, escape limit.
+    pub(crate) fst: L,
+    pub(crate) zst: L,
+    pub(crate) v: L,
+    pub(crate) sl: L,
+    pub(crate) esc: L,
+    /// Stribeck law: mu_k, mu_s - mu_k, 1/v_s, 1/eps, mu(V) F_st tanh(V/eps).
+    pub(crate) mu_k: L,
+    pub(crate) dmu: L,
+    pub(crate) inv_vs: L,
+    pub(crate) inv_eps: L,
+    pub(crate) stat: L,
+}
+
+impl Coef {
+    pub(crate) fn zero() -> Self {
+        let z = [0.0; W];
+        Coef {
+            ks: z,
+            ka: z,
+            c: z,
+            kphi: z,
+            mu: z,
+            inv_m: z,
+            wz2: z,
+            dz: z,
+            wx2: z,
+            dx: z,
+            wt2: z,
+            dt: z,
+            tg: z,
+            atol: [splat(1.0); 6],
+            fst: z,
+            zst: z,
+            v: z,
+            sl: z,
+            esc: splat(f64::INFINITY),
+            mu_k: z,
+            dmu: z,
+            inv_vs: z,
+            inv_eps: z,
+            stat: z,
+        }
+    }
+
+    pub(crate) fn set(&mut self, l: usize, s: &Slider, atol: &[f64; 6]) {
+        let p = &s.p;
+        let (wz, wx, wt) = (p.omega_normal, p.omega_friction, p.omega_torsion);
+        self.ks[l] = s.k_s;
+        self.ka[l] = p.contact_quadratic;
+        self.c[l] = p.contact_damping;
+        self.kphi[l] = p.twist_coupling;
+        self.mu[l] = p.mu;
+        self.inv_m[l] = 1.0 / p.mass;
+        self.wz2[l] = wz * wz;
+        self.dz[l] = 2.0 * p.zeta_normal * wz;
+        self.wx2[l] = wx * wx;
+        self.dx[l] = 2.0 * p.zeta_friction * wx;
+        self.wt2[l] = wt * wt;
+        self.dt[l] = 2.0 * p.zeta_torsion * wt;
+        self.tg[l] = p.torsion_sign * p.moment_arm / p.inertia;
+        for i in 0..6 {
+            self.atol[i][l] = atol[i];
+        }
+        self.fst[l] = p.normal_load;
+        self.zst[l] = s.z_st;
+        self.v[l] = p.sliding_speed;
+        self.sl[l] = p.torsion_sign * p.moment_arm;
+        self.esc[l] = p.escape_limit;
+        self.mu_k[l] = s.mu_k;
+        self.dmu[l] = p.mu_static - s.mu_k;
+        self.inv_vs[l] = 1.0 / p.stribeck_velocity;
+        self.inv_eps[l] = 1.0 / p.friction_regularization;
+        // The scalar law's static friction force, mu(V) F_st tanh(V/eps).
+        self.stat[l] = s.mu_of(p.sliding_speed) * p.normal_load * (p.sliding_speed / p.friction_regularization).tanh();
+    }
+}
+
+/// Right-hand side of the eight lanes and the dynamic law force `F_z` of each (the force the
+/// contact law gives, whether or not it acts). `UNI`: unilateral contact (the mask `contact`
+/// selects the law force or no normal force); `COUL`: the regularised Coulomb/Stribeck law.
+#[inline(always)]
+pub(super) fn rhs<const UNI: bool, const COUL: bool>(c: &Coef, contact: &[bool; W], y: &V6, out: &mut V6, fzl: &mut L) {
+    let mut fz = [0.0; W];
+    for l in 0..W {
+        let (z, zd, ph) = (y[0][l], y[1][l], y[4][l]);
+        let f = -c.ks[l] * z + c.ka[l] * z * z - c.c[l] * zd + c.kphi[l] * ph;
+        fzl[l] = f;
+        fz[l] = if UNI && !contact[l] { -c.fst[l] } else { f };
+    }
+    let mut fx = [0.0; W];
+    if COUL {
+        let mut a = [0.0; W];
+        let mut b = [0.0; W];
+        let mut vr = [0.0; W];
+        for l in 0..W {
+            let v = c.v[l] - (y[3][l] + c.sl[l] * y[5][l]);
+            vr[l] = v;
+            a[l] = -v.abs() * c.inv_vs[l];
+            b[l] = -2.0 * (v * c.inv_eps[l]).abs();
+        }
+        let ea = exp_lanes(&a);
+        let eb = exp_lanes(&b);
+        for l in 0..W {
+            let mu = c.mu_k[l] + c.dmu[l] * ea[l];
+            // tanh(v/eps) = sign(v) (1 - e^{-2|v|/eps}) / (1 + e^{-2|v|/eps}).
+            let th = ((1.0 - eb[l]) / (1.0 + eb[l])).copysign(vr[l]);
+            let normal = c.fst[l] + fz[l];
+            fx[l] = mu * normal * th - c.stat[l];
+        }
+    } else {
+        for l in 0..W {
+            fx[l] = c.mu[l] * fz[l];
+        }
+    }
+    for l in 0..W {
+        let (z, zd, x, xd, ph, phd) = (y[0][l], y[1][l], y[2][l], y[3][l], y[4][l], y[5][l]);
+        out[0][l] = zd;
+        out[1][l] = fz[l] * c.inv_m[l] - c.dz[l] * zd - c.wz2[l] * z;
+        out[2][l] = xd;
+        out[3][l] = fx[l] * c.inv_m[l] - c.dx[l] * xd - c.wx2[l] * x;
+        out[4][l] = phd;
+        out[5][l] = c.tg[l] * fx[l] - c.dt[l] * phd - c.wt2[l] * ph;
+    }
+}
+
+/// [`rhs`] as the lane kit's [`LaneRhs`]: the law force of the last evaluation is left in `fzl`.
+pub(super) struct SliderRhs<'a, const UNI: bool, const COUL: bool> {
+    pub(super) c: &'a Coef,
+    pub(super) contact: &'a [bool; W],
+    pub(super) fzl: &'a mut L,
+}
+
+impl<const UNI: bool, const COUL: bool> LaneRhs for SliderRhs<'_, UNI, COUL> {
+    #[inline(always)]
+    fn eval(&mut self, y: &V6, out: &mut V6) {
+        rhs::<UNI, COUL>(self.c, self.contact, y, out, self.fzl);
+    }
+}
+
+/// The slider's event functions on the lanes (`model::Slider::events`), from the state and the
+/// dynamic law force.
+#[inline(always)]
+pub(super) fn events_lanes<const COUL: bool>(c: &Coef, y: &V6, fzl: &L, g: &mut [L; NE]) {
+    for l in 0..W {
+        g[event::GAP][l] = c.zst[l] + y[idx::Z][l];
+        g[event::NORMAL][l] = c.fst[l] + fzl[l];
+        // No event under the constant law (see `Slider::events`).
+        g[event::SLIP][l] = if COUL { c.v[l] - (y[idx::XD][l] + c.sl[l] * y[idx::PHID][l]) } else { 1.0 };
+        g[event::ESCAPE][l] = c.esc[l] - y[idx::Z][l].abs();
+    }
+}
+
+/// The scalar driver's hidden-crossing check on all lanes at once: at the three interior points
+/// `x = 1/4, 1/2, 3/4` of each accepted step's interpolant, an event function that is not pending
+/// and differs in sign from the step start while the step end does not. `hidden[l]` becomes the
+/// first such `x` (0 where none).
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub(super) fn hidden_crossings<const COUL: bool>(
+    c: &Coef,
+    dense: &LaneDense<5>,
+    g0: &[L; NE],
+    g1: &[L; NE],
+    pend: &[[bool; W]; NE],
+    ok: &[bool; W],
+    hidden: &mut L,
+) {
+    let mut found = [false; W];
+    for q in 1..=3 {
+        let th = q as f64 / 4.0;
+        let v = dense.eval(th);
+        let mut g = [[0.0; W]; NE];
+        for l in 0..W {
+            let (z, zd, xd, ph, phd) = (v[0][l], v[1][l], v[2][l], v[3][l], v[4][l]);
+            let fz = -c.ks[l] * z + c.ka[l] * z * z - c.c[l] * zd + c.kphi[l] * ph;
+            g[event::GAP][l] = c.zst[l] + z;
+            g[event::NORMAL][l] = c.fst[l] + fz;
+            g[event::SLIP][l] = if COUL { c.v[l] - (xd + c.sl[l] * phd) } else { 1.0 };
+            g[event::ESCAPE][l] = c.esc[l] - z.abs();
+        }
+        let mut hit = [false; W];
+        for e in 0..NE {
+            for l in 0..W {
+                hit[l] |= !pend[e][l] & cross(g0[e][l], g[e][l]) & !cross(g0[e][l], g1[e][l]);
+            }
+        }
+        for l in 0..W {
+            let take = hit[l] & ok[l] & !found[l];
+            hidden[l] = if take { th } else { hidden[l] };
+            found[l] |= take;
+        }
+    }
+}

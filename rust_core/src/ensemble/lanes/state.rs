@@ -1,0 +1,302 @@
+//! The state of a lane driver: the vector side of the eight lanes ([`Lanes`]), each lane's scalar
+//! side ([`Side`]: the observers of its task, its events and options), and the set-up and teardown
+//! of a trajectory in a lane (refill, finish, idle) with the copies between the two sides.
+
+use super::slider::{Coef, NE};
+use crate::ensemble::{Task, TrajectoryResult};
+use crate::model::{idx, ContactMode, Slider, State};
+use crate::ode::controller::initial_step;
+use crate::ode::lanes::{L, LN_ERR_FLOOR, V6, W};
+use crate::ode::{Control, Observer, OdeSystem, Options, Outcome, Sampler, Stats, StepView, MAX_EVENTS};
+use crate::steady::{
+    options_for, status_of, summarize, Extremes, ExtremesObserver, RunResult, SteadyObserver, SteadyOptions, Tolerances,
+};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// What a lane's observer watches.
+pub(super) enum Watch<'a> {
+    Nothing,
+    Sample(Sampler<'a, 6>),
+    Steady(Box<SteadyObserver>, SteadyOptions),
+    Log(Vec<(usize, f64)>),
+}
+
+impl Observer<6, ContactMode> for Watch<'_> {
+    fn on_step(&mut self, st: &StepView<'_, 6, ContactMode>) -> Control {
+        match self {
+            Watch::Sample(s) => s.on_step(st),
+            Watch::Steady(o, _) => o.on_step(st),
+            Watch::Nothing | Watch::Log(_) => Control::Continue,
+        }
+    }
+    fn on_event(&mut self, i: usize, t: f64, y: &State, before: ContactMode, after: ContactMode) -> Control {
+        match self {
+            Watch::Log(v) => {
+                v.push((i, t));
+                Control::Continue
+            }
+            Watch::Steady(o, _) => o.on_event(i, t, y, before, after),
+            _ => Control::Continue,
+        }
+    }
+}
+
+/// The scalar side of a lane: what the cold paths need.
+pub(super) struct Side<'a> {
+    /// Input index of the trajectory.
+    pub(super) i: usize,
+    pub(super) s: &'a Slider,
+    pub(super) opts: Options<6>,
+    pub(super) mode: ContactMode,
+    pub(super) pend: [Option<f64>; MAX_EVENTS],
+    /// Right-hand sides outside the steps (start, starting step, restarts) and located events.
+    pub(super) stats: Stats,
+    pub(super) obs: ExtremesObserver<'a, Watch<'a>>,
+}
+
+/// The vector side of the eight lanes.
+pub(super) struct Lanes<'a> {
+    pub(super) c: Coef,
+    pub(super) y: V6,
+    /// f(t, y) in the lane's mode: the FSAL stage.
+    pub(super) f: V6,
+    pub(super) t: L,
+    pub(super) h: L,
+    pub(super) ln_err_old: L,
+    pub(super) rejected: [bool; W],
+    pub(super) n_acc: [u64; W],
+    pub(super) n_rej: [u64; W],
+    /// Right-hand sides of DOP853's interpolant built on the lanes (hidden-crossing checks).
+    pub(super) n_extra: [u64; W],
+    /// The method is DOP853 (else DP5).
+    pub(super) m8: bool,
+    pub(super) contact: [bool; W],
+    pub(super) g0: [L; NE],
+    pub(super) pend: [[bool; W]; NE],
+    pub(super) min_n: L,
+    pub(super) max_gap: L,
+    pub(super) min_vr: L,
+    pub(super) max_z: L,
+    /// Steady watcher: largest |z| and |y_c| since the last section, the rest floor (-inf: none).
+    pub(super) peak: L,
+    pub(super) peaks: V6,
+    pub(super) rest: L,
+    /// Next `t_eval` time of each lane (+inf: none).
+    pub(super) next_sample: L,
+    pub(super) side: [Option<Side<'a>>; W],
+}
+
+/// Everything the set-up and teardown of a lane needs.
+pub(super) struct Input<'a, 'b> {
+    pub(super) sliders: &'a [Slider],
+    pub(super) y0s: &'b [State],
+    pub(super) t_end: f64,
+    pub(super) tol: Tolerances,
+    pub(super) task: Task<'a>,
+    /// Index of the next trajectory to start (shared by the workers of a threaded call).
+    pub(super) feed: &'b AtomicUsize,
+}
+
+pub(super) fn sync_to_side(min_n: &L, max_gap: &L, min_vr: &L, max_z: &L, l: usize, sd: &mut Side<'_>) {
+    sd.obs.ext =
+        Extremes { min_normal_force: min_n[l], max_gap: max_gap[l], min_slip_velocity: min_vr[l], max_abs_z: max_z[l] };
+}
+
+/// Copy what the scalar observers changed back onto the lanes.
+pub(super) fn sync_from_side(ln: &mut Lanes<'_>, l: usize, steady: bool, sampled: bool) {
+    let sd = ln.side[l].as_ref().expect("live");
+    let e = sd.obs.ext;
+    ln.min_n[l] = e.min_normal_force;
+    ln.max_gap[l] = e.max_gap;
+    ln.min_vr[l] = e.min_slip_velocity;
+    ln.max_z[l] = e.max_abs_z;
+    if steady {
+        if let Watch::Steady(o, _) = &sd.obs.inner {
+            ln.peak[l] = o.w.peak_since;
+            for i in 0..6 {
+                ln.peaks[i][l] = o.w.peaks_since[i];
+            }
+        }
+    }
+    if sampled {
+        if let Watch::Sample(s) = &sd.obs.inner {
+            ln.next_sample[l] = s.t_eval.get(s.out.len()).copied().unwrap_or(f64::INFINITY);
+        }
+    }
+}
+
+/// Write lane `l`'s result (ended at `(t, y)` with `outcome`) and mark it idle.
+#[cold]
+pub(super) fn finish(
+    ln: &mut Lanes<'_>,
+    l: usize,
+    t: f64,
+    y: State,
+    outcome: Outcome,
+    out: &mut Vec<(usize, TrajectoryResult)>,
+) {
+    let mut sd = ln.side[l].take().expect("finish on a live lane");
+    let ext = Extremes {
+        min_normal_force: ln.min_n[l],
+        max_gap: ln.max_gap[l],
+        min_slip_velocity: ln.min_vr[l],
+        max_abs_z: ln.max_z[l],
+    };
+    let steps = ln.n_acc[l] + ln.n_rej[l];
+    let mut stats = sd.stats;
+    // DP5: six new stages per attempt (FSAL); DOP853: eleven per attempt and the derivative at
+    // each accepted step's end, plus its interpolants' extra stages.
+    stats.n_rhs += if ln.m8 { 11 * steps + ln.n_acc[l] + ln.n_extra[l] } else { 6 * steps };
+    stats.n_accept = ln.n_acc[l];
+    stats.n_reject = ln.n_rej[l];
+    let escaped = y[idx::Z].abs() >= sd.s.p.escape_limit * (1.0 - 1e-9);
+    let run = RunResult { status: status_of(outcome, escaped), t, y, extremes: ext, stats };
+    out.push((sd.i, conclude(run, &mut sd)));
+    idle(ln, l);
+}
+
+/// The task's result from a finished run and its observer.
+fn conclude(run: RunResult, sd: &mut Side<'_>) -> TrajectoryResult {
+    let mut res = TrajectoryResult { run, samples: Vec::new(), summary: None, events: Vec::new() };
+    match std::mem::replace(&mut sd.obs.inner, Watch::Nothing) {
+        Watch::Sample(s) => {
+            let mut v = s.out;
+            v.resize(s.t_eval.len(), State::repeat(f64::NAN));
+            res.samples = v;
+        }
+        Watch::Steady(o, opts) => res.summary = Some(summarize(sd.s, &res.run, &o.w, &opts)),
+        Watch::Log(v) => res.events = v,
+        Watch::Nothing => {}
+    }
+    res
+}
+
+/// Harmless values in an idle lane: at rest, far from every end condition and event.
+fn idle(ln: &mut Lanes<'_>, l: usize) {
+    for k in 0..6 {
+        ln.y[k][l] = 0.0;
+        ln.f[k][l] = 0.0;
+    }
+    ln.t[l] = 0.0;
+    ln.h[l] = 0.0;
+    ln.c.esc[l] = f64::INFINITY;
+    ln.contact[l] = true;
+    for e in 0..NE {
+        ln.g0[e][l] = 1.0;
+        ln.pend[e][l] = false;
+    }
+    ln.rest[l] = f64::NEG_INFINITY;
+    ln.next_sample[l] = f64::INFINITY;
+    ln.side[l] = None;
+}
+
+/// Load the next trajectory that needs a step into lane `l` (trajectories that end before their
+/// first step get their result here); leave the lane idle when none is left.
+#[cold]
+pub(super) fn refill<'a>(ln: &mut Lanes<'a>, l: usize, inp: &Input<'a, '_>, out: &mut Vec<(usize, TrajectoryResult)>) {
+    loop {
+        // The next trajectory of the call, shared by every worker of it.
+        let i = inp.feed.fetch_add(1, Ordering::Relaxed);
+        if i >= inp.sliders.len() {
+            break;
+        }
+        let s = &inp.sliders[i];
+        let y0 = inp.y0s[i];
+        let t_end = inp.t_end;
+        let mode = s.mode_at(&y0);
+        let watch = match inp.task {
+            Task::Final => Watch::Nothing,
+            Task::Sampled(te) => Watch::Sample(Sampler::new(te)),
+            Task::Steady { opts, decay } => {
+                let o = match decay {
+                    Some(d) => SteadyOptions { decay_amplitude: Some(d[i]), ..*opts },
+                    None => *opts,
+                };
+                Watch::Steady(Box::new(SteadyObserver::new(s, &o)), o)
+            }
+            Task::Events => Watch::Log(Vec::new()),
+        };
+        let mut obs = ExtremesObserver { s, ext: Extremes::default(), inner: watch };
+        obs.ext.update(s, &y0, mode);
+        let opts = options_for(s, &inp.tol);
+        let mut sd = Side { i, s, opts, mode, pend: [None; MAX_EVENTS], stats: Stats::default(), obs };
+        let early = |outcome: Outcome, n_rhs: u64, sd: &mut Side<'a>| {
+            sd.stats.n_rhs = n_rhs;
+            let run = RunResult {
+                status: status_of(outcome, y0[idx::Z].abs() >= s.p.escape_limit * (1.0 - 1e-9)),
+                t: 0.0,
+                y: y0,
+                extremes: sd.obs.ext,
+                stats: sd.stats,
+            };
+            conclude(run, sd)
+        };
+        if !t_end.is_finite() || !y0.iter().all(|v| v.is_finite()) {
+            out.push((i, early(Outcome::NonFinite, 0, &mut sd)));
+            continue;
+        }
+        if t_end < 0.0 {
+            out.push((i, early(Outcome::StepTooSmall, 0, &mut sd)));
+            continue;
+        }
+        if t_end == 0.0 {
+            out.push((i, early(Outcome::Finished, 0, &mut sd)));
+            continue;
+        }
+        let f0 = s.rhs(&y0, mode);
+        if !f0.iter().all(|v| v.is_finite()) {
+            out.push((i, early(Outcome::NonFinite, 1, &mut sd)));
+            continue;
+        }
+        let mut n_rhs = 1;
+        let order = if ln.m8 { 8 } else { 5 };
+        let h0 = initial_step(s, mode, 0.0, &y0, &f0, t_end, order, &opts.atol, opts.rtol, f64::INFINITY, &mut n_rhs);
+        sd.stats.n_rhs = n_rhs;
+        let mut g = [0.0; MAX_EVENTS];
+        s.events(0.0, &y0, mode, &mut g);
+        for e in 0..NE {
+            if g[e] == 0.0 {
+                sd.pend[e] = Some(0.0);
+            }
+            ln.g0[e][l] = g[e];
+            ln.pend[e][l] = g[e] == 0.0;
+        }
+        let atol: [f64; 6] = std::array::from_fn(|k| opts.atol[k]);
+        ln.c.set(l, s, &atol);
+        for k in 0..6 {
+            ln.y[k][l] = y0[k];
+            ln.f[k][l] = f0[k];
+        }
+        ln.t[l] = 0.0;
+        ln.h[l] = h0;
+        ln.ln_err_old[l] = LN_ERR_FLOOR;
+        ln.rejected[l] = false;
+        ln.n_acc[l] = 0;
+        ln.n_rej[l] = 0;
+        ln.n_extra[l] = 0;
+        ln.contact[l] = mode.in_contact();
+        let e = sd.obs.ext;
+        ln.min_n[l] = e.min_normal_force;
+        ln.max_gap[l] = e.max_gap;
+        ln.min_vr[l] = e.min_slip_velocity;
+        ln.max_z[l] = e.max_abs_z;
+        ln.rest[l] = f64::NEG_INFINITY;
+        ln.next_sample[l] = f64::INFINITY;
+        match &sd.obs.inner {
+            Watch::Steady(o, _) => {
+                ln.rest[l] = o.decay_floor;
+                ln.peak[l] = o.w.peak_since;
+                for k in 0..6 {
+                    ln.peaks[k][l] = o.w.peaks_since[k];
+                }
+            }
+            Watch::Sample(smp) => {
+                ln.next_sample[l] = smp.t_eval.first().copied().unwrap_or(f64::INFINITY);
+            }
+            _ => {}
+        }
+        ln.side[l] = Some(sd);
+        return;
+    }
+    idle(ln, l);
+}

@@ -1,0 +1,260 @@
+//! Ensembles of slider trajectories: one entry point, [`run`], and the policy that routes an
+//! ensemble to one of three paths.
+//!
+//! - [`Route::Batch`]: [`batch::run_bilateral_batch`], lane-batched Dormand–Prince 5(4) for the end
+//!   state of the bilateral constant-`mu` slider (the fastest path; only the escape is located).
+//! - [`Route::Lanes`]: [`lanes::run_lanes_threads`], lane-batched Dormand–Prince 5(4) and DOP853 for
+//!   everything else the lanes support (unilateral contact, the Coulomb/Stribeck law, samples at
+//!   `t_eval`, runs to a steady state), with the scalar driver's event code on a cold path.
+//! - [`Route::Scalar`]: the scalar driver through `steady` (`run`, `run_sampled`, `run_to_steady`,
+//!   `run_observed`), one trajectory per work item of [`par_map`]: every method and model.
+//!
+//! Every route gives the result of the scalar driver with the same method and tolerances, to
+//! integration accuracy (the lane paths use the same algebra with the dynamic law force used
+//! directly, so states differ by rounding per step; tested per route). On one route a
+//! trajectory's result is bitwise the same for any thread count: the lane paths compute each lane
+//! from its own values only, whatever shares its batch, and the scalar route runs one pure
+//! function per trajectory.
+//!
+//! This module is the home of every slider-specific batched integrator (`batch`, `lanes`); the
+//! generic pieces they are built from (tableaux, the lane kit, event location) stay in
+//! [`crate::ode`], which knows nothing of the slider.
+
+pub mod batch;
+pub mod lanes;
+
+#[cfg(test)]
+mod tests;
+
+// The thread pools lived here before they moved to `parallel`; these names keep working.
+pub use crate::parallel::{default_threads, panic_message, par_map, THREADS_ENV};
+
+use crate::model::{ContactMode, ContactModel, FrictionLaw, Slider, State};
+use crate::ode::{Control, Method, Observer, Stats};
+use crate::status::Status;
+use crate::steady::{self, RunResult, SteadyOptions, Summary, Tolerances};
+
+/// What each trajectory of an ensemble computes.
+#[derive(Clone, Copy, Debug)]
+pub enum Task<'a> {
+    /// The end state at `t_end` (or where the run stopped).
+    Final,
+    /// The end state and the states at the increasing times `t_eval` (NaN past an early stop),
+    /// as `steady::run_sampled`.
+    Sampled(&'a [f64]),
+    /// A run to a steady state and its summary, as `steady::run_to_steady`: `opts` carries the
+    /// method, the tolerances and `t_max` (the settings' `t_end`, `method` and `tol` are not
+    /// used). `decay`: a decay amplitude per trajectory that overrides `opts.decay_amplitude`.
+    Steady { opts: &'a SteadyOptions, decay: Option<&'a [f64]> },
+    /// The end state and every located event `(index, time)`: for tests and diagnostics.
+    Events,
+}
+
+/// The result of one trajectory.
+#[derive(Clone, Debug)]
+pub struct TrajectoryResult {
+    /// The plain run. For `Steady`: on the lane route the run up to the end of detection; on the
+    /// scalar route the summary's status, `t_end`, `y_end`, extremes and work.
+    pub run: RunResult,
+    /// States at `t_eval` (`Sampled` only).
+    pub samples: Vec<State>,
+    /// Summary (`Steady` only).
+    pub summary: Option<Summary>,
+    /// Located events `(index, time)` (`Events` only).
+    pub events: Vec<(usize, f64)>,
+}
+
+impl TrajectoryResult {
+    /// A plain run's result, nothing else.
+    pub fn from_run(run: RunResult) -> Self {
+        TrajectoryResult { run, samples: Vec::new(), summary: None, events: Vec::new() }
+    }
+
+    /// The result of a trajectory that could not be computed: `status`, NaN state and time, no
+    /// samples, a failed summary.
+    pub fn failed(status: Status) -> Self {
+        let run = RunResult {
+            status,
+            t: f64::NAN,
+            y: State::repeat(f64::NAN),
+            extremes: Default::default(),
+            stats: Stats::default(),
+        };
+        TrajectoryResult { summary: Some(Summary::failed(status)), ..Self::from_run(run) }
+    }
+}
+
+/// Settings shared by every trajectory of an ensemble.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Settings {
+    /// Simulated time of each trajectory from `t = 0` [s] (not used by `Task::Steady`).
+    pub t_end: f64,
+    /// Integrator (not used by `Task::Steady`: `opts.method`).
+    pub method: Method,
+    /// Tolerances and limits (not used by `Task::Steady`: `opts.tol`).
+    pub tol: Tolerances,
+    /// Worker threads; `None`: [`default_threads`].
+    pub threads: Option<usize>,
+}
+
+/// The path an ensemble takes (see the module documentation).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Route {
+    /// [`batch::run_bilateral_batch`] on groups of [`group_size`] trajectories in parallel.
+    Batch,
+    /// [`lanes::run_lanes_threads`].
+    Lanes,
+    /// The scalar driver, one trajectory per work item.
+    Scalar,
+}
+
+impl Route {
+    /// Every route.
+    pub const ALL: [Route; 3] = [Route::Batch, Route::Lanes, Route::Scalar];
+}
+
+/// The method and tolerances a task integrates with.
+fn method_tol(settings: &Settings, task: &Task<'_>) -> (Method, Tolerances) {
+    match task {
+        Task::Steady { opts, .. } => (opts.method, opts.tol),
+        _ => (settings.method, settings.tol),
+    }
+}
+
+/// Whether `route` can compute `task` for these sliders with these settings: the batch only the
+/// end state of bilateral constant-`mu` sliders with DOPRI5 and the default step and event
+/// budgets (it counts no events); the lanes only DOPRI5 or DOP853 and the friction laws they know,
+/// with one contact model and one law for all sliders; the scalar route everything.
+pub fn supports(route: Route, sliders: &[Slider], settings: &Settings, task: &Task<'_>) -> bool {
+    let (method, tol) = method_tol(settings, task);
+    let Some(first) = sliders.first() else { return route == Route::Scalar };
+    let shared = sliders.iter().all(|s| s.p.contact == first.p.contact && s.p.friction_law == first.p.friction_law);
+    match route {
+        Route::Batch => {
+            matches!(task, Task::Final)
+                && !tol.has_limits()
+                && method == Method::Dopri5
+                && shared
+                && first.p.contact == ContactModel::Bilateral
+                && first.p.friction_law == FrictionLaw::Constant
+        }
+        Route::Lanes => lanes::supports_method(method) && shared && lanes::supports(&first.p),
+        Route::Scalar => true,
+    }
+}
+
+/// The routing policy: the batch where it applies (the fastest), else the lanes where they
+/// apply, else the scalar driver.
+pub fn route(sliders: &[Slider], settings: &Settings, task: &Task<'_>) -> Route {
+    [Route::Batch, Route::Lanes].into_iter().find(|&r| supports(r, sliders, settings, task)).unwrap_or(Route::Scalar)
+}
+
+/// Trajectories per group of the batch route for `n` trajectories on `threads` threads (`None`:
+/// [`default_threads`]): about four groups per thread, so that the threads stay busy to the end of
+/// a call even when a few long runs dominate it, at least one full set of lanes (8) and at most
+/// 1024.
+pub fn group_size(n: usize, threads: Option<usize>) -> usize {
+    let nthreads = threads.unwrap_or_else(default_threads).max(1);
+    n.div_ceil(4 * nthreads).clamp(8, 1024)
+}
+
+/// Integrate each `sliders[i]` from `y0s[i]` at `t = 0` and compute `task` for it, on the route
+/// that [`route`] picks; results in input order. `Err(message)` for a trajectory whose
+/// computation panicked (on the batch route: every trajectory of its group).
+///
+/// Preconditions (panics otherwise): `sliders.len() == y0s.len()`; for `Task::Steady` with
+/// `decay`, one decay amplitude per slider.
+pub fn run(
+    sliders: &[Slider],
+    y0s: &[State],
+    settings: &Settings,
+    task: Task<'_>,
+) -> Vec<Result<TrajectoryResult, String>> {
+    run_on(route(sliders, settings, &task), sliders, y0s, settings, task)
+}
+
+/// [`run`] on a given route (for tests and benchmarks). Panics if [`supports`] rejects the route.
+pub fn run_on(
+    route: Route,
+    sliders: &[Slider],
+    y0s: &[State],
+    settings: &Settings,
+    task: Task<'_>,
+) -> Vec<Result<TrajectoryResult, String>> {
+    assert_eq!(sliders.len(), y0s.len(), "ensemble: one initial state per slider");
+    if let Task::Steady { decay: Some(d), .. } = task {
+        assert_eq!(d.len(), sliders.len(), "ensemble: one decay amplitude per slider");
+    }
+    assert!(supports(route, sliders, settings, &task), "ensemble: the {route:?} route cannot compute this task");
+    let (method, tol) = method_tol(settings, &task);
+    let threads = settings.threads;
+    match route {
+        Route::Batch => {
+            let group = group_size(sliders.len(), threads);
+            let ranges: Vec<std::ops::Range<usize>> =
+                (0..sliders.len()).step_by(group).map(|a| a..(a + group).min(sliders.len())).collect();
+            let parts = par_map(
+                &ranges,
+                threads,
+                |r| Ok(batch::run_bilateral_batch(&sliders[r.clone()], &y0s[r.clone()], settings.t_end, &tol)),
+                Err,
+            );
+            parts
+                .into_iter()
+                .zip(&ranges)
+                .flat_map(|(p, r)| match p {
+                    Ok(v) => v.into_iter().map(|run| Ok(TrajectoryResult::from_run(run))).collect::<Vec<_>>(),
+                    Err(msg) => vec![Err(msg); r.len()],
+                })
+                .collect()
+        }
+        Route::Lanes => lanes::run_lanes_threads(sliders, y0s, settings.t_end, method, &tol, task, threads),
+        Route::Scalar => {
+            let rows: Vec<usize> = (0..sliders.len()).collect();
+            par_map(&rows, threads, |&i| Ok(scalar(&sliders[i], &y0s[i], i, settings.t_end, method, &tol, task)), Err)
+        }
+    }
+}
+
+/// One trajectory on the scalar driver.
+fn scalar(
+    s: &Slider,
+    y0: &State,
+    i: usize,
+    t_end: f64,
+    method: Method,
+    tol: &Tolerances,
+    task: Task<'_>,
+) -> TrajectoryResult {
+    match task {
+        Task::Final => TrajectoryResult::from_run(steady::run(s, y0, t_end, method, tol)),
+        Task::Sampled(te) => {
+            let (run, samples) = steady::run_sampled(s, y0, t_end, method, tol, te);
+            TrajectoryResult { samples, ..TrajectoryResult::from_run(run) }
+        }
+        Task::Steady { opts, decay } => {
+            let o = match decay {
+                Some(d) => SteadyOptions { decay_amplitude: Some(d[i]), ..*opts },
+                None => *opts,
+            };
+            let sum = steady::run_to_steady(s, y0, &o);
+            let run =
+                RunResult { status: sum.status, t: sum.t_end, y: sum.y_end, extremes: sum.extremes, stats: sum.stats };
+            TrajectoryResult { summary: Some(sum), ..TrajectoryResult::from_run(run) }
+        }
+        Task::Events => {
+            let (run, log) = steady::run_observed(s, y0, t_end, method, tol, EventLog(Vec::new()));
+            TrajectoryResult { events: log.0, ..TrajectoryResult::from_run(run) }
+        }
+    }
+}
+
+/// Records every located event `(index, time)`.
+struct EventLog(Vec<(usize, f64)>);
+
+impl Observer<6, ContactMode> for EventLog {
+    fn on_event(&mut self, i: usize, t: f64, _y: &State, _before: ContactMode, _after: ContactMode) -> Control {
+        self.0.push((i, t));
+        Control::Continue
+    }
+}

@@ -1,0 +1,278 @@
+//! The routing policy and the entry point: which route each ensemble takes, every route against
+//! the scalar driver (with the tolerances of the lane and batch tests), and bitwise equality where
+//! results must not change (thread counts, the batch's grouping, the entry point against the paths
+//! it calls).
+
+use super::*;
+use crate::model::Params;
+use crate::steady::SteadyOutcome;
+
+fn tol(rtol: f64) -> Tolerances {
+    Tolerances::new(rtol)
+}
+
+fn settings(t_end: f64, method: Method, rtol: f64, threads: Option<usize>) -> Settings {
+    Settings { t_end, method, tol: tol(rtol), threads }
+}
+
+fn sliders(base: Params, mus: &[f64]) -> Vec<Slider> {
+    mus.iter().map(|&mu| Slider::new(Params { mu, ..base }).unwrap()).collect()
+}
+
+fn starts(n: usize, z0: f64) -> Vec<State> {
+    vec![State::new(z0, 0.0, 0.0, 0.0, 0.0, 0.0); n]
+}
+
+fn unwrap(v: Vec<Result<TrajectoryResult, String>>) -> Vec<TrajectoryResult> {
+    v.into_iter().map(|r| r.expect("no panic")).collect()
+}
+
+/// Every number of a result, as bits.
+fn bits(r: &TrajectoryResult) -> Vec<u64> {
+    let mut v: Vec<u64> = r.run.y.iter().map(|x| x.to_bits()).collect();
+    v.push(r.run.t.to_bits());
+    let e = r.run.extremes;
+    v.extend([e.min_normal_force, e.max_gap, e.min_slip_velocity, e.max_abs_z].map(f64::to_bits));
+    let s = r.run.stats;
+    v.extend([s.n_rhs, s.n_jac, s.n_lu, s.n_accept, s.n_reject, s.n_events, r.run.status.code() as u64]);
+    for y in &r.samples {
+        v.extend(y.iter().map(|x| x.to_bits()));
+    }
+    if let Some(m) = &r.summary {
+        v.extend([m.omega, m.period, m.t_end, m.z0, m.z_amp[0], m.z_amp[1], m.fraction_off_disk].map(f64::to_bits));
+        v.extend(m.y_end.iter().map(|x| x.to_bits()));
+        v.extend([m.outcome as u64, m.multiplicity as u64, m.stats.n_rhs]);
+    }
+    for (i, t) in &r.events {
+        v.extend([*i as u64, t.to_bits()]);
+    }
+    v
+}
+
+fn seed_bilateral() -> Params {
+    Params::seed()
+}
+
+fn unilateral() -> Params {
+    Params { contact: ContactModel::Unilateral, ..Params::seed() }
+}
+
+#[test]
+fn the_policy_picks_the_fastest_route_that_applies() {
+    let bil = sliders(seed_bilateral(), &[0.21, 0.22]);
+    let uni = sliders(unilateral(), &[0.21, 0.22]);
+    let sw = sliders(Params { friction_law: FrictionLaw::Switch, ..seed_bilateral() }, &[0.21]);
+    let mixed = vec![bil[0], uni[0]];
+    let te = [0.0, 0.1];
+    let opts = SteadyOptions::default();
+    let steady = Task::Steady { opts: &opts, decay: None };
+    let dp5 = settings(0.5, Method::Dopri5, 1e-8, None);
+    let limited = Settings { tol: Tolerances { max_steps: Some(1000), ..tol(1e-8) }, ..dp5 };
+    let cases: [(&str, &[Slider], Settings, Task<'_>, Route); 12] = [
+        ("bilateral constant end state", &bil, dp5, Task::Final, Route::Batch),
+        ("with a step budget (the batch keeps the default)", &bil, limited, Task::Final, Route::Lanes),
+        ("samples", &bil, dp5, Task::Sampled(&te), Route::Lanes),
+        ("steady state", &bil, dp5, steady, Route::Lanes),
+        ("events", &bil, dp5, Task::Events, Route::Lanes),
+        ("DOP853", &bil, Settings { method: Method::Dop853, ..dp5 }, Task::Final, Route::Lanes),
+        ("Rodas4", &bil, Settings { method: Method::Rodas4, ..dp5 }, Task::Final, Route::Scalar),
+        ("unilateral", &uni, dp5, Task::Final, Route::Lanes),
+        ("switch law", &sw, dp5, Task::Final, Route::Scalar),
+        ("mixed contact models", &mixed, dp5, Task::Final, Route::Scalar),
+        ("no trajectory", &[], dp5, Task::Final, Route::Scalar),
+        (
+            "steady with Rodas4 in its options",
+            &bil,
+            dp5,
+            Task::Steady { opts: &SteadyOptions { method: Method::Rodas4, ..opts }, decay: None },
+            Route::Scalar,
+        ),
+    ];
+    for (name, s, set, task, want) in cases {
+        assert_eq!(route(s, &set, &task), want, "{name}");
+        // The scalar route takes everything; a route is only picked where it applies.
+        assert!(supports(Route::Scalar, s, &set, &task), "{name}");
+        assert!(supports(want, s, &set, &task), "{name}");
+    }
+}
+
+#[test]
+fn batch_groups_keep_the_threads_and_the_lanes_busy() {
+    // About four groups per thread...
+    assert_eq!(group_size(1000, Some(2)), 125);
+    assert_eq!(group_size(1001, Some(2)), 126);
+    // ...but never less than one set of 8 lanes, never more than 1024 trajectories.
+    assert_eq!(group_size(10, Some(4)), 8);
+    assert_eq!(group_size(0, Some(4)), 8);
+    assert_eq!(group_size(10_000_000, Some(1)), 1024);
+    // Zero threads means one.
+    assert_eq!(group_size(100, Some(0)), group_size(100, Some(1)));
+}
+
+/// Distance of each trajectory's `z(t_end)` from a tight DOP853 reference, relative to the
+/// reference's largest `|z|`.
+fn z_errors(s: &[Slider], y0: &[State], t_end: f64, r: &[TrajectoryResult]) -> Vec<f64> {
+    (0..s.len())
+        .map(|i| {
+            let rf = steady::run(&s[i], &y0[i], t_end, Method::Dop853, &tol(1e-13));
+            (r[i].run.y[0] - rf.y[0]).abs() / rf.extremes.max_abs_z
+        })
+        .collect()
+}
+
+/// The end state on every route that applies, against the scalar route: same status and end
+/// time, an error from the tight reference of the scalar error's size (the lane and batch tests'
+/// bound: the paths are the same method and differ by rounding per step, so 10 times the scalar
+/// error plus 10 rtol covers the accumulated rounding), step counts within a few per cent.
+#[test]
+fn every_route_gives_the_scalar_drivers_end_state() {
+    let mus = [0.19, 0.2, 0.205, 0.21, 0.215, 0.22, 0.23, 0.25, 0.27, 0.3];
+    let scenes =
+        [("seed", sliders(seed_bilateral(), &mus), 1e-6, 0.5), ("unilateral", sliders(unilateral(), &mus), 30e-6, 0.2)];
+    for (name, s, z0, t_end) in scenes {
+        let y0 = starts(s.len(), z0);
+        for method in [Method::Dopri5, Method::Dop853] {
+            for rtol in [1e-6, 1e-9] {
+                let set = settings(t_end, method, rtol, Some(2));
+                let scalar = unwrap(run_on(Route::Scalar, &s, &y0, &set, Task::Final));
+                let e_s = z_errors(&s, &y0, t_end, &scalar);
+                let mut checked = 0;
+                for r in [Route::Batch, Route::Lanes] {
+                    if !supports(r, &s, &set, &Task::Final) {
+                        continue;
+                    }
+                    checked += 1;
+                    let out = unwrap(run_on(r, &s, &y0, &set, Task::Final));
+                    let e_r = z_errors(&s, &y0, t_end, &out);
+                    for i in 0..s.len() {
+                        let (a, b) = (&out[i].run, &scalar[i].run);
+                        assert_eq!(a.status, b.status, "{name} {method:?} {r:?} #{i}");
+                        assert_eq!(a.t, b.t, "{name} {method:?} {r:?} #{i}");
+                        assert!(
+                            e_r[i] <= 10.0 * e_s[i] + 10.0 * rtol,
+                            "{name} {method:?} {r:?} rtol {rtol} #{i}: {:e} vs scalar {:e}",
+                            e_r[i],
+                            e_s[i]
+                        );
+                        let (na, nb) = (a.stats.n_accept + a.stats.n_reject, b.stats.n_accept + b.stats.n_reject);
+                        assert!(
+                            (na as f64 - nb as f64).abs() <= 0.05 * nb as f64 + 3.0,
+                            "{name} {r:?} #{i}: {na} vs {nb} steps"
+                        );
+                    }
+                }
+                // The seed's bilateral DP5 ensemble has both lane routes, the others the lanes.
+                let want = if name == "seed" && method == Method::Dopri5 { 2 } else { 1 };
+                assert_eq!(checked, want, "{name} {method:?}");
+            }
+        }
+    }
+}
+
+/// Samples and runs to steady state on the lane route against the scalar route (the lane tests'
+/// bounds: samples within 10 times the scalar error from a tight reference plus 10 rtol of the
+/// motion's size; the same outcome, and a periodic state's frequency to 1e-5 and amplitude to 1e-4
+/// relative, the accuracy the cycle detection promises at rtol 1e-8).
+#[test]
+fn samples_and_steady_states_agree_across_routes() {
+    let te: Vec<f64> = (0..=100).map(|k| k as f64 * 2e-3).collect();
+    let s = sliders(unilateral(), &[0.2, 0.25, 0.3, 0.35]);
+    let y0 = starts(s.len(), 30e-6);
+    let rtol = 1e-8;
+    let set = settings(0.2, Method::Dopri5, rtol, Some(2));
+    let lanes = unwrap(run_on(Route::Lanes, &s, &y0, &set, Task::Sampled(&te)));
+    let scalar = unwrap(run_on(Route::Scalar, &s, &y0, &set, Task::Sampled(&te)));
+    for i in 0..s.len() {
+        let (_, yr) = steady::run_sampled(&s[i], &y0[i], 0.2, Method::Dop853, &tol(1e-13), &te);
+        let scale = yr.iter().map(|y| y[0].abs()).fold(0.0, f64::max);
+        let worst = |v: &[State]| v.iter().zip(&yr).map(|(a, b)| (a[0] - b[0]).abs()).fold(0.0, f64::max);
+        assert_eq!(lanes[i].samples.len(), te.len());
+        let (wl, ws) = (worst(&lanes[i].samples), worst(&scalar[i].samples));
+        assert!(wl <= 10.0 * ws + 10.0 * rtol * scale, "#{i}: {wl:e} vs {ws:e}");
+    }
+
+    let mut outcomes = Vec::new();
+    for base in [seed_bilateral(), unilateral()] {
+        let mus = [0.15, 0.18, 0.25, 0.30, 0.35];
+        let s = sliders(base, &mus);
+        let y0: Vec<State> =
+            (0..mus.len()).map(|k| State::new(1e-6 * (1 + k) as f64, 0.0, 0.0, 0.0, 0.0, 0.0)).collect();
+        let opts = SteadyOptions { t_max: 10.0, tol: tol(1e-8), ..SteadyOptions::default() };
+        let task = Task::Steady { opts: &opts, decay: None };
+        let lanes = unwrap(run_on(Route::Lanes, &s, &y0, &set, task));
+        let scalar = unwrap(run_on(Route::Scalar, &s, &y0, &set, task));
+        for i in 0..s.len() {
+            let (m, sc) = (lanes[i].summary.expect("steady"), scalar[i].summary.expect("steady"));
+            assert_eq!(m.outcome, sc.outcome, "{:?} #{i}", base.contact);
+            assert_eq!(m.status, sc.status, "{:?} #{i}", base.contact);
+            if m.outcome == SteadyOutcome::Periodic {
+                assert!((m.omega - sc.omega).abs() < 1e-5 * sc.omega, "{:?} #{i}", base.contact);
+                assert!((m.z_amp[0] - sc.z_amp[0]).abs() < 1e-4 * sc.z_amp[0], "{:?} #{i}", base.contact);
+            }
+            outcomes.push(m.outcome);
+        }
+    }
+    // The set covers every way a run ends (the scenes of the lane tests).
+    for o in [SteadyOutcome::Decayed, SteadyOutcome::Periodic, SteadyOutcome::Diverged] {
+        assert!(outcomes.contains(&o), "{o:?} missing: {outcomes:?}");
+    }
+}
+
+/// On each route, every task gives bitwise the same results on 1, 2 and 3 threads (on the batch
+/// route that also changes the grouping: 40 trajectories in groups of 10 or 8), and the entry
+/// point gives bitwise what the path it routes to gives when called directly.
+#[test]
+fn results_are_bitwise_the_same_for_any_thread_count_and_through_the_entry_point() {
+    let mus: Vec<f64> = (0..40).map(|k| 0.18 + 0.004 * k as f64).collect();
+    let te: Vec<f64> = (0..=20).map(|k| k as f64 * 5e-3).collect();
+    let opts = SteadyOptions { t_max: 0.3, tol: tol(1e-7), ..SteadyOptions::default() };
+    let decay: Vec<f64> = (0..40).map(|k| 1e-8 * (1 + k % 3) as f64).collect();
+    let tasks = [Task::Final, Task::Sampled(&te), Task::Steady { opts: &opts, decay: Some(&decay) }, Task::Events];
+    for (base, z0) in [(seed_bilateral(), 1e-6), (unilateral(), 30e-6)] {
+        let s = sliders(base, &mus);
+        let y0 = starts(s.len(), z0);
+        for task in tasks {
+            for r in Route::ALL {
+                let set = settings(0.1, Method::Dopri5, 1e-7, Some(1));
+                if !supports(r, &s, &set, &task) {
+                    continue;
+                }
+                let one: Vec<Vec<u64>> = unwrap(run_on(r, &s, &y0, &set, task)).iter().map(bits).collect();
+                for th in [2, 3] {
+                    let set = Settings { threads: Some(th), ..set };
+                    let many: Vec<Vec<u64>> = unwrap(run_on(r, &s, &y0, &set, task)).iter().map(bits).collect();
+                    assert!(one == many, "{:?} {task:?} {r:?}: {th} threads differ from 1", base.contact);
+                }
+                // The entry point adds nothing to the lane paths' arithmetic (the batch route's
+                // grouping included).
+                let direct: Option<Vec<Vec<u64>>> = match r {
+                    Route::Batch => Some(
+                        batch::run_bilateral_batch(&s, &y0, 0.1, &set.tol)
+                            .into_iter()
+                            .map(|x| bits(&TrajectoryResult::from_run(x)))
+                            .collect(),
+                    ),
+                    Route::Lanes => {
+                        Some(lanes::run_lanes(&s, &y0, 0.1, Method::Dopri5, &set.tol, task).iter().map(bits).collect())
+                    }
+                    Route::Scalar => None,
+                };
+                if let Some(direct) = direct {
+                    assert!(one == direct, "{:?} {task:?} {r:?}: the entry point differs from the path", base.contact);
+                }
+                if route(&s, &set, &task) == r {
+                    let auto: Vec<Vec<u64>> = unwrap(run(&s, &y0, &set, task)).iter().map(bits).collect();
+                    assert!(auto == one, "{:?} {task:?}: run differs from run_on({r:?})", base.contact);
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn failed_results_carry_the_status_and_no_numbers() {
+    let f = TrajectoryResult::failed(Status::Panic);
+    assert_eq!(f.run.status, Status::Panic);
+    assert!(f.run.t.is_nan() && f.run.y.iter().all(|v| v.is_nan()));
+    assert_eq!(f.summary.map(|s| (s.status, s.outcome)), Some((Status::Panic, SteadyOutcome::Failed)));
+}

@@ -1,0 +1,273 @@
+//! Events on an accepted step: sign changes located on the step's dense output (Illinois), acted
+//! on in time order, reported to the observer; the hidden-crossing check inside a step.
+//!
+//! The rules (restart, grazing guard, truncation) are those of the driver's module documentation;
+//! this code is shared by the scalar driver ([`super::driver`]) and the lane-batched slider paths
+//! (`crate::ensemble::lanes`), which call [`step_events`] for a lane whose step shows a crossing.
+
+use super::stepper::StepDense;
+use super::{Control, Dense, EventAction, Observer, OdeSystem, Options, Outcome, Stats, StepView, MAX_EVENTS};
+use nalgebra::SVector;
+
+/// A sign change from `a` (nonzero) to `b` (other sign or exactly zero).
+#[inline]
+pub(crate) fn crosses(a: f64, b: f64) -> bool {
+    (a > 0.0 && b <= 0.0) || (a < 0.0 && b >= 0.0)
+}
+
+/// Illinois (modified regula falsi) on `[a, b]` with `ga`, `gb` of opposite signs (or `gb == 0`),
+/// safeguarded by bisection when the bracket fails to halve in two iterations. Returns a time on
+/// the `b` side of the root with `b - root <= tol` (or a point where `g` is exactly 0).
+pub(crate) fn locate(mut g: impl FnMut(f64) -> f64, mut a: f64, mut ga: f64, mut b: f64, mut gb: f64, tol: f64) -> f64 {
+    if gb == 0.0 {
+        return b;
+    }
+    // Which end moved last: +1 the left, -1 the right (Illinois halves the stuck end's value).
+    let mut side = 0i8;
+    let mut width_2ago = f64::INFINITY;
+    let mut width_1ago = f64::INFINITY;
+    for _ in 0..300 {
+        let w = b - a;
+        if w <= tol {
+            break;
+        }
+        let bisect = w > 0.5 * width_2ago;
+        width_2ago = width_1ago;
+        width_1ago = w;
+        let mut c = if bisect { 0.5 * (a + b) } else { b - gb * (b - a) / (gb - ga) };
+        if !(c > a && c < b) {
+            c = 0.5 * (a + b);
+            if !(c > a && c < b) {
+                break; // the bracket is down to adjacent floats
+            }
+        }
+        let gc = g(c);
+        if gc == 0.0 {
+            return c;
+        }
+        // A NaN value is treated as lying on the far side (shrinks from the right).
+        if gc.is_nan() || (gc > 0.0) == (gb > 0.0) {
+            b = c;
+            gb = if gc.is_nan() { gb } else { gc };
+            if side == -1 {
+                ga *= 0.5;
+            }
+            side = -1;
+        } else {
+            a = c;
+            ga = gc;
+            if side == 1 {
+                gb *= 0.5;
+            }
+            side = 1;
+        }
+    }
+    b
+}
+
+/// `sys.on_event`, kept out of line: it runs only at events (the slider's evaluates its
+/// right-hand side), so there is no reason to grow the step loop with it.
+#[inline(never)]
+#[cold]
+fn event_action<const N: usize, S: OdeSystem<N>>(
+    sys: &S,
+    t: f64,
+    y: &SVector<f64, N>,
+    mode: S::Mode,
+    index: usize,
+) -> EventAction<S::Mode> {
+    sys.on_event(t, y, mode, index)
+}
+
+/// A located crossing within the current step.
+#[derive(Clone, Copy)]
+struct Found<const N: usize, M> {
+    t: f64,
+    index: usize,
+    y: SVector<f64, N>,
+    action: EventAction<M>,
+}
+
+/// How an accepted step ended, as the driver continues from it.
+pub(crate) struct StepEnd<const N: usize, M> {
+    /// End of the step as the observer saw it (an event time if truncated).
+    pub(crate) t1: f64,
+    pub(crate) y1: SVector<f64, N>,
+    /// Mode from here on.
+    pub(crate) new_mode: M,
+    /// The run ends here.
+    pub(crate) end: Option<Outcome>,
+    /// A `Switch` truncated the step: restart there.
+    pub(crate) switched: Option<Switched>,
+}
+
+/// What a restart after a `Switch` needs to set the pending events.
+pub(crate) struct Switched {
+    /// The event that switched.
+    pub(crate) index: usize,
+    /// Pending state of every event at the start of the truncated step.
+    pub(crate) pend_before: [Option<f64>; MAX_EVENTS],
+    /// Check times of the events pending in that step (`-inf` for the others).
+    pub(crate) t_check: [f64; MAX_EVENTS],
+}
+
+/// First interior point (of `opts.interior_checks` evenly spaced ones) of a step where an event
+/// function that is not pending differs in sign from the step start while the step end does not:
+/// a crossing and its return hidden inside the step.
+#[inline(never)]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn hidden_crossing<const N: usize, S: OdeSystem<N>, D: Dense<N>>(
+    sys: &S,
+    dense: &D,
+    mode: S::Mode,
+    t: f64,
+    t_new: f64,
+    n_ev: usize,
+    g0: &[f64; MAX_EVENTS],
+    g1: &[f64; MAX_EVENTS],
+    pend: &[Option<f64>; MAX_EVENTS],
+    opts: &Options<N>,
+) -> Option<f64> {
+    let k = opts.interior_checks as usize;
+    let mut gk = [0.0; MAX_EVENTS];
+    for j in 1..=k {
+        let tj = t + (t_new - t) * j as f64 / (k + 1) as f64;
+        sys.events(tj, &dense.eval(tj), mode, &mut gk);
+        for i in 0..n_ev {
+            if pend[i].is_none() && crosses(g0[i], gk[i]) && !crosses(g0[i], g1[i]) {
+                return Some(tj);
+            }
+        }
+    }
+    None
+}
+
+/// Locate, act on and report the events of an accepted step `[t, t_new]` in which some event
+/// function changed sign or was pending; calls the observer for the (possibly truncated) step and
+/// its events. Out of line: most steps have no event, and keeping this off the step loop keeps
+/// that loop small.
+#[inline(never)]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn step_events<const N: usize, S, O, D>(
+    sys: &S,
+    obs: &mut O,
+    opts: &Options<N>,
+    stats: &mut Stats,
+    dense: &D,
+    mode: S::Mode,
+    (t, y): (f64, &SVector<f64, N>),
+    (t_new, y_new): (f64, &SVector<f64, N>),
+    n_ev: usize,
+    g0: &[f64; MAX_EVENTS],
+    g1: &[f64; MAX_EVENTS],
+    pend: &mut [Option<f64>; MAX_EVENTS],
+) -> StepEnd<N, S::Mode>
+where
+    S: OdeSystem<N>,
+    O: Observer<N, S::Mode>,
+    D: StepDense<N>,
+{
+    let mut found: [Option<Found<N, S::Mode>>; MAX_EVENTS] = [None; MAX_EVENTS];
+    let mut n_found = 0;
+    let pend_before = *pend;
+    let mut t_check = [f64::NEG_INFINITY; MAX_EVENTS];
+    let mut gbuf = [0.0; MAX_EVENTS];
+    let mut g_at = |i: usize, tt: f64| {
+        let yy = dense.eval(tt);
+        sys.events(tt, &yy, mode, &mut gbuf);
+        gbuf[i]
+    };
+    for i in 0..n_ev {
+        let (ta, ga) = match pend[i] {
+            None => (t, g0[i]),
+            Some(ts) => {
+                let tc = (ts + opts.event_guard).max(t + 1e-6 * (t_new - t));
+                t_check[i] = tc;
+                if tc >= t_new {
+                    continue;
+                }
+                let gc = g_at(i, tc);
+                if gc == 0.0 || gc.is_nan() {
+                    if g1[i] != 0.0 {
+                        pend[i] = None;
+                    }
+                    continue;
+                }
+                pend[i] = None;
+                (tc, gc)
+            }
+        };
+        if crosses(ga, g1[i]) {
+            let te = locate(|tt| g_at(i, tt), ta, ga, t_new, g1[i], opts.event_tol);
+            found[n_found] = Some(Found { t: te, index: i, y: *y_new, action: EventAction::Continue });
+            n_found += 1;
+        }
+    }
+    // Time order (ties by index); at most MAX_EVENTS entries: insertion sort.
+    for a in 1..n_found {
+        let mut b = a;
+        while b > 0 && found[b - 1].map(|e| e.t) > found[b].map(|e| e.t) {
+            found.swap(b - 1, b);
+            b -= 1;
+        }
+    }
+
+    // Actions in time order, up to the first truncating one.
+    let mut n_proc = 0;
+    let mut trunc = false;
+    for slot in found.iter_mut().take(n_found) {
+        let e = slot.as_mut().expect("filled above");
+        if e.t < t_new {
+            e.y = dense.eval(e.t);
+        }
+        e.action = event_action(sys, e.t, &e.y, mode, e.index);
+        n_proc += 1;
+        if !matches!(e.action, EventAction::Continue) {
+            trunc = true;
+            break;
+        }
+    }
+    let (t1, y1) = if trunc {
+        let e = found[n_proc - 1].expect("filled above");
+        (e.t, e.y)
+    } else {
+        (t_new, *y_new)
+    };
+
+    let mut end = None;
+    let mut new_mode = mode;
+    let view = StepView { t0: t, t1, y0: y, y1: &y1, mode, dense };
+    if obs.on_step(&view) == Control::Stop {
+        end = Some(Outcome::StoppedByObserver);
+    } else {
+        for e in found.iter().take(n_proc).flatten() {
+            stats.n_events += 1;
+            if stats.n_events > opts.max_events {
+                end = Some(Outcome::EventChatter);
+                break;
+            }
+            let after = match e.action {
+                EventAction::Switch(m) => m,
+                _ => mode,
+            };
+            let c = obs.on_event(e.index, e.t, &e.y, mode, after);
+            new_mode = after;
+            if matches!(e.action, EventAction::Stop) {
+                end = Some(Outcome::StoppedByEvent);
+            }
+            if c == Control::Stop {
+                end = Some(Outcome::StoppedByObserver);
+            }
+            if end.is_some() {
+                break;
+            }
+        }
+    }
+    let switched = if trunc && end.is_none() {
+        let index = found[n_proc - 1].expect("filled above").index;
+        Some(Switched { index, pend_before, t_check })
+    } else {
+        None
+    };
+    StepEnd { t1, y1, new_mode, end, switched }
+}

@@ -1,0 +1,101 @@
+"""The contract of the compiled core ``tribosweep._core`` at the Python boundary.
+
+- One exception hierarchy: ``TribosweepError`` is the base of every error raised on purpose; bad
+  input raises ``InvalidArgumentError``, which is also a ``ValueError`` (so ``except ValueError``
+  keeps working), with a message that names the argument, its value and what is valid.
+- Optional parameters are keyword-only in every function (required ones stay positional), so an
+  argument can never land in the wrong slot when a parameter is added.
+- The ensemble's path (lane-batched or scalar) and grouping are the core's choice: the results do
+  not depend on the thread count, bit for bit.
+"""
+
+from __future__ import annotations
+
+import inspect
+
+import numpy as np
+import pytest
+
+from tribosweep import _core
+
+
+def test_the_exception_hierarchy():
+    assert issubclass(_core.TribosweepError, Exception)
+    assert not issubclass(_core.TribosweepError, ValueError)
+    assert issubclass(_core.InvalidArgumentError, _core.TribosweepError)
+    assert issubclass(_core.InvalidArgumentError, ValueError)
+    assert _core.InvalidArgumentError.__module__ == "tribosweep._core"
+
+
+@pytest.mark.parametrize(
+    ("call", "message"),
+    [
+        (lambda: _core.validate_params({"mu": -1.0}, "bilateral", "constant"), r"mu = -1\.0 is out of range: must be"),
+        (lambda: _core.validate_params({"spam": 1.0}, "bilateral", "constant"), r'unknown parameter "spam"; valid names: mass, '),
+        (lambda: _core.validate_params({}, "sticky", "constant"), r"contact = \"sticky\" is not valid: must be 'bilateral' or"),
+        (
+            lambda: _core.linear_stability({}, "bilateral", "constant", ["mu"], np.array([[0.2], [-0.5]])),
+            r"trajectory 1: mu = -0\.5 is out of range",
+        ),
+        (
+            lambda: _core.ensemble({}, "bilateral", "constant", [], np.zeros((1, 0)), np.zeros((1, 6)), 0.1, "dopri5",
+                                   1e-6, kind="chaotic"),
+            r"kind = \"chaotic\" is not valid: must be 'final', 'sampled' or 'steady'",
+        ),
+        (
+            lambda: _core.ensemble({}, "bilateral", "constant", [], np.zeros((1, 0)), np.zeros((1, 6)), 0.1, "euler",
+                                   1e-6),
+            r"method = \"euler\" is not valid: must be one of dopri5, dop853, rodas4",
+        ),
+    ],
+)
+def test_bad_input_raises_invalid_argument_naming_it(call, message):
+    with pytest.raises(_core.InvalidArgumentError, match=message) as e:
+        call()
+    assert isinstance(e.value, ValueError) and isinstance(e.value, _core.TribosweepError)
+
+
+def _functions():
+    return [f for name in _core.__all__ if callable(f := getattr(_core, name)) and not isinstance(f, type)]
+
+
+def test_optional_parameters_are_keyword_only():
+    checked = 0
+    for f in _functions():
+        for p in inspect.signature(f).parameters.values():
+            if p.default is not inspect.Parameter.empty:
+                assert p.kind is inspect.Parameter.KEYWORD_ONLY, f"{f.__name__}({p.name}=...) is not keyword-only"
+                checked += 1
+            else:
+                assert p.kind is inspect.Parameter.POSITIONAL_OR_KEYWORD, f"{f.__name__}({p.name})"
+    # simulate 4, ensemble 10, linear_stability 1, describing_function 5, periodic_orbit 7,
+    # periodic_orbits 8, tidf_solve 2: the signatures really were read.
+    assert checked >= 37
+    values = np.array([[0.2]])
+    with pytest.raises(TypeError):
+        _core.linear_stability({}, "bilateral", "constant", ["mu"], values, 1)
+    assert _core.linear_stability({}, "bilateral", "constant", ["mu"], values, threads=1)["status"][0] == 0
+
+
+def test_ensemble_results_do_not_depend_on_the_thread_count():
+    # 40 seed trajectories (mu across the Hopf point) on each of the core's paths: the bilateral
+    # end state (batch), samples (lanes), steady states (lanes) and Rodas4 (scalar driver).
+    mus = np.linspace(0.18, 0.26, 40)[:, None]
+    y0 = np.array([[1e-6, 0, 0, 0, 0, 0]])
+    te = np.linspace(0.0, 0.05, 11)
+    cases = [
+        dict(method="dopri5", kind="final"),
+        dict(method="dop853", kind="sampled", t_eval=te),
+        dict(method="dop853", kind="steady"),
+        dict(method="rodas4", kind="final"),
+    ]
+    for case in cases:
+        args = dict(case)
+        method = args.pop("method")
+        runs = [
+            _core.ensemble({}, "bilateral", "constant", ["mu"], mus, y0, 0.05, method, 1e-7, threads=th, **args)
+            for th in (1, 3)
+        ]
+        for key, value in runs[0].items():
+            if isinstance(value, np.ndarray):
+                assert np.array_equal(value, runs[1][key], equal_nan=True), (case, key)
