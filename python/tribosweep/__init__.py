@@ -7,6 +7,7 @@ Datasets. Units are SI throughout (m, kg, s, N, rad; frequencies in rad/s unless
 from __future__ import annotations
 
 from . import _core
+from ._core import InvalidArgumentError, TribosweepError
 from ._apparatus import ARM_EXPONENTS, apparatus_model, arm_frequencies
 from ._census import census
 from ._codes import (
@@ -36,12 +37,14 @@ __all__ = [
     "DECIDED_BY_NAMES",
     "DEFAULT_Y0",
     "INSTABILITY_NAMES",
+    "InvalidArgumentError",
     "OUTCOME_NAMES",
     "PARAM_NAMES",
     "REGIME_NAMES",
     "STATUS",
     "STATUS_NAMES",
     "SliderModel",
+    "TribosweepError",
     "WEAR_APPLICABILITY_NAMES",
     "WearCalibration",
     "WearReference",
