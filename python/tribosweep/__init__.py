@@ -7,7 +7,6 @@ Datasets. Units are SI throughout (m, kg, s, N, rad; frequencies in rad/s unless
 from __future__ import annotations
 
 from . import _core
-from ._core import InvalidArgumentError, TribosweepError
 from ._apparatus import ARM_EXPONENTS, apparatus_model, arm_frequencies
 from ._census import census
 from ._codes import (
@@ -22,6 +21,7 @@ from ._codes import (
     WEAR_APPLICABILITY_NAMES,
     labels,
 )
+from ._core import InvalidArgumentError, TribosweepError
 from ._frequency import describing_function, follow_cycle, hopf_load, linear_stability, periodic_orbit
 from ._model import PARAM_NAMES, SliderModel
 from ._simulate import DEFAULT_Y0, ensemble, simulate
