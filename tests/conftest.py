@@ -7,6 +7,7 @@ import json
 import pathlib
 import struct
 
+import numpy as np
 import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
@@ -50,3 +51,32 @@ def saved_figures(monkeypatch) -> dict:
 
     monkeypatch.setattr(Figure, "savefig", savefig)
     return figures
+
+
+def _check_status_chart(ax, ds, var, names):
+    """A status map's axes: one red label per failing cell, at the cell's centre, with its code's short name;
+    the axis labels are the coordinates' long names, with units where they have one."""
+    from tribosweep import _failure
+
+    x, y = ds[var].dims[1], ds[var].dims[0]
+    edges = {d: _failure._edges(ds[d].values, _failure._is_log(ds[d].values)) for d in (x, y)}
+    centre = {d: np.sqrt(e[1:] * e[:-1]) if _failure._is_log(ds[d].values) else 0.5 * (e[1:] + e[:-1])
+              for d, e in edges.items()}  # fmt: skip
+
+    def cell(item):  # sort by the cell a position falls in: mid-cell, so rounding cannot move it
+        return np.searchsorted(edges[x], item[0]), np.searchsorted(edges[y], item[1])
+
+    labels = sorted(((*t.get_position(), t.get_text()) for t in ax.texts if t.get_bbox_patch() is not None), key=cell)
+    want = sorted(((centre[x][j], centre[y][i], _failure.STATUS_SHORT.get(names[c], names[c][:2].upper()))
+                   for (i, j), c in np.ndenumerate(ds[var].values) if names[c] != names[0]), key=cell)  # fmt: skip
+    assert [t for *_, t in labels] == [t for *_, t in want]
+    np.testing.assert_allclose([xy for *xy, _ in labels], [xy for *xy, _ in want], rtol=1e-12)
+    for dim, label in ((x, ax.get_xlabel()), (y, ax.get_ylabel())):
+        units = ds[dim].attrs["units"]
+        assert label == ds[dim].attrs["long_name"] + (f" [{units}]" if units != "1" else "")
+
+
+@pytest.fixture
+def check_status_chart():
+    """The function ``check_status_chart(ax, ds, var, names)`` (see ``_check_status_chart``)."""
+    return _check_status_chart

@@ -9,7 +9,6 @@ import xarray as xr
 import tribosweep as ts
 from tribosweep import _core, reference
 from tribosweep import _df_failure as dff
-from tribosweep import _failure as fm
 from tribosweep._apparatus import apparatus_model
 
 
@@ -71,28 +70,7 @@ def _expected_validity(loads, arms, a1_error):
     return code
 
 
-def _check_status_chart(ax, ds, var, names):
-    """A status map's axes: one red label per failing cell, at the cell's centre, with its code's short name;
-    the axis labels are the coordinates' long names, with units where they have one."""
-    x, y = ds[var].dims[1], ds[var].dims[0]
-    edges = {d: fm._edges(ds[d].values, fm._is_log(ds[d].values)) for d in (x, y)}
-    centre = {d: np.sqrt(e[1:] * e[:-1]) if fm._is_log(ds[d].values) else 0.5 * (e[1:] + e[:-1])
-              for d, e in edges.items()}  # fmt: skip
-
-    def cell(item):  # sort by the cell a position falls in: mid-cell, so rounding cannot move it
-        return np.searchsorted(edges[x], item[0]), np.searchsorted(edges[y], item[1])
-
-    labels = sorted(((*t.get_position(), t.get_text()) for t in ax.texts if t.get_bbox_patch() is not None), key=cell)
-    want = sorted(((centre[x][j], centre[y][i], fm.STATUS_SHORT.get(names[c], names[c][:2].upper()))
-                   for (i, j), c in np.ndenumerate(ds[var].values) if names[c] != names[0]), key=cell)  # fmt: skip
-    assert [t for *_, t in labels] == [t for *_, t in want]
-    np.testing.assert_allclose([xy for *xy, _ in labels], [xy for *xy, _ in want], rtol=1e-12)
-    for dim, label in ((x, ax.get_xlabel()), (y, ax.get_ylabel())):
-        units = ds[dim].attrs["units"]
-        assert label == ds[dim].attrs["long_name"] + (f" [{units}]" if units != "1" else "")
-
-
-def test_maps_are_written(tmp_path, png_size, saved_figures):
+def test_maps_are_written(tmp_path, png_size, saved_figures, check_status_chart):
     r = dff.tidf_failure_maps(tmp_path, quick=True)
     with xr.open_dataset(tmp_path / "failure_tidf_validity.nc") as v, \
             xr.open_dataset(tmp_path / "failure_tidf_newton.nc") as nb:  # fmt: skip
@@ -109,7 +87,7 @@ def test_maps_are_written(tmp_path, png_size, saved_figures):
         assert r["counts"][name] == {n: int((ds[var].values == c).sum()) for c, n in enumerate(names)}
         # The charts: 6.4 x 4.6 in at 100 dpi, one labelled cell per failing point, at that point.
         assert png_size(tmp_path / f"{name}.png") == (640, 460)
-        _check_status_chart(saved_figures[f"{name}.png"].axes[0], ds, var, names)
+        check_status_chart(saved_figures[f"{name}.png"].axes[0], ds, var, names)
 
 
 def test_model_cost_numbers(tmp_path, monkeypatch, png_size, saved_figures):
