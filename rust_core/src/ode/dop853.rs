@@ -441,8 +441,9 @@ mod tests {
         let (d1, d2) = ((p[1] - p[0]).abs(), (p[2] - p[1]).abs());
         assert!(d2 <= 0.5 * d1, "not in the asymptotic regime: pairwise orders {p:?} ({errs:?})");
         // Then the limit is within the last change of the last slope (the changes still to come, at most
-        // d2/2 + d2/4 + ..., add up to at most d2), plus rounding: the finest error (about 1e-14) is some 30 ulps of |y| = 3,
-        // so rounding moves it by under 1/30 and the slope by under log2(1 + 1/30) < 0.05.
-        assert!((p[2] - 8.0).abs() < d2 + 0.05, "dense order {:.3} is not 8 within {:.3} ({errs:?})", p[2], d2 + 0.05);
+        // d2/2 + d2/4 + ..., add up to at most d2), plus rounding: the finest error (about 1e-14) is some 30 ulps
+        // of |y| = 3, so a few ulps of noise (the interpolant's sum, the reference) move it by under 10 % and
+        // the slope by under log2(1.1) < 0.14.
+        assert!((p[2] - 8.0).abs() < d2 + 0.14, "dense order {:.3} is not 8 within {:.3} ({errs:?})", p[2], d2 + 0.14);
     }
 }
