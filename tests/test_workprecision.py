@@ -181,7 +181,7 @@ def test_failed_rungs_are_recorded_and_drawn():
     assert all(x == wp._FAIL_X for ln in crosses for x in ln.get_xdata())
 
 
-def test_stiffness_map_and_status_hook(tmp_path):
+def test_stiffness_map_and_status_hook(tmp_path, png_size, check_status_chart):
     ds = fm.stiffness_map(rtols=[1e-3, 1e-6], regularizations=[1e-3, 1e-4], methods=("dopri5", "rodas4"), t_end=0.03,
                           threads=1)  # fmt: skip
     assert ds.status.shape == (2, 2, 2)
@@ -192,9 +192,17 @@ def test_stiffness_map_and_status_hook(tmp_path):
     d, r = ds.n_rhs.sel(integrator="dopri5", rtol=1e-3), ds.n_rhs.sel(integrator="rodas4", rtol=1e-3)
     assert float(d.sel(friction_regularization=1e-4) / d.sel(friction_regularization=1e-3)) > 3
     assert float(r.sel(friction_regularization=1e-4) / r.sel(friction_regularization=1e-3)) < 3
+    # The chart: one panel per integrator, its heat map the points' n_rhs over (regularisation, rtol), the
+    # title naming the failures (none here), axis labels and failure labels by the shared status checker.
     fig = fm.draw_failure_maps(ds)
-    fig.savefig(tmp_path / "m.png")
-    assert len(fig.axes) >= 2
+    panels = [ax for ax in fig.axes if ax.get_label() != "<colorbar>"]
+    assert [ax.get_title() for ax in panels] == ["dopri5: no failure", "rodas4: no failure"]
+    for ax, m in zip(panels, ("dopri5", "rodas4")):
+        cost = ds.n_rhs.sel(integrator=m).transpose("friction_regularization", "rtol").values
+        np.testing.assert_array_equal(np.ma.getdata(ax.collections[0].get_array()).reshape(cost.shape), cost)
+        check_status_chart(ax, ds.sel(integrator=m), "status", STATUS_NAMES)
+    fig.savefig(tmp_path / "m.png", dpi=100)
+    assert png_size(tmp_path / "m.png") == (1040, 440)  # Figure(figsize=(5.2 x 2 panels, 4.4)) at 100 dpi
 
 
 def test_draw_status_map_hook_on_any_flag_dataset():
