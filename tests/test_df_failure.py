@@ -97,7 +97,7 @@ def test_model_cost_numbers(tmp_path, monkeypatch, png_size, saved_figures):
     real_sweep = _model_cost.sweep
 
     def recording_sweep(**kw):
-        runs[kw["method"], kw.get("census", True)] = ds = real_sweep(**kw)
+        runs[kw.get("strategy", kw.get("method")), kw.get("census", True)] = ds = real_sweep(**kw)
         return ds
 
     monkeypatch.setattr(_model_cost, "sweep", recording_sweep)
