@@ -1,10 +1,13 @@
-"""Shared fixtures: the seed reference values of ../shared/reference/seed_values.json."""
+"""Shared fixtures: the seed reference values of ../shared/reference/seed_values.json; the pixel size of a
+PNG file and the Figures behind the images a function saves (to check a chart's content, not its bytes)."""
 
 from __future__ import annotations
 
 import json
 import pathlib
+import struct
 
+import numpy as np
 import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
@@ -18,3 +21,63 @@ def seed_values() -> dict:
         if p.exists():
             return json.loads(p.read_text())
     raise FileNotFoundError(f"seed_values.json not found in {_CANDIDATES}")
+
+
+def _png_size(path) -> tuple[int, int]:
+    """(width, height) in pixels from a PNG file's IHDR chunk; fails if the file is not a PNG."""
+    head = pathlib.Path(path).read_bytes()[:24]
+    assert head[:8] == b"\x89PNG\r\n\x1a\n" and head[12:16] == b"IHDR", f"{path} is not a PNG file"
+    return struct.unpack(">II", head[16:24])
+
+
+@pytest.fixture
+def png_size():
+    """The function ``png_size(path) -> (width, height)``."""
+    return _png_size
+
+
+@pytest.fixture
+def saved_figures(monkeypatch) -> dict:
+    """Every matplotlib Figure saved during the test, by the saved file's name (the Figure itself, to read
+    its artists' data)."""
+    from matplotlib.figure import Figure
+
+    real = Figure.savefig
+    figures = {}
+
+    def savefig(self, fname, *args, **kwargs):
+        figures[pathlib.Path(fname).name] = self
+        return real(self, fname, *args, **kwargs)
+
+    monkeypatch.setattr(Figure, "savefig", savefig)
+    return figures
+
+
+def _check_status_chart(ax, ds, var, names):
+    """A status map's axes: one red label per failing cell, at the cell's centre, with its code's short name;
+    the axis labels are the coordinates' long names, with units where they have one."""
+    from tribosweep.bench import status_map as _failure
+    from tribosweep.plot import _edges
+
+    x, y = ds[var].dims[1], ds[var].dims[0]
+    edges = {d: _edges(ds[d].values, _failure._is_log(ds[d].values)) for d in (x, y)}
+    centre = {d: np.sqrt(e[1:] * e[:-1]) if _failure._is_log(ds[d].values) else 0.5 * (e[1:] + e[:-1])
+              for d, e in edges.items()}  # fmt: skip
+
+    def cell(item):  # sort by the cell a position falls in: mid-cell, so rounding cannot move it
+        return np.searchsorted(edges[x], item[0]), np.searchsorted(edges[y], item[1])
+
+    labels = sorted(((*t.get_position(), t.get_text()) for t in ax.texts if t.get_bbox_patch() is not None), key=cell)
+    want = sorted(((centre[x][j], centre[y][i], _failure.STATUS_SHORT.get(names[c], names[c][:2].upper()))
+                   for (i, j), c in np.ndenumerate(ds[var].values) if names[c] != names[0]), key=cell)  # fmt: skip
+    assert [t for *_, t in labels] == [t for *_, t in want]
+    np.testing.assert_allclose([xy for *xy, _ in labels], [xy for *xy, _ in want], rtol=1e-12)
+    for dim, label in ((x, ax.get_xlabel()), (y, ax.get_ylabel())):
+        units = ds[dim].attrs["units"]
+        assert label == ds[dim].attrs["long_name"] + (f" [{units}]" if units != "1" else "")
+
+
+@pytest.fixture
+def check_status_chart():
+    """The function ``check_status_chart(ax, ds, var, names)`` (see ``_check_status_chart``)."""
+    return _check_status_chart

@@ -20,14 +20,28 @@ from tribosweep._apparatus import (
     load_extrapolated,
 )
 
-# The errors MODEL.md §7 and the module docstring state for the fit: about 3 % (3.4 % on appendix 4's
-# normal points), 7 % for appendix 3's three normal points.
-STATED_ERROR = {
-    ("normal", "appendix4_table2"): 0.035,
-    ("normal", "appendix3_table1"): 0.07,
-    ("friction", "appendix3_table1"): 0.03,
-    ("torsion", "appendix3_table1"): 0.03,
+#: The largest relative error of each fit as the module docstring's table prints it (to 0.1 %).
+DOCUMENTED_ERROR = {
+    ("normal", "appendix4_table2"): 0.034,
+    ("normal", "appendix3_table1"): 0.057,
+    ("friction", "appendix3_table1"): 0.021,
+    ("torsion", "appendix3_table1"): 0.022,
 }
+#: Column of each mode in seed_values.json's copy of the report's tables.
+_COLUMN = {"normal": "normal_hz", "friction": "frictional_hz", "torsion": "torsional_hz"}
+
+
+def _independent_fit(seed_values, mode):
+    """scipy's closed-form regression of log f on log l over the report's tables as seed_values.json
+    holds them (not the module's copy): exponent, prefactor [Hz m^-p] and the (arm [m], f [Hz]) of each table."""
+    from scipy.stats import linregress
+
+    tables = {name: (np.array(t["arm_cm"]) / 100, np.array(t[_COLUMN[mode]], dtype=float))
+              for name, t in seed_values["arm_tables"].items() if _COLUMN[mode] in t}  # fmt: skip
+    arm = np.concatenate([a for a, _ in tables.values()])
+    f = np.concatenate([f for _, f in tables.values()])
+    r = linregress(np.log(arm), np.log(f))
+    return r.slope, math.exp(r.intercept), tables
 
 
 def test_tables_are_the_reports(seed_values):
@@ -43,27 +57,29 @@ def test_tables_are_the_reports(seed_values):
 
 @pytest.mark.parametrize(("mode", "expected"), [("normal", -0.68), ("friction", -0.82), ("torsion", -0.43)])
 def test_exponents_near_model_md(mode, expected):
-    assert ARM_EXPONENTS[mode] == pytest.approx(expected, abs=0.01)
+    assert ARM_EXPONENTS[mode] == pytest.approx(expected, abs=0.005)  # MODEL.md prints two decimals
 
 
-def test_fit_is_least_squares_on_log_log():
-    # Independent check: the normal fit over both tables from the closed-form normal equations.
-    arm = np.concatenate([ARM_TABLES[t]["arm_length"] for t in ARM_TABLES])
-    f = np.concatenate([ARM_TABLES[t]["normal"] for t in ARM_TABLES])
-    x, y = np.log(arm), np.log(f)
-    slope = np.sum((x - x.mean()) * (y - y.mean())) / np.sum((x - x.mean()) ** 2)
-    assert ARM_EXPONENTS["normal"] == pytest.approx(slope, rel=1e-12)
+@pytest.mark.parametrize("mode", ["normal", "friction", "torsion"])
+def test_fit_is_least_squares_on_log_log(seed_values, mode):
+    # The module solves by SVD (lstsq), scipy by the closed-form normal equations: the same two-column
+    # problem, whose condition number is small (log l spans 0.9), agrees to about 1e-14; rel 1e-9 leaves
+    # room without hanging on the last bits.
+    slope, prefactor, _ = _independent_fit(seed_values, mode)
+    assert ARM_EXPONENTS[mode] == pytest.approx(slope, rel=1e-9)
+    assert ARM_FIT[mode]["prefactor"] == pytest.approx(prefactor, rel=1e-9)
 
 
-@pytest.mark.parametrize("key", list(STATED_ERROR))
-def test_fit_reproduces_every_table_entry_within_the_stated_error(key):
+@pytest.mark.parametrize("key", list(DOCUMENTED_ERROR))
+def test_fit_error_against_an_independent_fit_and_the_documented_figure(seed_values, key):
     mode, table = key
-    t = ARM_FIT[mode]["tables"][table]
-    fitted = ARM_FIT[mode]["prefactor"] * t["arm_length"] ** ARM_EXPONENTS[mode]
-    rel = np.abs(fitted / t["measured"] - 1)
-    assert np.all(rel <= STATED_ERROR[key]), rel
-    assert ARM_FIT_MAX_REL_ERROR[key] == pytest.approx(rel.max())
-    assert ARM_FIT_MAX_REL_ERROR[key] <= STATED_ERROR[key]
+    slope, prefactor, tables = _independent_fit(seed_values, mode)
+    arm, measured = tables[table]
+    err = float(np.max(np.abs(prefactor * arm**slope / measured - 1)))
+    assert ARM_FIT_MAX_REL_ERROR[key] == pytest.approx(err, rel=1e-9)  # as the fit above
+    # The docstring's table prints each error to 0.1 %: it must be that figure, to half its last digit.
+    assert err == pytest.approx(DOCUMENTED_ERROR[key], abs=0.0005)
+    assert f"{100 * DOCUMENTED_ERROR[key]:.1f} %" in _apparatus.__doc__
 
 
 def test_seed_arm_length_gives_the_seed_exactly():
@@ -94,7 +110,8 @@ def test_vectorised_frequencies_match_scalar():
     arm = np.array([0.04, 0.06, 0.072, 0.2])
     w = arm_frequencies(arm)
     for i, a in enumerate(arm):
-        assert w["omega_torsion"][i] == arm_frequencies(float(a))["omega_torsion"]
+        # The same formula; a vectorised pow may round differently in the last bit, hence rel 1e-14.
+        assert w["omega_torsion"][i] == pytest.approx(arm_frequencies(float(a))["omega_torsion"], rel=1e-14)
 
 
 def test_base_model_is_kept():

@@ -23,15 +23,44 @@ def run(argv, capsys):
     return code, out.out, out.err
 
 
-def test_sweep_info_plot(tmp_path, capsys):
+def _check_regime_png(path, ds, x, y, png_size):
+    """The regime map a command wrote: its pixel size, the Figure's content through the API, and in the file
+    itself each point's cell painted in its regime's colour."""
+    import matplotlib.image
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.colors import to_rgb
+
+    from tribosweep.plot import REGIME_COLORS, regime_map
+
+    # One panel: Figure(figsize=(3.6 + 1.8, 3.6)) inches, saved at 120 dpi.
+    assert png_size(path) == (648, 432)
+    fig = regime_map(ds, x=x, y=y)
+    ax = fig.axes[0]
+    regime = ds.regime.isel({d: 0 for d in ds.regime.dims if d not in (x, y)}).transpose(y, x).values
+    np.testing.assert_array_equal(np.asarray(ax.collections[0].get_array()).reshape(regime.shape), regime)
+    for dim, label in ((x, ax.get_xlabel()), (y, ax.get_ylabel())):
+        assert label == f"{ds[dim].attrs['long_name']} [{ds[dim].attrs['units']}]"
+    names = [ts.REGIME_NAMES[r] for r in sorted(set(regime.ravel().tolist()))]
+    assert [t.get_text() for leg in fig.legends for t in leg.get_texts()] == [n.replace("_", " ") for n in names]
+    # Lay the Figure out as savefig did (120 dpi) to find each cell's centre in the file's pixels.
+    fig.set_dpi(120)
+    FigureCanvasAgg(fig).draw()
+    img = matplotlib.image.imread(path)
+    for (j, i), r in np.ndenumerate(regime):
+        px, py = ax.transData.transform((ds[x].values[i], ds[y].values[j]))
+        rgb = img[img.shape[0] - int(py), int(px), :3]
+        np.testing.assert_allclose(rgb, to_rgb(REGIME_COLORS[ts.REGIME_NAMES[r]]), atol=1 / 255)  # 8-bit colour
+
+
+def test_sweep_info_plot(tmp_path, capsys, png_size):
     nc, png = tmp_path / "s.nc", tmp_path / "s.png"
     code, out, err = run(["sweep", "--normal-load", "10,30,60", "--arm-length", "0.05:0.1:2", "--strategy", "linear",
                           "-o", nc, "--plot", png, "--no-progress", "--threads", "1"], capsys)  # fmt: skip
     assert code == 0, err
-    assert nc.exists() and png.stat().st_size > 0
     assert "regime:" in out and "steady_sliding" in out
     with xr.open_dataset(nc) as ds:
         assert ds.regime.shape == (3, 2, 1)
+        _check_regime_png(png, ds.load(), "normal_load", "arm_length", png_size)
         assert ds.attrs["history"].endswith("--no-progress --threads 1")
         assert "tribosweep sweep --normal-load 10,30,60" in ds.attrs["history"]
 
@@ -43,16 +72,17 @@ def test_sweep_info_plot(tmp_path, capsys):
     png2 = tmp_path / "again.png"
     code, out, err = run(["plot", nc, "-o", png2, "--x", "arm_length", "--y", "normal_load"], capsys)
     assert code == 0, err
-    assert png2.stat().st_size > 0
+    with xr.open_dataset(nc) as ds:
+        _check_regime_png(png2, ds.load(), "arm_length", "normal_load", png_size)
 
 
-def test_default_sweep_and_extra_axes(tmp_path, capsys):
+def test_default_sweep_and_extra_axes(tmp_path, capsys, png_size):
     nc = tmp_path / "new_dir" / "d.nc"
     png = tmp_path / "other_dir" / "d.png"
     code, _, err = run(["sweep", "--strategy", "linear", "-o", nc, "--plot", png, "--no-progress"], capsys)
     assert code == 0, err
-    assert png.exists()
     with xr.open_dataset(nc) as ds:
+        _check_regime_png(png, ds.load(), "normal_load", "arm_length", png_size)
         np.testing.assert_allclose(ds.normal_load, np.linspace(10, 150, 15))
         np.testing.assert_allclose(ds.arm_length, np.linspace(0.05, 0.127, 4))
         assert ds.sliding_speed.values.tolist() == [0.46]

@@ -112,8 +112,10 @@ def test_bilateral_orbit_from_the_seed_root(seed_values):
     assert rel(float(orb.A1), ref["A1"]) < 1e-3 and rel(float(orb.A2), ref["A2"]) < 2e-3
     assert rel(float(orb.z_max), ref["z_max"]) < 1e-3
     assert bool(orb.contact_opens) and abs(float(orb.open_fraction) - 0.26) < 0.01
-    # The describing function is within 3.3 % in A1 of this orbit (MODEL.md §6).
-    assert abs(float(root.A1) / float(orb.A1) - 1) < 0.035
+    # The describing function is within 3.3 % in A1 of this orbit, below it (MODEL.md §6). seed_values prints
+    # both amplitudes to five digits; their rounding moves the ratio by at most 0.5/21524 + 0.5/22267 = 4.6e-5.
+    ratio = seed_values["tidf_root_seed"]["A1"] / ref["A1"]
+    assert float(root.A1) / float(orb.A1) == pytest.approx(ratio, abs=4.6e-5)
 
 
 def test_unilateral_cycle_by_shooting_is_stable(seed_values):

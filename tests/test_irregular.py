@@ -154,8 +154,13 @@ def test_the_stribeck_sweep_leaves_no_bounded_point_undetermined(stribeck):
     assert r.size == 200
     assert not np.any(r == REGIME["unstable_undetermined"])
     irr = r == REGIME["irregular"]
-    # Measured 29 (the 29 points that were unstable_undetermined before); a margin for platforms.
-    assert 20 <= irr.sum() <= 40, irr.sum()
+    # Where the points are irregular and why: only where steady sliding is linearly unstable (at a stable
+    # point the small start decays: every stable point is steady sliding), among the unstable points that
+    # neither settled on a cycle nor escaped. Not a count pinned near a measured one: which chaotic runs
+    # settle late is not a verdict to hang on the last bits.
+    unstable = ds.growth_rate.values.ravel() > 0
+    assert np.all(r[~unstable] == REGIME["steady_sliding"])
+    assert np.all(unstable[irr]) and irr.any()
     assert np.all(ds.status.values.ravel()[irr] == ts.STATUS["success"])
     v = {k: ds[k].values.ravel() for k in IRREGULAR_VARS}
     for k in IRREGULAR_VARS:

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import xarray as xr
 
 import tribosweep as ts
 from tribosweep import INSTABILITY_NAMES
@@ -94,14 +95,43 @@ def test_sweep_reports_the_doubled_period():
     assert float(ratio.sel(mu=0.425)) == pytest.approx(2.0, abs=0.15)
 
 
-def test_maps_are_written(tmp_path):
+def test_maps_are_written(tmp_path, png_size, saved_figures, check_status_chart):
     r = pf.pd_failure_maps(tmp_path, quick=True)
-    for name in ("failure_shooting_pd", "bifurcation_pd"):
-        assert (tmp_path / f"{name}.png").stat().st_size > 1000
-        assert (tmp_path / f"{name}.nc").exists()
-    assert sum(r["counts"]["failure_shooting_pd"].values()) == 27
+    with xr.open_dataset(tmp_path / "failure_shooting_pd.nc") as smap, xr.open_dataset(tmp_path / "bifurcation_pd.nc") as bd:
+        smap, bd = smap.load(), bd.load()
+    code = np.array(pf.SHOOTING_NAMES)[smap.shooting.values]
+    # Which points fail and why, against the transient's own cycle (time integration, not the shooting):
+    # where it settled on a cycle of one mode period, period-1 shooting from its state finds a stable orbit
+    # (valid, or near_flip beside the doubling); where it settled on twice the period, period-1 shooting
+    # never passes (it fails, or lands on the flip-unstable orbit); where it found no cycle, nothing is shot.
+    # The ratio is the cycle's period over the linear mode's: a few per cent off a whole number by the
+    # cycle's nonlinear frequency shift, against a gap of 1 between the classes; 0.3 is the map's own cutoff.
+    ratio = smap.attractor_period_ratio.values
+    one, two, none = np.abs(ratio - 1) < 0.3, np.abs(ratio - 2) < 0.3, np.isnan(ratio)
+    assert np.all(one | two | none), ratio
+    assert np.all(np.isin(code[one], ["valid", "near_flip"])), code
+    assert np.all(np.isin(code[two], ["flip_unstable", "not_converged"])), code
+    assert np.all(code[none] == "no_cycle"), code
+    assert one.any() and two.any()  # both sides of the doubling are on the quick grid
+    assert r["counts"]["failure_shooting_pd"] == {n: int((code == n).sum()) for n in pf.SHOOTING_NAMES}
+    assert r["numbers"]["period_2_points"] == int(two.sum())
     assert 0.4195 < r["numbers"]["flip_mu"] < 0.4215
-    assert r["numbers"]["period_2_points"] >= 1
+    # The charts (6.4 x 4.6 in at 100 dpi). The map: a label at each failing cell, white circles on the
+    # period-2 points; the diagram: the branch's flip multiplier against mu, its crossing of -1 marked.
+    for name in ("failure_shooting_pd", "bifurcation_pd"):
+        assert png_size(tmp_path / f"{name}.png") == (640, 460)
+    ax = saved_figures["failure_shooting_pd.png"].axes[0]
+    check_status_chart(ax, smap, "shooting", pf.SHOOTING_NAMES)
+    (circles,) = [ln for ln in ax.lines if ln.get_label() == "period-2 attractor"]
+    il, im = np.nonzero(two)
+    assert sorted(zip(circles.get_xdata(), circles.get_ydata())) == sorted(
+        zip(smap.mu.values[im], smap.normal_load.values[il]))
+    fig = saved_figures["bifurcation_pd.png"]
+    (branch,) = [ln for ax_ in fig.axes for ln in ax_.lines if ln.get_label() == "flip multiplier, period-1 branch"]
+    np.testing.assert_array_equal(branch.get_xdata(), bd.mu.values)
+    np.testing.assert_array_equal(branch.get_ydata(), bd.flip_multiplier.values)
+    vlines = [ln.get_xdata()[0] for ln in fig.axes[0].lines if ln.get_linestyle() == ":"]
+    assert vlines == [pytest.approx(r["numbers"]["flip_mu"], rel=1e-12)]
 
 
 def test_bifurcation_diagram_rejects_bad_mu():

@@ -9,6 +9,7 @@ import pytest
 
 import tribosweep as ts
 from tribosweep import _wear
+from tribosweep._apparatus import apparatus_model
 from tribosweep._wear import (
     A_APP,
     BETA,
@@ -24,24 +25,48 @@ from tribosweep._wear import (
     relative_wear_rate,
     slide_frequency_hz,
 )
+from tribosweep.bench import reference
 
 
-def test_constants():
-    assert L1 == pytest.approx(0.514e-2, rel=1e-3)
-    assert slide_frequency_hz(0.46) == pytest.approx(89.5, abs=0.05)
-    assert E_EFF / 1e9 == pytest.approx(74.4, abs=0.05)
-    assert effective_modulus(207e9, 0.3, 103e9, 0.26) == E_EFF
-    assert BETA == pytest.approx(L1**2 / (4 * SIGMA))
-    assert SIGMA == pytest.approx(0.026e-3 * 1e-3)
-    assert 20.0 / A_APP / 1e6 == pytest.approx(1.02, abs=0.005)  # nominal pressure at 20 N on the 5 mm pin
-    np.testing.assert_allclose(slide_frequency_hz(np.array([0.46, 0.6])), [0.46 / L1, 0.6 / L1])
+def test_constants_against_the_report():
+    # The report's printed inputs (appendix 4): tau_s = |b/a| = 0.857e-2 s at the wear runs' 60 cm/s;
+    # rms roughness 0.026e-3 mm; pin 207 GPa / 0.3, disk 103 GPa / 0.26; a 5 mm pin.
+    # l_1 = tau_s V = 0.857e-2 s x 0.6 m/s = 5.142e-3 m (the report prints 0.51 cm).
+    assert L1 == pytest.approx(5.142e-3, rel=1e-12)  # four exact digits times one: rounding only
+    assert SIGMA == pytest.approx(0.026e-3 * 1e-3, rel=1e-12)  # 0.026e-3 mm in metres
+    # f_s = V / l_1: at 0.46 m/s MODEL.md's 89.5 Hz; at the fit speed 0.6 m/s it is 1/tau_s = 116.686 Hz,
+    # the report's 116.7 Hz of b_w (f - 116.7 Hz). abs 0.05: both are printed to 0.1 Hz.
+    np.testing.assert_allclose(slide_frequency_hz(np.array([0.46, 0.6])), [89.5, 116.7], atol=0.05)
+    assert slide_frequency_hz(0.6) == pytest.approx(1 / 0.857e-2, rel=1e-12)
+    # 1/E' = (1 - 0.3^2)/207 GPa + (1 - 0.26^2)/103 GPa = (4.396135e-3 + 9.052427e-3)/GPa, by hand:
+    # E' = 74.3574 GPa (MODEL.md 74.4; the report prints 74.6). rel 1e-6: the hand value has 6 digits.
+    assert E_EFF == pytest.approx(74.3574e9, rel=1e-6)
+    assert effective_modulus(103e9, 0.26, 207e9, 0.3) == pytest.approx(74.3574e9, rel=1e-6)  # symmetric
+    # beta = l_1^2 / (4 sigma) = (5.142e-3 m)^2 / (4 x 2.6e-8 m) = 2.6440164e-5 / 1.04e-7 = 254.2323 m, by hand.
+    assert BETA == pytest.approx(254.2323, rel=1e-6)  # the hand value has 7 digits
+    # The report prints beta = 2.47e4 cm from l_1 = 0.51 cm and sigma = 0.026e-3 mm: two-digit inputs, whose
+    # rounding alone (half a unit: 0.005/0.51 twice in l_1^2, 0.0005/0.026 in sigma) moves beta by 3.9 %.
+    assert BETA == pytest.approx(247.0, rel=2 * 0.005 / 0.51 + 0.0005 / 0.026)
+    assert 20.0 / A_APP / 1e6 == pytest.approx(1.02, abs=0.005)  # MODEL.md: 1.02 MPa at 20 N on the 5 mm pin
 
 
 def test_normal_mode_frequency_at_seed(seed_values):
     f = normal_mode_frequency_hz(ts.SliderModel())
     assert f == pytest.approx(seed_values["normal_mode_frequency_hz_seed"], abs=0.05)
     assert f == pytest.approx(seed_values["linear_eigenvalues_seed"][2][1] / (2 * math.pi), rel=1e-5)
-    assert WearReference().frequency_hz() == f
+
+
+def test_reference_frequency_is_the_normal_mode_of_the_apparatus():
+    # f_ref away from the seed (50 N, 5 cm arm, 1 m/s) against the independent numpy reference: eigenvalues
+    # of its finite-difference Jacobian; the normal mode is the fastest pair (in contact K_s/m = 2.1e6 1/s^2
+    # puts it near 1420 rad/s, twice the torsion mode's 756). The central difference of the quadratic
+    # right-hand side is exact up to rounding (about 1e-13 relative), hence rel 1e-9.
+    ref = WearReference(normal_load=50.0, arm_length=0.05, sliding_speed=1.0)
+    lam = reference.linear_eigenvalues(apparatus_model(50.0, 0.05, 1.0).values())
+    f_normal = float(np.max(np.abs(lam.imag))) / (2 * math.pi)
+    assert ref.frequency_hz() == pytest.approx(f_normal, rel=1e-9)
+    # The seed reference gives MODEL.md's 229.2 Hz (printed to 0.1 Hz).
+    assert WearReference().frequency_hz() == pytest.approx(229.2, abs=0.05)
 
 
 def test_relative_rate_is_one_at_the_reference():
@@ -59,10 +84,9 @@ def test_relative_rate_scales_linearly_with_load_at_fixed_frequency():
 
 def test_relative_rate_speed_and_frequency_dependence():
     f_ref = 229.2
-    # (V_ref/V)(f + V/l_1)/(f_ref + V_ref/l_1)
-    v = 0.92
-    expected = (0.46 / v) * (f_ref + v / L1) / (f_ref + 0.46 / L1)
-    assert relative_wear_rate(84.46, v, f_ref, reference_frequency_hz=f_ref) == pytest.approx(expected)
+    # (V_ref/V)(f + V/l_1)/(f_ref + V_ref/l_1) at twice the speed, by hand with l_1 = 5.142e-3 m:
+    # 0.5 x (229.2 + 178.9187) / (229.2 + 89.4594) = 0.640368 (rel 1e-6: six digits).
+    assert relative_wear_rate(84.46, 0.92, f_ref, reference_frequency_hz=f_ref) == pytest.approx(0.640368, rel=1e-6)
     assert relative_wear_rate(84.46, 0.46, 2 * f_ref, reference_frequency_hz=f_ref) > 1
 
 

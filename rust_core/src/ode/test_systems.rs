@@ -227,6 +227,24 @@ impl OdeSystem<2> for VanDerPol {
     fn initial_mode(&self, _t: f64, _y: &SVector<f64, 2>) {}
 }
 
+/// Checks that the dense output's local error at mid-step, `errs` at step sizes halving from
+/// one to the next, converges like `h^order`: `e(h) = C h^order (1 + O(h))`, so the slope of each
+/// halving, `p_k = log2(e_k / e_(k+1))`, is `order + O(h_k)`, and in the asymptotic regime the
+/// change from one slope to the next shrinks by a ratio `r` near 1/2 (an O(h) term; 1/4 for O(h^2)).
+/// Asserts `r <= 2/3` for the last two changes, then that the last slope is `order` within the
+/// changes still to come, `d r + d r^2 + ... = d r / (1 - r) <= 2 d` for the last change `d`, plus
+/// rounding: three ulps of `|y| < 4` (6 eps) on the finest error move its slope by
+/// `log2(1 + 6 eps / e)`.
+pub fn assert_dense_order(name: &str, errs: &[f64], order: f64) {
+    let p: Vec<f64> = errs.windows(2).map(|w| (w[0] / w[1]).log2()).collect();
+    println!("{name} dense: {} -> pairwise orders {p:.3?}", sci(errs));
+    let k = p.len() - 1;
+    let (d1, d2) = ((p[k - 1] - p[k - 2]).abs(), (p[k] - p[k - 1]).abs());
+    assert!(d2 <= 2.0 / 3.0 * d1, "{name}: not in the asymptotic regime, pairwise orders {p:?} ({errs:?})");
+    let bound = 2.0 * d2 + (6.0 * f64::EPSILON / errs[k + 1]).ln_1p() / std::f64::consts::LN_2;
+    assert!((p[k] - order).abs() < bound, "{name}: dense order {:.3} is not {order} within {bound:.3}", p[k]);
+}
+
 /// Numbers in scientific notation, for test output.
 pub fn sci(v: &[f64]) -> String {
     let parts: Vec<String> = v.iter().map(|e| format!("{e:.2e}")).collect();
