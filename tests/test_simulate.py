@@ -111,7 +111,7 @@ def test_unilateral_seed_reaches_bouncing_cycle(seed_values):
                      rtol=1e-9)  # fmt: skip
     assert ts.OUTCOME_NAMES[int(ds.outcome[0])] == "periodic", ds
     assert abs(float(ds.omega[0]) / ref["omega"] - 1) < 0.01
-    assert abs(float(ds.z1_amp[0]) / ref["A1"] - 1) < 0.01
+    assert abs(float(ds.z1_amplitude[0]) / ref["A1"] - 1) < 0.01
     assert abs(float(ds.fraction_off_disk[0]) - ref["fraction_off_disk"]) < 0.01
     assert float(ds.min_normal_force[0]) == 0.0  # the pin leaves the disk
 

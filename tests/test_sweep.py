@@ -293,7 +293,7 @@ def test_a_failed_point_is_data_not_an_exception(monkeypatch):
         n = sel.size
         return {"status": np.full(n, ts.STATUS["panic"], np.uint8), "outcome": np.full(n, 4, np.uint8),
                 "reason": ["panic: boom"] * n, **{k: np.full(n, np.nan) for k in (
-                    "omega", "z1_amp", "z2_amp", "phi1_amp", "fraction_off_disk", "min_normal_force",
+                    "omega", "z1_amplitude", "z2_amplitude", "phi1_amplitude", "fraction_off_disk", "min_normal_force",
                     "min_slip_velocity")}, "n_rhs": np.zeros(n, np.int64)}  # fmt: skip
 
     monkeypatch.setattr(_stages, "run_steady", panicking)

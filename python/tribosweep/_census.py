@@ -327,7 +327,7 @@ def run(
     -------
     (dict, dict)
         Per-point census variables over ``sel`` (``CENSUS_VARIABLES``) and per-sample arrays
-        (``outcome``, ``attractor``, ``cycle``, ``omega``, ``z1_amp``, ``t_end``, ``n_rhs``, ``y0``).
+        (``outcome``, ``attractor``, ``cycle``, ``omega``, ``z1_amplitude``, ``t_end``, ``n_rhs``, ``y0``).
     """
     m = sel.size
     out = empty(m)
@@ -358,7 +358,7 @@ def run(
     # A run that stopped at t_max is bounded motion (irregular) only if it was not a numerical failure.
     attractor[(attractor == 2) & (status != STATUS["not_converged"])] = -1
     omega = np.asarray(res["omega"]).reshape(m, samples)
-    a1 = np.asarray(res["z1_amp"]).reshape(m, samples)
+    a1 = np.asarray(res["z1_amplitude"]).reshape(m, samples)
     mult = np.asarray(res["multiplicity"]).reshape(m, samples)
     off = np.asarray(res["fraction_off_disk"]).reshape(m, samples)
     max_z = np.asarray(res["max_abs_z"]).reshape(m, samples)
@@ -393,7 +393,7 @@ def run(
             out["irregular_max_abs_z"][i] = float(np.max(max_z[i, a == 2]))
     per_sample = {
         "outcome": outcome, "status": status, "attractor": attractor, "cycle": cycle, "omega": omega,
-        "z1_amp": a1, "multiplicity": mult, "fraction_off_disk": off, "max_abs_z": max_z,
+        "z1_amplitude": a1, "multiplicity": mult, "fraction_off_disk": off, "max_abs_z": max_z,
         "t_end": np.asarray(res["t_end"]).reshape(m, samples),
         "n_rhs": np.asarray(res["n_rhs"], dtype=np.int64).reshape(m, samples), "y0": y0,
         "reason": np.asarray(res["reason"], dtype=str).reshape(m, samples),
@@ -474,7 +474,7 @@ def census(
         ``basin_fraction`` and ``basin_fraction_se`` on ``attractor`` (sliding, cycle, irregular,
         escape); ``basin_stability``, ``n_attractors``, ``n_cycles`` and the largest cycle's
         frequency and amplitude; per ``sample``: the start ``y0``, the ``attractor`` reached, its
-        ``cycle`` label (-1 if none), ``omega``, ``z1_amp``, ``t_end`` and ``n_rhs``.
+        ``cycle`` label (-1 if none), ``omega``, ``z1_amplitude``, ``t_end`` and ``n_rhs``.
 
     Examples
     --------
@@ -508,7 +508,7 @@ def census(
     res, per = run(
         base, model.contact, model.friction_law, {"normal_load": values[:, 0]}, np.array([0]), samples=int(samples),
         scale=scale, t_max=t_max, integrator=integrator, rtol=rtol, atol=None, periodic_tol=periodic_tol,
-        threads=threads, eigenvalues=np.asarray(lin["eigenvalues"]), linear_frequency=lin["least_stable_frequency"],
+        threads=threads, eigenvalues=np.asarray(lin["eigenvalues"]), linear_frequency=lin["linear_frequency"],
         saddle_a1=a1, cycle_tol=cycle_tol,
     )  # fmt: skip
     from ._simulate import STATE_VARS
@@ -523,7 +523,7 @@ def census(
                                  {"long_name": "attractor each disturbance reached"} | flag)  # fmt: skip
     data["cycle"] = (("sample",), per["cycle"][0], {"long_name": "label of the distinct cycle reached (-1: none)"})
     for k, units, text in (("omega", "rad s-1", "angular frequency of the motion at the end of the run"),
-                           ("z1_amp", "m", "first-harmonic amplitude of z on the cycle (NaN if not periodic)"),
+                           ("z1_amplitude", "m", "first-harmonic amplitude of z on the cycle (NaN if not periodic)"),
                            ("t_end", "s", "simulated time when the attractor was recognised"),
                            ("n_rhs", "1", "right-hand-side evaluations")):  # fmt: skip
         data[k] = (("sample",), per[k][0], {"long_name": text, "units": units})

@@ -37,15 +37,16 @@ def linear_stability(model: SliderModel) -> xr.Dataset:
     -------
     xarray.Dataset
         ``eigenvalue`` (complex, 1/s) on dim ``eigenvalue``; per mode (``friction``, ``torsion``,
-        ``normal``, labelled by eigenvector participation) ``growth_rate`` [1/s] and ``frequency``
-        [rad/s]; scalars ``max_growth_rate``, ``least_stable_frequency``, ``stable`` and
-        ``normal_mode_frequency_hz`` (the wear model's ``f``).
+        ``normal``, labelled by eigenvector participation) ``mode_growth_rate`` [1/s] and
+        ``mode_frequency`` [rad/s]; scalars ``growth_rate`` (the largest), ``linear_frequency`` (of
+        the least stable mode), ``stable`` and ``normal_mode_frequency`` [Hz] (the wear model's
+        ``f``): the names of a sweep's variables.
 
     Examples
     --------
     >>> import tribosweep as ts
     >>> ds = ts.linear_stability(ts.SliderModel())
-    >>> round(float(ds.frequency.sel(mode="torsion")), 2), bool(ds.stable)
+    >>> round(float(ds.mode_frequency.sel(mode="torsion")), 2), bool(ds.stable)
     (646.63, True)
     """
     model = _model(model)
@@ -55,12 +56,12 @@ def linear_stability(model: SliderModel) -> xr.Dataset:
         {
             "eigenvalue_real": (("eigenvalue",), out["eigenvalues"][0].real, {"units": "s-1", "long_name": "real part of the eigenvalue (growth rate)"}),
             "eigenvalue_imag": (("eigenvalue",), out["eigenvalues"][0].imag, {"units": "rad s-1", "long_name": "imaginary part of the eigenvalue (frequency)"}),
-            "growth_rate": (("mode",), out["mode_growth_rate"][0], {"units": "s-1", "long_name": "growth rate of the mode (> 0: unstable)"}),
-            "frequency": (("mode",), out["mode_frequency"][0], {"units": "rad s-1", "long_name": "angular frequency of the mode"}),
-            "max_growth_rate": ((), out["max_growth_rate"][0], {"units": "s-1", "long_name": "largest growth rate"}),
-            "least_stable_frequency": ((), out["least_stable_frequency"][0], {"units": "rad s-1", "long_name": "frequency of the least stable mode"}),
+            "mode_growth_rate": (("mode",), out["mode_growth_rate"][0], {"units": "s-1", "long_name": "growth rate of the mode (> 0: unstable)"}),
+            "mode_frequency": (("mode",), out["mode_frequency"][0], {"units": "rad s-1", "long_name": "angular frequency of the mode"}),
+            "growth_rate": ((), out["growth_rate"][0], {"units": "s-1", "long_name": "largest growth rate"}),
+            "linear_frequency": ((), out["linear_frequency"][0], {"units": "rad s-1", "long_name": "frequency of the least stable mode"}),
             "stable": ((), bool(out["stable"][0]), {"long_name": "steady sliding is linearly stable"}),
-            "normal_mode_frequency_hz": ((), out["normal_mode_frequency_hz"][0], {"units": "Hz", "long_name": "frequency of the normal mode in steady sliding"}),
+            "normal_mode_frequency": ((), out["normal_mode_frequency"][0], {"units": "Hz", "long_name": "frequency of the normal mode in steady sliding"}),
             "status": ((), np.uint8(out["status"][0]), flag_attrs(STATUS_NAMES, "status of the computation")),
         },
         coords={"mode": ("mode", list(out["mode_names"])), "eigenvalue": ("eigenvalue", np.arange(6))},
@@ -108,11 +109,11 @@ _ROOT_VARS = {
     "theta": ("rad", "phase of z2 relative to z1"),
     "phi0": ("rad", "mean twist"),
     "x0": ("m", "mean of x"),
-    "phi1_amp": ("rad", "amplitude of the first harmonic of phi"),
+    "phi1_amplitude": ("rad", "amplitude of the first harmonic of phi"),
     "phi1_phase": ("rad", "phase of phi1 relative to z1, in (-pi, pi]"),
-    "phi2_amp": ("rad", "amplitude of the second harmonic of phi"),
+    "phi2_amplitude": ("rad", "amplitude of the second harmonic of phi"),
     "phi2_phase": ("rad", "phase of phi2 relative to z1"),
-    "x1_amp": ("m", "amplitude of the first harmonic of x"),
+    "x1_amplitude": ("m", "amplitude of the first harmonic of x"),
     "x1_phase": ("rad", "phase of x1 relative to z1, in (-pi, pi]"),
     "z_max": ("m", "largest z of the two-harmonic waveform"),
     "third_harmonic_ratio": ("1", "third harmonic of F_z dropped by the describing function, relative to the first two"),
@@ -217,7 +218,7 @@ def periodic_orbit(
         ``period`` [s], ``omega``, ``floquet_multipliers`` (complex, by modulus descending) and their
         ``floquet_moduli``, ``stable``, ``instability`` (stable, fold, flip, torus), ``flip_multiplier`` and
         ``period_doubling`` (a real multiplier below ``-1 + FLIP_TOL``), harmonics of z (``A0, A1, A2, A3, theta``), ``z_max``,
-        ``contact_opens``, ``open_fraction``, ``min_normal_force``, ``status``, cost.
+        ``contact_opens``, ``fraction_off_disk``, ``min_normal_force``, ``status``, cost.
     """
     model = _model(model)
     rtol = _checks.rtol(rtol)
@@ -250,7 +251,7 @@ def periodic_orbit(
         "theta": ("rad", "phase of z2 relative to z1"),
         "z_max": ("m", "largest z on the orbit"),
         "z_min": ("m", "smallest z on the orbit"),
-        "open_fraction": ("1", "fraction of the period with the pin off the disk (zc > 0)"),
+        "fraction_off_disk": ("1", "fraction of the period with the pin off the disk (zc > 0)"),
         "min_normal_force": ("N", "smallest total normal force"),
         "residual": ("1", "scaled periodicity residual"),
         "trivial_error": ("1", "|rho - 1| of the trivial Floquet multiplier (accuracy check)"),

@@ -32,8 +32,8 @@ def seed_analysis(model: SliderModel | None = None) -> dict:
     df = describing_function(m)
     phys = [i for i in range(df.sizes["root"]) if int(df.physical[i]) == 1]
     out: dict = {
-        "eigen_growth_rate": dict(zip(lin.mode.values.tolist(), lin.growth_rate.values.tolist())),
-        "eigen_frequency": dict(zip(lin.mode.values.tolist(), lin.frequency.values.tolist())),
+        "eigen_growth_rate": dict(zip(lin.mode.values.tolist(), lin.mode_growth_rate.values.tolist())),
+        "eigen_frequency": dict(zip(lin.mode.values.tolist(), lin.mode_frequency.values.tolist())),
         "stable": bool(lin.stable),
         "hopf_loads": [h["normal_load"] for h in hopf],
         "tidf_search_outcome": df.attrs["search_outcome"],
@@ -46,13 +46,13 @@ def seed_analysis(model: SliderModel | None = None) -> dict:
     if phys:
         r = df.isel(root=phys[0])
         out["tidf"] = dict(omega=float(r.omega), A0=float(r.A0), A1=float(r.A1), A2=float(r.A2),
-                           theta_deg=float(r.theta) * _DEG, phi1=float(r.phi1_amp),
-                           phi1_deg=float(r.phi1_phase) * _DEG % 360, x=float(r.x1_amp), x_deg=float(r.x1_phase) * _DEG)
+                           theta_deg=float(r.theta) * _DEG, phi1=float(r.phi1_amplitude),
+                           phi1_deg=float(r.phi1_phase) * _DEG % 360, x=float(r.x1_amplitude), x_deg=float(r.x1_phase) * _DEG)
         orb = periodic_orbit(m.replace(contact="bilateral"), r)
         out["orbit"] = dict(omega=float(orb.omega), period=float(orb.period), A0=float(orb.A0), A1=float(orb.A1),
                             A2=float(orb.A2), A3=float(orb.A3), theta_deg=float(orb.theta) * _DEG,
                             moduli=orb.floquet_moduli.values.tolist(), stable=bool(orb.stable),
-                            z_max=float(orb.z_max), open_fraction=float(orb.open_fraction), status=int(orb.status))
+                            z_max=float(orb.z_max), fraction_off_disk=float(orb.fraction_off_disk), status=int(orb.status))
     # The unilateral bouncing cycle, followed from mu = 0.30 (where it is the attractor a small
     # disturbance grows into) down to the model's mu by shooting: a property of the model, not of
     # one trajectory. MODEL.md §6's recipe (22 s at 0.30, then a transient at 0.215) lands near a
@@ -61,9 +61,9 @@ def seed_analysis(model: SliderModel | None = None) -> dict:
     um = m.replace(contact="unilateral")
     orb, _path = follow_cycle(um)
     cyc = ensemble(um, 1.0, {"mu": [m.mu]}, y0=orb.state0.values, steady=True, rtol=1e-11, method="dop853")
-    out["bouncing"] = dict(omega=float(cyc.omega[0]), A0=float(cyc.z0[0]), A1=float(cyc.z1_amp[0]),
-                           A2=float(cyc.z2_amp[0]), A3=float(cyc.z3_amp[0]), theta_deg=float(cyc.z2_phase[0]) * _DEG,
-                           phi1=float(cyc.phi1_amp[0]), phi1_deg=float(cyc.phi1_phase[0]) * _DEG,
+    out["bouncing"] = dict(omega=float(cyc.omega[0]), A0=float(cyc.z0[0]), A1=float(cyc.z1_amplitude[0]),
+                           A2=float(cyc.z2_amplitude[0]), A3=float(cyc.z3_amplitude[0]), theta_deg=float(cyc.z2_phase[0]) * _DEG,
+                           phi1=float(cyc.phi1_amplitude[0]), phi1_deg=float(cyc.phi1_phase[0]) * _DEG,
                            fraction_off_disk=float(cyc.fraction_off_disk[0]), stable=bool(orb.stable),
                            orbit_omega=float(orb.omega), moduli=orb.floquet_moduli.values.tolist())  # fmt: skip
     return out
@@ -89,7 +89,7 @@ def comparison_table(a: dict) -> str:
     row("experiment (printed)", EXPERIMENT)
     if "orbit" in a:
         o = a["orbit"]
-        row(f"shooting orbit, bilateral ({'stable' if o['stable'] else 'unstable'}; contact open {o['open_fraction']:.0%})", o, phi=False)
+        row(f"shooting orbit, bilateral ({'stable' if o['stable'] else 'unstable'}; contact open {o['fraction_off_disk']:.0%})", o, phi=False)
     b = a["bouncing"]
     row(f"bouncing cycle, unilateral (off the disk {b['fraction_off_disk']:.1%})", b)
     return head + "\n" + "\n".join(rows)

@@ -113,7 +113,7 @@ def normal_mode_frequency_hz(model: SliderModel) -> float:
     from . import _core
 
     lin = _core.linear_stability(model.values(), model.contact, model.friction_law, [], np.zeros((1, 0)), threads=1)
-    return float(lin["normal_mode_frequency_hz"][0])
+    return float(lin["normal_mode_frequency"][0])
 
 
 def relative_wear_rate(

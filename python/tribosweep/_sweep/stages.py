@@ -128,9 +128,9 @@ def linear(p: Points) -> None:
     t0 = time.perf_counter()
     lin = _core.linear_stability(p.base, p.contact, p.friction_law, p.names, p.values, threads=p.threads)
     out = p.out
-    out["growth_rate"] = lin["max_growth_rate"]
-    out["linear_frequency"] = lin["least_stable_frequency"]
-    out["normal_mode_frequency"] = lin["normal_mode_frequency_hz"]
+    out["growth_rate"] = lin["growth_rate"]
+    out["linear_frequency"] = lin["linear_frequency"]
+    out["normal_mode_frequency"] = lin["normal_mode_frequency"]
     p.stable = np.asarray(lin["stable"], dtype=bool)
     p.eigenvalues = np.asarray(lin["eigenvalues"])
     out["status"][:] = lin["status"]
@@ -199,7 +199,7 @@ def describing_function(p: Points, *, unstable_too: bool, predict_cycles: bool, 
             out["cycle_omega"][i] = out["tidf_omega"][i]
             out["z1_amplitude"][i] = out["tidf_a1"][i]
             out["z2_amplitude"][i] = df["A2"][j, k[0]]
-            out["phi1_amplitude"][i] = df["phi1_amp"][j, k[0]]
+            out["phi1_amplitude"][i] = df["phi1_amplitude"][j, k[0]]
             reason[i] = "cycle predicted by the describing function"
         elif predict_cycles:
             reason[i] = "sliding unstable; no describing-function cycle within the law's validity"
@@ -342,9 +342,8 @@ def transient(p: Points, *, start_on_mode: bool) -> None:
     reason[sel] = np.where(why != "", why, reason[sel].astype(str))
     out["decided_by"][sel] = decided
     periodic = np.isin(regime, CYCLE_REGIMES)
-    for key, src in (("z1_amplitude", "z1_amp"), ("z2_amplitude", "z2_amp"), ("phi1_amplitude", "phi1_amp"),
-                     ("fraction_off_disk", "fraction_off_disk")):  # fmt: skip
-        out[key][sel] = np.where(periodic, summary[src], np.nan)
+    for key in ("z1_amplitude", "z2_amplitude", "phi1_amplitude", "fraction_off_disk"):
+        out[key][sel] = np.where(periodic, summary[key], np.nan)
     out["cycle_omega"][sel] = np.where(periodic, summary["omega"], np.nan)
     out["min_normal_force"][sel] = summary["min_normal_force"]
     out["min_slip_velocity"][sel] = summary["min_slip_velocity"]

@@ -68,7 +68,7 @@ def shooting_pd_map(normal_load, mu, *, model: SliderModel | None = None, t_max:
                   periodic_tol=1e-6, threads=threads)  # fmt: skip
     lin = _core.linear_stability(m.values(), m.contact, m.friction_law, ["normal_load", "mu"],
                                  np.column_stack([pl, pm]), threads=threads)  # fmt: skip
-    t_guess = 2.0 * np.pi / np.asarray(lin["least_stable_frequency"])
+    t_guess = 2.0 * np.pi / np.asarray(lin["linear_frequency"])
     n = pl.size
     code = np.full(n, SHOOTING_NAMES.index("no_cycle"), dtype=np.uint8)
     flip = np.full(n, np.nan)
@@ -130,7 +130,7 @@ def bifurcation_diagram(mu, *, normal_load: float = 80.0, model: SliderModel | N
         raise ValueError(f"mu = {mu!r} must be a strictly increasing 1-D sequence of at least 2 values")
     # Peaks: sample the last stretch of each transient densely (40 samples per 9.6 ms cycle).
     lin = _core.linear_stability(m.values(), m.contact, m.friction_law, ["mu"], mus[:, None], threads=threads)
-    period = 2.0 * np.pi / float(np.median(lin["least_stable_frequency"]))
+    period = 2.0 * np.pi / float(np.median(lin["linear_frequency"]))
     span = 0.5 * n_peaks * period * 1.05
     t_eval = np.linspace(t_max - span, t_max, int(40 * span / period) + 1)
     tr = ensemble(m, t_max, {"mu": mus}, y0=_start(m, np.full(mus.size, normal_load)), t_eval=t_eval, rtol=1e-9,

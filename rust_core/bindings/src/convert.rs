@@ -249,12 +249,12 @@ pub(crate) fn summaries_into(d: &Bound<'_, PyDict>, out: &[(Summary, String)]) -
     d.set_item("y_end", states(out.iter().map(|o| &o.0.y_end), out.len()).into_pyarray(py))?;
     d.set_item("z0", f(&|s| s.z0))?;
     for k in 0..3 {
-        d.set_item(format!("z{}_amp", k + 1), f(&|s| s.z_amp[k]))?;
+        d.set_item(format!("z{}_amplitude", k + 1), f(&|s| s.z_amp[k]))?;
         d.set_item(format!("z{}_phase", k + 1), f(&|s| s.z_phase[k]))?;
     }
-    d.set_item("phi1_amp", f(&|s| s.phi_amp))?;
+    d.set_item("phi1_amplitude", f(&|s| s.phi_amp))?;
     d.set_item("phi1_phase", f(&|s| s.phi_phase))?;
-    d.set_item("x1_amp", f(&|s| s.x_amp))?;
+    d.set_item("x1_amplitude", f(&|s| s.x_amp))?;
     d.set_item("x1_phase", f(&|s| s.x_phase))?;
     d.set_item("min_normal_force", f(&|s| s.min_normal_force))?;
     d.set_item("fraction_off_disk", f(&|s| s.fraction_off_disk))?;

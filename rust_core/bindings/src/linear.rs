@@ -60,9 +60,9 @@ fn linear_stability<'py>(
     d.set_item("mode_growth_rate", gr.into_pyarray(py))?;
     d.set_item("mode_frequency", fr.into_pyarray(py))?;
     d.set_item("mode_names", kinds.iter().map(|k| k.name()).collect::<Vec<_>>())?;
-    d.set_item("max_growth_rate", f(|l| l.max_growth_rate))?;
-    d.set_item("least_stable_frequency", f(|l| l.least_stable_frequency))?;
-    d.set_item("normal_mode_frequency_hz", f(|l| l.normal_mode_frequency_hz))?;
+    d.set_item("growth_rate", f(|l| l.max_growth_rate))?;
+    d.set_item("linear_frequency", f(|l| l.least_stable_frequency))?;
+    d.set_item("normal_mode_frequency", f(|l| l.normal_mode_frequency_hz))?;
     d.set_item("stable", Array1::from_iter(out.iter().map(|l| l.stable)).into_pyarray(py))?;
     d.set_item("status", Array1::from_iter(out.iter().map(|l| l.status.code())).into_pyarray(py))?;
     Ok(d)

@@ -54,7 +54,7 @@ fn orbit_dict<'py>(py: Python<'py>, o: &PeriodicOrbit) -> PyResult<Bound<'py, Py
     d.set_item("z_max", o.z_max)?;
     d.set_item("z_min", o.z_min)?;
     d.set_item("contact_opens", o.contact_opens)?;
-    d.set_item("open_fraction", o.open_fraction)?;
+    d.set_item("fraction_off_disk", o.open_fraction)?;
     d.set_item("min_normal_force", o.min_normal_force)?;
     d.set_item("min_law_force", o.min_law_force)?;
     d.set_item("n_switches", o.n_switches)?;
@@ -167,7 +167,7 @@ fn periodic_orbits<'py>(
     d.set_item("A3", f(|o| o.harmonics.a3))?;
     d.set_item("theta", f(|o| o.harmonics.theta))?;
     d.set_item("z_max", f(|o| o.z_max))?;
-    d.set_item("open_fraction", f(|o| o.open_fraction))?;
+    d.set_item("fraction_off_disk", f(|o| o.open_fraction))?;
     d.set_item("min_normal_force", f(|o| o.min_normal_force))?;
     d.set_item("flip_multiplier", f(|o| o.flip_multiplier))?;
     d.set_item("residual", f(|o| o.residual_norm))?;
