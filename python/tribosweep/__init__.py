@@ -12,6 +12,15 @@ from ._census import ATTRACTOR_NAMES, census
 from ._chunk import BISTABLE_NAMES, REGIME_NAMES
 from ._flags import INSTABILITY_NAMES, OUTCOME_NAMES, STATUS, STATUS_NAMES
 from ._frequency import describing_function, follow_cycle, hopf_load, linear_stability, periodic_orbit
+from ._hopf import (
+    CRITICALITY_NAMES,
+    END_STATUS_NAMES,
+    PARAMETERS,
+    POINT_TYPE_NAMES,
+    hopf_curve,
+    hopf_cycle_guess,
+    sliding_branch,
+)
 from ._model import PARAM_NAMES, SliderModel
 from ._simulate import DEFAULT_Y0, ensemble, simulate
 from ._sweep import sweep
@@ -23,10 +32,14 @@ __all__ = [
     "ARM_EXPONENTS",
     "ATTRACTOR_NAMES",
     "BISTABLE_NAMES",
+    "CRITICALITY_NAMES",
     "DEFAULT_Y0",
+    "END_STATUS_NAMES",
     "INSTABILITY_NAMES",
     "OUTCOME_NAMES",
+    "PARAMETERS",
     "PARAM_NAMES",
+    "POINT_TYPE_NAMES",
     "REGIME_NAMES",
     "STATUS",
     "STATUS_NAMES",
@@ -40,11 +53,14 @@ __all__ = [
     "describing_function",
     "ensemble",
     "follow_cycle",
+    "hopf_curve",
+    "hopf_cycle_guess",
     "hopf_load",
     "linear_stability",
     "normal_mode_frequency_hz",
     "periodic_orbit",
     "relative_wear_rate",
     "simulate",
+    "sliding_branch",
     "sweep",
 ]

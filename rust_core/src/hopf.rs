@@ -362,6 +362,11 @@ pub struct HopfNormalForm<const N: usize> {
     /// `(|<p,C(q,q,conj q)>| + |<p,B(conj q,h20)>| + 2|<p,B(q,h11)>|) / 2w`: the size of the terms
     /// summed into `l1`, the scale of its rounding error.
     pub l1_scale: f64,
+    /// `h20 = (2iw I - A)^-1 B(q, q)` and `h11 = -A^-1 B(q, conj q)`: the centre manifold to second
+    /// order, `x = x0 + 2 Re(v q) + Re(h20 v^2) + h11 |v|^2 + O(|v|^3)`.
+    pub h20: CVector<N>,
+    /// See `h20` (real up to rounding).
+    pub h11: CVector<N>,
 }
 
 /// Sign of the first Lyapunov coefficient.
@@ -446,6 +451,8 @@ pub fn first_lyapunov<F: VectorField<N> + ?Sized, const N: usize>(
         c1,
         l1: c1.re / omega,
         l1_scale: (t1.norm() + t2.norm() + 2.0 * t3.norm()) / (2.0 * omega),
+        h20,
+        h11,
     })
 }
 
@@ -566,8 +573,7 @@ pub fn track<Fam: Family<N>, const N: usize>(
     let d1 = (lambda - guess).norm();
     let ambiguity = order.get(1).map_or(0.0, |&j| d1 / (upper[j] - guess).norm().max(f64::MIN_POSITIVE));
     let others = order[1..].iter().map(|&j| upper[j]).collect();
-    let omega = lambda.im.abs().max(f64::MIN_POSITIVE);
-    let pair = eigenpair(&a, lambda, &fam.weights(&f, omega)).map_err(|e| format!("{e} at {p:?}"))?;
+    let pair = eigenpair(&a, lambda, &fam.weights(&f, lambda.im)).map_err(|e| format!("{e} at {p:?}"))?;
     let mut grad = Vec::with_capacity(p.len());
     for k in 0..p.len() {
         grad.push(pair.derivative(&jacobian_derivative(fam, p, k, h[k], cnt)?));

@@ -109,7 +109,7 @@ impl<Fam> Ctx<'_, Fam> {
         let mut grad = Vec::with_capacity(ev.len());
         let mut labels = Vec::with_capacity(ev.len());
         for e in &ev {
-            let w = self.fam.weights(&f, e.im.max(f64::MIN_POSITIVE));
+            let w = self.fam.weights(&f, e.im);
             grad.push(super::eigenpair(&a, *e, &w).map(|p| p.derivative(&da)).unwrap_or(C64::new(f64::NAN, f64::NAN)));
             labels.push(self.fam.mode_label(&f, *e));
         }

@@ -232,7 +232,8 @@ impl Family<6> for SliderFamily {
     /// a displacement in metres (`L phi` is the twist's displacement of the contact point), so
     /// `l1` is in m^-2 and `2 |v| |q_z|` is the amplitude of `z` on the small cycle.
     fn weights(&self, f: &SliderField, omega: f64) -> SVector<f64, 6> {
-        let w2 = if omega > 0.0 { 1.0 / (omega * omega) } else { 1.0 };
+        // A real eigenvalue (no frequency): plain displacements and velocities.
+        let w2 = if omega > 1e-9 { 1.0 / (omega * omega) } else { 1.0 };
         let l = f.0.p.moment_arm;
         let l2 = if l > 0.0 { l * l } else { 1.0 };
         SVector::<f64, 6>::from([1.0, w2, 1.0, w2, l2, l2 * w2])
