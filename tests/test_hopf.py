@@ -70,7 +70,8 @@ def test_hopf_curve_loads_equal_hopf_load_at_five_arm_lengths():
     arms = [0.052, 0.06, 0.068, 0.076, 0.085]
     ds = ts.hopf_curve(SEED, x=("normal_load", 1.0, 250.0), y=("arm_length", 0.05, 0.127), y_marks=arms)
     marks = ds.where(ds.point_type == ts.POINT_TYPE_NAMES.index("mark"), drop=True)
-    assert sorted(marks.arm_length.values.round(12)) == arms
+    # Located in arclength to the corrector tolerance (1e-10 box units of the 0.077 m range).
+    assert np.allclose(np.sort(marks.arm_length.values), arms, rtol=0, atol=1e-10 * 0.077)
     for load, arm in zip(marks.normal_load.values, marks.arm_length.values):
         ref = _exact_hopf_load(ts.apparatus_model(50.0, float(arm), 0.46))
         # Corrector 1e-10 box units (2.5e-8 N over 249 N) and Brent 1e-10 relative: 1e-6 relative
@@ -85,7 +86,7 @@ def test_hopf_curve_in_load_and_mu_passes_through_model_md(seed_values):
     ds = ts.hopf_curve(SEED, x=("normal_load", 1.0, 250.0), y=("mu", 0.15, 0.4), y_marks=mus)
     assert ds.sizes["hopf_curve"] == 1
     marks = ds.where(ds.point_type == ts.POINT_TYPE_NAMES.index("mark"), drop=True).sortby("mu")
-    assert np.allclose(marks.mu.values, mus, rtol=0, atol=1e-12)
+    assert np.allclose(marks.mu.values, mus, rtol=0, atol=1e-10 * 0.25)  # as above, range 0.25
     for mu, load in zip(mus, marks.normal_load.values):
         ref = seed_values["hopf_load_N"][str(mu)]
         # The references carry 3 decimals (+-5e-4 N): the 1e-4 relative is wider than that

@@ -142,6 +142,7 @@ def hopf_curve(
     tol: float = 1e-10,
     max_points: int = 5000,
     max_angle: float = 0.1,
+    chord_tol: float = 1e-5,
     x_marks: list[float] = ...,
     y_marks: list[float] = ...,
 ) -> dict[str, Any]: ...

@@ -353,12 +353,13 @@ def hopf_curve(
     y: tuple[str, float, float] = ("arm_length", 0.05, 0.127),
     *,
     grid: tuple[int, int] = (16, 16),
-    step: float = 0.01,
+    step: float | None = None,
     step_min: float = 1e-7,
     step_max: float = 0.05,
     tol: float = 1e-10,
     max_points: int = 5000,
     max_angle: float = 0.1,
+    chord_tol: float = 1e-5,
     x_marks: Sequence[float] | None = None,
     y_marks: Sequence[float] | None = None,
 ) -> xr.Dataset:
@@ -368,8 +369,9 @@ def hopf_curve(
     nodes, located on the edge; a seed on a curve already traced (same frequency) is dropped. From
     each seed the curve ``Re lambda(x, y) = 0`` is followed both ways in box units (each axis
     scaled to [0, 1]): tangent predictor, Newton corrector on the arclength hyperplane, step
-    halved on failure (Newton, an ambiguous eigenvalue, a turn above ``max_angle``) down to
-    ``step_min``, grown by 1.5 after easy steps up to ``step_max``. Bautin points (``l1 = 0``),
+    halved on failure (Newton, an ambiguous eigenvalue) and shortened where the tangent turns by
+    more than ``max_angle`` or the polyline would bulge from the curve by more than
+    ``chord_tol``, down to ``step_min``; grown by 1.5 after easy steps up to ``step_max``. Bautin points (``l1 = 0``),
     double Hopf points (another eigenvalue crosses), requested axis values (``x_marks``,
     ``y_marks``) and box exits are located on the curve; a curve that returns to its seed is
     closed. A curve entirely inside one grid cell is not seen: refine ``grid``.
@@ -384,13 +386,17 @@ def hopf_curve(
     grid : (int, int)
         Seeding nodes per axis (>= 2 each).
     step, step_min, step_max : float
-        First, smallest and largest continuation step [box units], ``0 < step_min <= step <= step_max <= 0.5``.
+        First, smallest and largest continuation step [box units], ``0 < step_min <= step <= step_max <= 0.5``
+        (``step`` defaults to ``min(0.01, step_max)``).
     tol : float
         Newton tolerance [box units], in (0, 1e-4].
     max_points : int
         Largest number of points per curve (>= 10).
     max_angle : float, rad
         Largest turn of the tangent per step, in (0, 1].
+    chord_tol : float
+        Largest bulge of the curve from the polyline of its points [box units], estimated per step
+        as ``h * angle / 8``; in (0, 0.1]. The points themselves are on the curve to ``tol``.
     x_marks, y_marks : sequence of float, optional
         Axis values to locate on the curves (point type ``mark``).
 
@@ -435,15 +441,16 @@ def hopf_curve(
         raise ValueError(f"grid = {grid!r} must be a pair of integers >= 2") from None
     gx, gy = _int("grid[0]", gx, 2, 1000), _int("grid[1]", gy, 2, 1000)
     step_max = _real("step_max", step_max, 0.0, 0.5)
-    step = _real("step", step, 0.0, step_max)
+    step = _real("step", min(0.01, step_max) if step is None else step, 0.0, step_max)
     step_min = _real("step_min", step_min, 0.0, step)
     tol = _real("tol", tol, 0.0, 1e-4)
     max_points = _int("max_points", max_points, 10)
     max_angle = _real("max_angle", max_angle, 0.0, 1.0)
+    chord_tol = _real("chord_tol", chord_tol, 0.0, 0.1)
     xm, ym = _marks("x_marks", x_marks), _marks("y_marks", y_marks)
     out = _core.hopf_curve(model.values(), model.contact, model.friction_law, _axis(model, xn), _axis(model, yn),
                            (xlo, xhi), (ylo, yhi), (gx, gy), step, step_min, step_max, tol, max_points, max_angle,
-                           xm, ym)  # fmt: skip
+                           chord_tol, xm, ym)  # fmt: skip
     pt = ("curve_point",)
     data = {
         "curve": (pt, out["curve"], {"long_name": "index of the curve along hopf_curve", "instance_dimension": "hopf_curve"}),
@@ -467,7 +474,7 @@ def hopf_curve(
         "x": xn, "y": yn, "x_low": xlo, "x_high": xhi, "y_low": ylo, "y_high": yhi, "seed_grid": [gx, gy],
         "continuation_tolerance": tol, "continuation_step": step, "continuation_step_min": step_min,
         "continuation_step_max": step_max, "continuation_units": "box units: each axis scaled to [0, 1]",
-        "max_angle": max_angle, "max_points": max_points, "n_seeds": int(out["n_seeds"]),
+        "max_angle": max_angle, "polyline_tolerance": chord_tol, "max_points": max_points, "n_seeds": int(out["n_seeds"]),
         "n_eigenvalue_computations": int(out["n_eig"]), "n_jacobian_evaluations": int(out["n_jac"]),
         "normalisation": _NORMALISATION, "contact": "linearised in contact (same for both contact models)",
         "friction_law": model.friction_law,

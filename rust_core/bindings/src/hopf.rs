@@ -153,7 +153,7 @@ fn sliding_branch<'py>(
 /// Every Hopf curve in the box `[x_lo, x_hi] x [y_lo, y_hi]` (struct of arrays over all points,
 /// with the curve index, and per-curve end statuses and reasons).
 #[pyfunction]
-#[pyo3(signature = (values, contact, friction_law, x_axis, y_axis, x_range, y_range, grid=(16, 16), step=0.01, step_min=1e-7, step_max=0.05, tol=1e-10, max_points=5000, max_angle=0.1, x_marks=vec![], y_marks=vec![]))]
+#[pyo3(signature = (values, contact, friction_law, x_axis, y_axis, x_range, y_range, grid=(16, 16), step=0.01, step_min=1e-7, step_max=0.05, tol=1e-10, max_points=5000, max_angle=0.1, chord_tol=1e-5, x_marks=vec![], y_marks=vec![]))]
 #[allow(clippy::too_many_arguments)]
 fn hopf_curve<'py>(
     py: Python<'py>,
@@ -171,6 +171,7 @@ fn hopf_curve<'py>(
     tol: f64,
     max_points: usize,
     max_angle: f64,
+    chord_tol: f64,
     x_marks: Vec<f64>,
     y_marks: Vec<f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
@@ -183,6 +184,7 @@ fn hopf_curve<'py>(
         tol,
         max_points,
         max_angle,
+        chord_tol,
         marks: [x_marks, y_marks],
     };
     let bx = [[x_range.0, x_range.1], [y_range.0, y_range.1]];

@@ -10,9 +10,10 @@
 //!   located on the edge. A seed within reach of a curve already traced (same frequency) is a
 //!   duplicate.
 //! - **Continuation.** Tangent predictor `s + h t`, then Newton on `g(s) = 0`,
-//!   `t . (s - s_pred) = 0`. A step is rejected (and halved) when Newton fails, when the tracked
-//!   eigenvalue is ambiguous, or when the tangent turns by more than `max_angle`; it grows by 1.5
-//!   after an easy step. Below `step_min` the direction ends with `StepFloor` and the reason.
+//!   `t . (s - s_pred) = 0`. A step is rejected (and halved) when Newton fails or the tracked
+//!   eigenvalue is ambiguous, and shortened when the tangent turns by more than `max_angle` or the
+//!   chord bulges from the arc by more than `chord_tol`; it grows by 1.5 after an easy step. Below
+//!   `step_min` the direction ends with `StepFloor` and the reason.
 //! - **Special points** between two accepted points are located on the curve (a root in the
 //!   arclength `sigma` of the corrected point, by the Illinois method): a sign change of `l1`
 //!   (Bautin), of another eigenvalue's real part (double Hopf, or a real eigenvalue through zero),
@@ -41,6 +42,10 @@ pub struct CurveOptions {
     pub max_points: usize,
     /// Largest turn of the tangent per step [rad].
     pub max_angle: f64,
+    /// Largest deviation of the polyline from the curve [box units], estimated per step as
+    /// `h * angle / 8` (a circular arc of length `h` turning by `angle` bulges `h angle / 8` from
+    /// its chord).
+    pub chord_tol: f64,
     /// Axis values to mark on the curves (physical units), per axis.
     pub marks: [Vec<f64>; 2],
 }
@@ -55,6 +60,7 @@ impl Default for CurveOptions {
             tol: 1e-10,
             max_points: 5000,
             max_angle: 0.1,
+            chord_tol: 1e-5,
             marks: [Vec::new(), Vec::new()],
         }
     }
@@ -515,9 +521,11 @@ impl<'a, Fam> Ctx<'a, Fam> {
                 }
             };
             let angle = dot(a.t, b.t).clamp(-1.0, 1.0).acos();
-            if angle > opts.max_angle && h > 2.0 * opts.step_min {
-                last_err = format!("the tangent turned by {angle:.3} rad > max_angle");
-                h *= 0.5;
+            let bulge = h * angle / 8.0;
+            if (angle > opts.max_angle || bulge > opts.chord_tol) && h > 2.0 * opts.step_min {
+                last_err = format!("the tangent turned by {angle:.3} rad (max_angle {}, chord_tol {:e})", opts.max_angle, opts.chord_tol);
+                // The bulge grows as h^2: aim at 80 % of the tolerance.
+                h *= (0.8 * opts.chord_tol / bulge).sqrt().clamp(0.2, 0.5);
                 continue;
             }
             if b.e.lambda.im <= omega_floor {
@@ -545,7 +553,7 @@ impl<'a, Fam> Ctx<'a, Fam> {
                 pts.push(p);
             }
             pts.push(self.point(&b, PointType::Regular, Status::Success));
-            if angle < opts.max_angle / 3.0 {
+            if angle < opts.max_angle / 3.0 && bulge < opts.chord_tol / 3.0 {
                 h = (h * 1.5).min(opts.step_max);
             }
             a = b;
@@ -667,8 +675,9 @@ pub fn hopf_curves<Fam: Family<N>, const N: usize>(
     let n_seeds = seeds.len();
     let mut curves: Vec<Curve> = Vec::new();
     let mut traced: Vec<Vec<([f64; 2], C64)>> = Vec::new();
-    // A chord deviates from its arc by at most h * max_angle / 8: twice that is "on the curve".
-    let reach = (0.25 * opts.step_max * opts.max_angle).max(100.0 * opts.tol);
+    // A chord deviates from its arc by at most min(h max_angle / 8, chord_tol): twice that is
+    // "on the curve".
+    let reach = (0.25 * opts.step_max * opts.max_angle).min(2.0 * opts.chord_tol).max(100.0 * opts.tol);
     for (s0, e0) in seeds {
         let covered = traced.iter().any(|c| {
             c.windows(2).any(|w| {

@@ -432,6 +432,18 @@ fn circle_is_closed_with_its_bautin_and_double_hopf_points() {
             assert!(rel(p.l1, 2.0 * b / (1.0 + 0.25 * a)) < FD_RTOL * 10.0 || p.l1.abs() < 1e-7, "{:?}", p);
         }
     }
+    // The polyline keeps within chord_tol of the circle (box units: radius 1/3 about the centre);
+    // h angle / 8 is the exact bulge of a circular arc to second order in the angle.
+    let boxed = |u: [f64; 2]| [(u[0] + 1.5) / 3.0 - 0.5, (u[1] + 1.5) / 3.0 - 0.5];
+    let worst = circle
+        .points
+        .windows(2)
+        .map(|w| {
+            let (a, b) = (boxed(w[0].u), boxed(w[1].u));
+            1.0 / 3.0 - (0.5 * (a[0] + b[0])).hypot(0.5 * (a[1] + b[1]))
+        })
+        .fold(0.0, f64::max);
+    assert!(worst <= 1.01 * opts.chord_tol, "bulge {worst:e} > chord_tol {:e}", opts.chord_tol);
     let kinds = |c: &super::curve::Curve, k: PointType| c.points.iter().filter(|p| p.kind == k).map(|p| p.u).collect::<Vec<_>>();
     let bautin = kinds(circle, PointType::Bautin);
     assert_eq!(bautin.len(), 2, "{bautin:?}");
