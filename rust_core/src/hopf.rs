@@ -247,7 +247,9 @@ pub fn solve<const N: usize>(m: &CMatrix<N>, b: &CVector<N>) -> Option<CVector<N
     let (mut a, mut rhs) = (*m, *b);
     let scale = m.iter().map(|c| c.norm()).fold(0.0, f64::max);
     let perm = eliminate(&mut a, &mut rhs, N);
-    if !(a[(N - 1, N - 1)].norm() > (N as f64) * f64::EPSILON * scale) {
+    // NaN pivots fail this too.
+    let last = a[(N - 1, N - 1)].norm();
+    if last.is_nan() || last <= (N as f64) * f64::EPSILON * scale {
         return None;
     }
     let mut y = CVector::<N>::zeros();
@@ -335,7 +337,8 @@ pub fn eigenpair<const N: usize>(
     let mut q = CVector::<N>::from_fn(|i, _| qb[i] * d[i]);
     let mut p = CVector::<N>::from_fn(|i, _| pb[i] / d[i]);
     let norm = q.iter().zip(weights.iter()).map(|(c, w)| w * c.norm_sqr()).sum::<f64>().sqrt();
-    let k = (0..N).max_by(|&i, &j| (weights[i] * q[i].norm_sqr()).total_cmp(&(weights[j] * q[j].norm_sqr()))).unwrap_or(0);
+    let k =
+        (0..N).max_by(|&i, &j| (weights[i] * q[i].norm_sqr()).total_cmp(&(weights[j] * q[j].norm_sqr()))).unwrap_or(0);
     let phase = q[k].conj() / q[k].norm();
     q *= phase / norm;
     let pq = inner(&p, &q);
@@ -427,7 +430,7 @@ pub fn first_lyapunov<F: VectorField<N> + ?Sized, const N: usize>(
 ) -> Result<HopfNormalForm<N>, HopfError> {
     let a = f.jacobian(x0);
     let omega = lambda.im;
-    if !(omega > 0.0) {
+    if omega.is_nan() || omega <= 0.0 {
         return Err(HopfError::NotOscillatory { re: lambda.re, im: lambda.im });
     }
     let pair = eigenpair(&a, lambda, weights)?;
@@ -575,8 +578,8 @@ pub fn track<Fam: Family<N>, const N: usize>(
     let others = order[1..].iter().map(|&j| upper[j]).collect();
     let pair = eigenpair(&a, lambda, &fam.weights(&f, lambda.im)).map_err(|e| format!("{e} at {p:?}"))?;
     let mut grad = Vec::with_capacity(p.len());
-    for k in 0..p.len() {
-        grad.push(pair.derivative(&jacobian_derivative(fam, p, k, h[k], cnt)?));
+    for (k, hk) in h.iter().enumerate().take(p.len()) {
+        grad.push(pair.derivative(&jacobian_derivative(fam, p, k, *hk, cnt)?));
     }
     Ok(Tracked { lambda, grad, ambiguity, others, pair })
 }

@@ -38,7 +38,12 @@ fn axis_from(spec: AxisSpec) -> PyResult<Axis> {
     Ok(axis)
 }
 
-fn family_from(values: &HashMap<String, f64>, contact: &str, friction_law: &str, axes: Vec<AxisSpec>) -> PyResult<SliderFamily> {
+fn family_from(
+    values: &HashMap<String, f64>,
+    contact: &str,
+    friction_law: &str,
+    axes: Vec<AxisSpec>,
+) -> PyResult<SliderFamily> {
     let mut p = Params::seed();
     for (k, v) in values {
         p.set(k, *v).map_err(value_error)?;
@@ -46,7 +51,9 @@ fn family_from(values: &HashMap<String, f64>, contact: &str, friction_law: &str,
     p.contact = match contact {
         "bilateral" => ContactModel::Bilateral,
         "unilateral" => ContactModel::Unilateral,
-        _ => return Err(value_error(format!("contact = {contact:?} is not valid: must be 'bilateral' or 'unilateral'"))),
+        _ => {
+            return Err(value_error(format!("contact = {contact:?} is not valid: must be 'bilateral' or 'unilateral'")))
+        }
     };
     p.friction_law = match friction_law {
         "constant" => FrictionLaw::Constant,
@@ -133,7 +140,11 @@ fn sliding_branch<'py>(
     d.set_item("status", Array1::from_iter(c.iter().map(|x| x.status.code())).into_pyarray(py))?;
     d.set_item("reason", c.iter().map(|x| x.reason.clone()).collect::<Vec<_>>())?;
     let nan = Complex64::new(f64::NAN, f64::NAN);
-    let (mut q, mut h20, mut h11) = (Array2::from_elem((c.len(), 6), nan), Array2::from_elem((c.len(), 6), nan), Array2::from_elem((c.len(), 6), nan));
+    let (mut q, mut h20, mut h11) = (
+        Array2::from_elem((c.len(), 6), nan),
+        Array2::from_elem((c.len(), 6), nan),
+        Array2::from_elem((c.len(), 6), nan),
+    );
     for (i, x) in c.iter().enumerate() {
         if let Some(nf) = x.normal_form {
             for k in 0..6 {
@@ -192,7 +203,8 @@ fn hopf_curve<'py>(
     let pts: Vec<(usize, &tribosweep_core::hopf::curve::CurvePoint)> =
         res.curves.iter().enumerate().flat_map(|(i, c)| c.points.iter().map(move |p| (i, p))).collect();
     let d = PyDict::new(py);
-    let f = |g: &dyn Fn(&tribosweep_core::hopf::curve::CurvePoint) -> f64| Array1::from_iter(pts.iter().map(|(_, p)| g(p)));
+    let f =
+        |g: &dyn Fn(&tribosweep_core::hopf::curve::CurvePoint) -> f64| Array1::from_iter(pts.iter().map(|(_, p)| g(p)));
     d.set_item("curve", Array1::from_iter(pts.iter().map(|(i, _)| *i as i64)).into_pyarray(py))?;
     d.set_item("x", f(&|p| p.u[0]).into_pyarray(py))?;
     d.set_item("y", f(&|p| p.u[1]).into_pyarray(py))?;

@@ -16,7 +16,7 @@
 //!   `step_min` the direction ends with `StepFloor` and the reason.
 //! - **Special points** between two accepted points are located on the curve (a root in the
 //!   arclength `sigma` of the corrected point, by the Illinois method): a sign change of `l1`
-//!   (Bautin), of another eigenvalue's real part (double Hopf, or a real eigenvalue through zero),
+//!   (Bautin), of another pair's real part (double Hopf) or of a real eigenvalue (zero-Hopf),
 //!   a requested axis value (`marks`). A predictor leaving the box is replaced by the point of the
 //!   curve on the box face, found with the face coordinate fixed. A curve that returns to its seed
 //!   (the seed's tangent hyperplane crossed from behind within two steps of the seed, same
@@ -24,6 +24,11 @@
 
 use super::{normal_form_at, track, Counters, Criticality, Family, C64, H_BILINEAR};
 use crate::status::Status;
+
+mod events;
+mod seeds;
+
+use seeds::{seeds, segment_distance};
 
 /// Settings of [`hopf_curves`].
 #[derive(Clone, Debug, PartialEq)]
@@ -76,7 +81,7 @@ pub enum PointType {
     Seed = 1,
     /// `l1 = 0`: the criticality changes (generalised Hopf).
     Bautin = 2,
-    /// Another eigenvalue crosses the imaginary axis (a double Hopf, or a real one through zero).
+    /// Another complex pair crosses the imaginary axis (double Hopf).
     DoubleHopf = 3,
     /// The curve leaves the box here.
     BoxExit = 4,
@@ -86,11 +91,13 @@ pub enum PointType {
     End = 6,
     /// A requested axis value.
     Mark = 7,
+    /// A real eigenvalue crosses zero on the curve (fold-Hopf, or zero-Hopf).
+    ZeroHopf = 8,
 }
 
 impl PointType {
     /// Every value, in code order.
-    pub const ALL: [PointType; 8] = [
+    pub const ALL: [PointType; 9] = [
         PointType::Regular,
         PointType::Seed,
         PointType::Bautin,
@@ -99,6 +106,7 @@ impl PointType {
         PointType::Closure,
         PointType::End,
         PointType::Mark,
+        PointType::ZeroHopf,
     ];
 
     /// CF flag name.
@@ -112,6 +120,7 @@ impl PointType {
             PointType::Closure => "closure",
             PointType::End => "end",
             PointType::Mark => "mark",
+            PointType::ZeroHopf => "zero_hopf",
         }
     }
 }
@@ -134,8 +143,13 @@ pub enum EndStatus {
 
 impl EndStatus {
     /// Every value, in code order.
-    pub const ALL: [EndStatus; 5] =
-        [EndStatus::Closed, EndStatus::LeftBox, EndStatus::StepFloor, EndStatus::MaxPoints, EndStatus::FrequencyVanished];
+    pub const ALL: [EndStatus; 5] = [
+        EndStatus::Closed,
+        EndStatus::LeftBox,
+        EndStatus::StepFloor,
+        EndStatus::MaxPoints,
+        EndStatus::FrequencyVanished,
+    ];
 
     /// CF flag name.
     pub fn name(self) -> &'static str {
@@ -239,17 +253,6 @@ fn tangent(g: [f64; 2], prev: [f64; 2]) -> Option<[f64; 2]> {
     Some(if dot(t, prev) < 0.0 { [-t[0], -t[1]] } else { t })
 }
 
-/// An event between two accepted points, with its values there.
-#[derive(Clone, Copy, Debug)]
-enum Event {
-    /// Sign change of l1.
-    Bautin,
-    /// Another eigenvalue's real part (the eigenvalue at each end).
-    Other(C64, C64),
-    /// Axis `k` reaches `value`.
-    Mark(usize, f64),
-}
-
 struct Ctx<'a, Fam> {
     fam: &'a Fam,
     lo: [f64; 2],
@@ -270,14 +273,24 @@ impl<'a, Fam> Ctx<'a, Fam> {
     {
         let t = track(self.fam, &self.phys(s), guess, &self.h, &mut self.cnt)?;
         if t.ambiguity >= 0.5 {
-            return Err(format!("the critical eigenvalue is ambiguous at {:?} (ratio {:.2})", self.phys(s), t.ambiguity));
+            return Err(format!(
+                "the critical eigenvalue is ambiguous at {:?} (ratio {:.2})",
+                self.phys(s),
+                t.ambiguity
+            ));
         }
         let gc = [t.grad[0] * self.width[0], t.grad[1] * self.width[1]];
         Ok(Eval { lambda: t.lambda, g: [gc[0].re, gc[1].re], gc, others: t.others })
     }
 
     /// Newton on `Re lambda = 0`, `t . (s - pred) = 0`; rejects a correction longer than `reach`.
-    fn correct<const N: usize>(&mut self, pred: [f64; 2], t: [f64; 2], guess: C64, reach: f64) -> Result<([f64; 2], Eval), String>
+    fn correct<const N: usize>(
+        &mut self,
+        pred: [f64; 2],
+        t: [f64; 2],
+        guess: C64,
+        reach: f64,
+    ) -> Result<([f64; 2], Eval), String>
     where
         Fam: Family<N>,
     {
@@ -307,7 +320,8 @@ impl<'a, Fam> Ctx<'a, Fam> {
     where
         Fam: Family<N>,
     {
-        let t = tangent(e.g, prev).ok_or_else(|| format!("the gradient of Re lambda vanishes at {:?}", self.phys(s)))?;
+        let t =
+            tangent(e.g, prev).ok_or_else(|| format!("the gradient of Re lambda vanishes at {:?}", self.phys(s)))?;
         let (l1, crit, mode) = match normal_form_at(self.fam, &self.phys(s), e.lambda) {
             Ok((nf, m)) => (nf.l1, Criticality::of(nf.l1, nf.l1_scale), m),
             Err(_) => (f64::NAN, Criticality::Undetermined, 0),
@@ -327,99 +341,6 @@ impl<'a, Fam> Ctx<'a, Fam> {
             other_unstable,
             status,
         }
-    }
-
-    /// Value of an event function at node `n` reached after `sigma` of a step of length `h`.
-    fn event_value(&self, ev: Event, n: &Node, sigma: f64, h: f64) -> f64 {
-        match ev {
-            Event::Bautin => n.l1,
-            Event::Other(a, b) => {
-                let guess = a + (b - a) * (sigma / h);
-                let near = n.e.others.iter().min_by(|x, y| (**x - guess).norm().total_cmp(&(**y - guess).norm()));
-                near.map_or(f64::NAN, |e| e.re)
-            }
-            Event::Mark(k, v) => self.phys(n.s)[k] - v,
-        }
-    }
-
-    /// Events whose functions change sign between `a` and `b` (`b` at arclength `h` along `a.t`).
-    fn events_between(&self, a: &Node, b: &Node) -> Vec<Event> {
-        let mut out = Vec::new();
-        if a.l1.is_finite() && b.l1.is_finite() && (a.l1 < 0.0) != (b.l1 < 0.0) {
-            out.push(Event::Bautin);
-        }
-        // Match the other eigenvalues (nearest), then look for sign changes.
-        for oa in &a.e.others {
-            let ob = b.e.others.iter().min_by(|x, y| (**x - oa).norm().total_cmp(&(**y - oa).norm()));
-            if let Some(ob) = ob {
-                if (oa.re < 0.0) != (ob.re < 0.0) {
-                    out.push(Event::Other(*oa, *ob));
-                }
-            }
-        }
-        let (ua, ub) = (self.phys(a.s), self.phys(b.s));
-        for k in 0..2 {
-            for &m in &self.opts.marks[k] {
-                if (ua[k] < m) != (ub[k] < m) && ua[k] != m {
-                    out.push(Event::Mark(k, m));
-                }
-            }
-        }
-        out
-    }
-
-    /// Locate each event between `a` and `b` (arclength `h` along `a.t`) by the Illinois method on
-    /// the arclength of the corrected point; returns the points in order along the curve.
-    fn locate_events<const N: usize>(&mut self, a: &Node, b: &Node, h: f64) -> Vec<(f64, CurvePoint)>
-    where
-        Fam: Family<N>,
-    {
-        let mut found = Vec::new();
-        for ev in self.events_between(a, b) {
-            let (mut x0, mut f0) = (0.0, self.event_value(ev, a, 0.0, h));
-            let (mut x1, mut f1) = (h, self.event_value(ev, b, h, h));
-            let mut best: Option<(f64, Node)> = None;
-            let mut converged = false;
-            for _ in 0..60 {
-                let x = x1 - f1 * (x1 - x0) / (f1 - f0);
-                if !(x > 0.0 && x < h) {
-                    break;
-                }
-                let guess = a.e.lambda + (b.e.lambda - a.e.lambda) * (x / h);
-                let Ok((s, e)) = self.correct(axpy(a.s, x, a.t), a.t, guess, h) else { break };
-                let Ok(n) = self.node(s, e, a.t) else { break };
-                let f = self.event_value(ev, &n, x, h);
-                best = Some((x, n));
-                if !f.is_finite() {
-                    break;
-                }
-                if f == 0.0 || (x - x1).abs() <= self.opts.tol {
-                    converged = true;
-                    break;
-                }
-                if (f < 0.0) != (f1 < 0.0) {
-                    (x0, f0) = (x1, f1);
-                } else {
-                    f0 *= 0.5;
-                }
-                (x1, f1) = (x, f);
-                if (x1 - x0).abs() <= self.opts.tol {
-                    converged = true;
-                    break;
-                }
-            }
-            if let Some((x, n)) = best {
-                let kind = match ev {
-                    Event::Bautin => PointType::Bautin,
-                    Event::Other(..) => PointType::DoubleHopf,
-                    Event::Mark(..) => PointType::Mark,
-                };
-                let status = if converged { Status::Success } else { Status::NotConverged };
-                found.push((x, self.point(&n, kind, status)));
-            }
-        }
-        found.sort_by(|p, q| p.0.total_cmp(&q.0));
-        found
     }
 
     /// The point where the curve through `a` meets the box face that `a + sigma t` reaches first,
@@ -469,7 +390,13 @@ impl<'a, Fam> Ctx<'a, Fam> {
 
     /// Follow the curve from `start` along `start.t` until it ends; push its points (not `start`).
     /// With `closable`, a return to `start` closes it.
-    fn trace<const N: usize>(&mut self, start: &Node, closable: bool, pts: &mut Vec<CurvePoint>, budget: usize) -> (EndStatus, String)
+    fn trace<const N: usize>(
+        &mut self,
+        start: &Node,
+        closable: bool,
+        pts: &mut Vec<CurvePoint>,
+        budget: usize,
+    ) -> (EndStatus, String)
     where
         Fam: Family<N>,
     {
@@ -498,6 +425,16 @@ impl<'a, Fam> Ctx<'a, Fam> {
                 }
                 return (EndStatus::StepFloor, format!("step halved below step_min = {:e}: {last_err}", opts.step_min));
             }
+            // Where the frequency falls, no step may halve it more than once: the pair must not
+            // pass through the real axis unseen (the tracked eigenvalue would jump to its mirror).
+            let dim = (a.e.gc[0] * a.t[0] + a.e.gc[1] * a.t[1]).im;
+            if dim < 0.0 && a.e.lambda.im + h * dim < 0.5 * a.e.lambda.im {
+                h = 0.5 * a.e.lambda.im / -dim;
+                if h < opts.step_min {
+                    last_err = format!("the pair's frequency {:e} heads to zero", a.e.lambda.im);
+                    continue;
+                }
+            }
             let pred = axpy(a.s, h, a.t);
             if pred.iter().any(|&x| !(0.0..=1.0).contains(&x)) {
                 if let Some((along, e)) = self.exit(&a, h * 1.5) {
@@ -523,7 +460,10 @@ impl<'a, Fam> Ctx<'a, Fam> {
             let angle = dot(a.t, b.t).clamp(-1.0, 1.0).acos();
             let bulge = h * angle / 8.0;
             if (angle > opts.max_angle || bulge > opts.chord_tol) && h > 2.0 * opts.step_min {
-                last_err = format!("the tangent turned by {angle:.3} rad (max_angle {}, chord_tol {:e})", opts.max_angle, opts.chord_tol);
+                last_err = format!(
+                    "the tangent turned by {angle:.3} rad (max_angle {}, chord_tol {:e})",
+                    opts.max_angle, opts.chord_tol
+                );
                 // The bulge grows as h^2: aim at 80 % of the tolerance.
                 h *= (0.8 * opts.chord_tol / bulge).sqrt().clamp(0.2, 0.5);
                 continue;
@@ -540,7 +480,8 @@ impl<'a, Fam> Ctx<'a, Fam> {
                 && ca < 0.0
                 && cb >= 0.0
                 && norm(sub(b.s, start.s)) <= 2.0 * h
-                && (b.e.lambda - start.e.lambda).norm() <= 1e-3 * start.e.lambda.norm() + (b.e.gc[0].norm() + b.e.gc[1].norm()) * 2.0 * h
+                && (b.e.lambda - start.e.lambda).norm()
+                    <= 1e-3 * start.e.lambda.norm() + (b.e.gc[0].norm() + b.e.gc[1].norm()) * 2.0 * h
             {
                 let to_start = dot(sub(start.s, a.s), a.t);
                 for (_, p) in self.locate_events(&a, start, to_start) {
@@ -559,89 +500,6 @@ impl<'a, Fam> Ctx<'a, Fam> {
             a = b;
         }
     }
-}
-
-/// Seeds: sign changes of a complex pair's real part along the edges of the grid, located on the edge.
-fn seeds<Fam: Family<N>, const N: usize>(ctx: &mut Ctx<'_, Fam>) -> Vec<([f64; 2], Eval)> {
-    let [nx, ny] = ctx.opts.grid;
-    let node_s = |i: usize, j: usize| [i as f64 / (nx - 1) as f64, j as f64 / (ny - 1) as f64];
-    let mut spec: Vec<Option<Vec<C64>>> = Vec::with_capacity(nx * ny);
-    for i in 0..nx {
-        for j in 0..ny {
-            let p = ctx.phys(node_s(i, j));
-            let ev = super::jacobian_at(ctx.fam, &p, &mut ctx.cnt).ok().and_then(|(_, a)| {
-                ctx.cnt.n_eig += 1;
-                super::spectrum(&a)
-            });
-            spec.push(ev.map(|v| v.into_iter().filter(|e| e.im > 0.0).collect()));
-        }
-    }
-    let mut out = Vec::new();
-    for i in 0..nx {
-        for j in 0..ny {
-            for (di, dj) in [(1, 0), (0, 1)] {
-                let (i2, j2) = (i + di, j + dj);
-                if i2 >= nx || j2 >= ny {
-                    continue;
-                }
-                let (Some(ea), Some(eb)) = (&spec[i * ny + j], &spec[i2 * ny + j2]) else { continue };
-                for la in ea {
-                    let Some(lb) = eb.iter().min_by(|x, y| (**x - la).norm().total_cmp(&(**y - la).norm())) else { continue };
-                    if (la.re < 0.0) == (lb.re < 0.0) {
-                        continue;
-                    }
-                    if let Some(seed) = seed_on_edge(ctx, node_s(i, j), node_s(i2, j2), *la, *lb) {
-                        out.push(seed);
-                    }
-                }
-            }
-        }
-    }
-    out
-}
-
-/// Newton (safeguarded by bisection) on `Re lambda` along the edge from `sa` to `sb`.
-fn seed_on_edge<Fam: Family<N>, const N: usize>(
-    ctx: &mut Ctx<'_, Fam>,
-    sa: [f64; 2],
-    sb: [f64; 2],
-    la: C64,
-    lb: C64,
-) -> Option<([f64; 2], Eval)> {
-    let d = sub(sb, sa);
-    let (mut xa, mut xb, mut fa) = (0.0, 1.0, la.re);
-    let mut x = fa / (fa - lb.re);
-    for _ in 0..100 {
-        let s = axpy(sa, x, d);
-        let e = ctx.eval(s, la + (lb - la) * x).ok()?;
-        let (f, df) = (e.lambda.re, dot(e.g, d));
-        if f == 0.0 {
-            return Some((s, e));
-        }
-        if (f < 0.0) == (fa < 0.0) {
-            (xa, fa) = (x, f);
-        } else {
-            xb = x;
-        }
-        let newton = x - f / df;
-        let next = if df.is_finite() && newton > xa.min(xb) && newton < xa.max(xb) { newton } else { 0.5 * (xa + xb) };
-        let done = (next - x).abs() <= ctx.opts.tol;
-        x = next;
-        if done {
-            let s = axpy(sa, x, d);
-            let e = ctx.eval(s, e.lambda).ok()?;
-            return Some((s, e));
-        }
-    }
-    None
-}
-
-/// Distance from `s` to the segment `[a, b]`.
-fn segment_distance(s: [f64; 2], a: [f64; 2], b: [f64; 2]) -> (f64, f64) {
-    let ab = sub(b, a);
-    let l2 = dot(ab, ab);
-    let t = if l2 > 0.0 { (dot(sub(s, a), ab) / l2).clamp(0.0, 1.0) } else { 0.0 };
-    (norm(sub(s, axpy(a, t, ab))), t)
 }
 
 /// Every Hopf curve of `fam` in the box `[lo_k, hi_k]` (physical units), seeded from the grid.

@@ -205,8 +205,13 @@ pub fn scan<Fam: Family<N>, const N: usize>(
     }
     let n = opts.n_points.max(2);
     let range = hi - lo;
-    let mut ctx =
-        Ctx { fam, h: H_BILINEAR * range, min_width: opts.min_width * range, xtol: opts.xtol * range, cnt: Counters::default() };
+    let mut ctx = Ctx {
+        fam,
+        h: H_BILINEAR * range,
+        min_width: opts.min_width * range,
+        xtol: opts.xtol * range,
+        cnt: Counters::default(),
+    };
     let grid: Vec<f64> = (0..n).map(|i| if i + 1 == n { hi } else { lo + range * i as f64 / (n - 1) as f64 }).collect();
     let mut samples = vec![ctx.sample(grid[0])?];
     let mut crossings = Vec::new();
@@ -230,9 +235,8 @@ fn refine<Fam: Family<N>, const N: usize>(
 ) -> Result<(), String> {
     let quality = match_to(&a, &mut b);
     let width = b.value - a.value;
-    let dips = (0..a.eigenvalues.len().min(b.eigenvalues.len())).any(|i| {
-        hermite_dips(a.eigenvalues[i].re, b.eigenvalues[i].re, a.grad[i].re * width, b.grad[i].re * width)
-    });
+    let dips = (0..a.eigenvalues.len().min(b.eigenvalues.len()))
+        .any(|i| hermite_dips(a.eigenvalues[i].re, b.eigenvalues[i].re, a.grad[i].re * width, b.grad[i].re * width));
     if (quality > 0.25 || dips) && width > ctx.min_width {
         let m = ctx.sample(0.5 * (a.value + b.value))?;
         refine(ctx, a, m, out, crossings)?;

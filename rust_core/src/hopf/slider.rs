@@ -47,7 +47,12 @@ impl SliderField {
                     let eps = p.friction_regularization;
                     let th = (v / eps).tanh();
                     let sech2 = 1.0 - th * th;
-                    [th, sech2 / eps, -2.0 * th * sech2 / (eps * eps), -2.0 * sech2 * (1.0 - 3.0 * th * th) / eps.powi(3)]
+                    [
+                        th,
+                        sech2 / eps,
+                        -2.0 * th * sech2 / (eps * eps),
+                        -2.0 * sech2 * (1.0 - 3.0 * th * th) / eps.powi(3),
+                    ]
                 } else {
                     [v.signum(), 0.0, 0.0, 0.0]
                 };

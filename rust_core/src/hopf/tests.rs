@@ -31,7 +31,12 @@ impl VectorField<2> for NormalForm {
     fn jacobian(&self, x: &Vector2<f64>) -> Matrix2<f64> {
         let (a, b, s) = (x[0], x[1], self.s);
         let r2 = a * a + b * b;
-        Matrix2::new(s * (r2 + 2.0 * a * a), -self.w + 2.0 * s * a * b, self.w + 2.0 * s * a * b, s * (r2 + 2.0 * b * b))
+        Matrix2::new(
+            s * (r2 + 2.0 * a * a),
+            -self.w + 2.0 * s * a * b,
+            self.w + 2.0 * s * a * b,
+            s * (r2 + 2.0 * b * b),
+        )
     }
     fn bilinear(&self, x: &Vector2<f64>, u: &Vector2<f64>, v: &Vector2<f64>) -> Vector2<f64> {
         // F(x) = s (x.x) x: D^2F[u, v] = 2 s ((x.u) v + (x.v) u + (u.v) x)
@@ -68,7 +73,11 @@ fn normal_form_l1_is_two_sigma_over_omega() {
         for analytic in [true, false] {
             let (f, x0, one) = (NormalForm { w, s }, Vector2::zeros(), Vector2::repeat(1.0));
             let lam = C64::new(0.0, w);
-            let nf = if analytic { first_lyapunov(&f, &x0, lam, &one) } else { first_lyapunov(&Differenced(f), &x0, lam, &one) };
+            let nf = if analytic {
+                first_lyapunov(&f, &x0, lam, &one)
+            } else {
+                first_lyapunov(&Differenced(f), &x0, lam, &one)
+            };
             let nf = nf.unwrap();
             let expect = 2.0 * s / w;
             // Analytic forms: the formula's own rounding (a few eps on O(1) terms).
@@ -101,7 +110,8 @@ impl VectorField<2> for VanDerPol {
 #[test]
 fn van_der_pol_is_supercritical_and_its_mirror_subcritical() {
     for (sgn, crit) in [(-1.0, Criticality::Supercritical), (1.0, Criticality::Subcritical)] {
-        let nf = first_lyapunov(&VanDerPol { sgn }, &Vector2::zeros(), C64::new(0.0, 1.0), &Vector2::repeat(1.0)).unwrap();
+        let nf =
+            first_lyapunov(&VanDerPol { sgn }, &Vector2::zeros(), C64::new(0.0, 1.0), &Vector2::repeat(1.0)).unwrap();
         assert!(rel(nf.l1, sgn / 4.0) < FD_RTOL, "sgn {sgn}: l1 = {}", nf.l1);
         assert_eq!(Criticality::of(nf.l1, nf.l1_scale), crit);
     }
@@ -152,7 +162,12 @@ fn planar_quadratic_cubic_matches_guckenheimer_holmes() {
         let sys = Planar { w, f, g };
         let nf = first_lyapunov(&sys, &Vector2::zeros(), C64::new(0.0, w), &Vector2::repeat(1.0)).unwrap();
         // Terms of size 1: the FD tolerance applies to the scale of the terms, not to l1 itself.
-        assert!((nf.l1 - 2.0 * a / w).abs() < FD_RTOL * nf.l1_scale.max(1.0), "w {w}: l1 = {} vs {}", nf.l1, 2.0 * a / w);
+        assert!(
+            (nf.l1 - 2.0 * a / w).abs() < FD_RTOL * nf.l1_scale.max(1.0),
+            "w {w}: l1 = {} vs {}",
+            nf.l1,
+            2.0 * a / w
+        );
     }
 }
 
@@ -176,7 +191,8 @@ impl VectorField<3> for Slaved {
 #[test]
 fn slaved_direction_enters_through_the_centre_manifold() {
     for (k, s) in [(3.0, 1.0), (0.5, -1.0)] {
-        let nf = first_lyapunov(&Slaved { k, s }, &Vector3::zeros(), C64::new(0.0, 1.0), &Vector3::repeat(1.0)).unwrap();
+        let nf =
+            first_lyapunov(&Slaved { k, s }, &Vector3::zeros(), C64::new(0.0, 1.0), &Vector3::repeat(1.0)).unwrap();
         assert!(rel(nf.l1, 2.0 * s / k) < FD_RTOL, "k {k}: l1 = {}", nf.l1);
     }
 }
@@ -194,7 +210,8 @@ impl VectorField<2> for Smooth {
     }
     fn jacobian(&self, x: &Vector2<f64>) -> Matrix2<f64> {
         let (c, d) = (Vector2::from(CV), Vector2::from(DV));
-        Vector2::new(1.0, 2.0) * c.transpose() * c.dot(x).exp() + Vector2::new(-1.5, 0.5) * d.transpose() * d.dot(x).cos()
+        Vector2::new(1.0, 2.0) * c.transpose() * c.dot(x).exp()
+            + Vector2::new(-1.5, 0.5) * d.transpose() * d.dot(x).cos()
     }
 }
 
@@ -212,7 +229,8 @@ fn smooth_c(x: &Vector2<f64>, u: &Vector2<f64>, v: &Vector2<f64>, w: &Vector2<f6
 
 #[test]
 fn difference_schemes_converge_at_second_order() {
-    let (x, u, v, w) = (Vector2::new(0.3, -0.2), Vector2::new(0.6, 0.8), Vector2::new(-0.5, 1.0), Vector2::new(1.0, 0.2));
+    let (x, u, v, w) =
+        (Vector2::new(0.3, -0.2), Vector2::new(0.6, 0.8), Vector2::new(-0.5, 1.0), Vector2::new(1.0, 0.2));
     let (b, c) = (smooth_b(&x, &u, &v), smooth_c(&x, &u, &v, &w));
     // Steps well above the rounding floor (eps/h^2 < 1e-11 at h >= 1e-2.5), so truncation rules.
     let hs = [0.08, 0.04, 0.02, 0.01];
@@ -270,12 +288,18 @@ fn slider_forms_match_differences_of_its_jacobian() {
         assert!((b - bd).norm() <= floor_b, "{law:?} B: {b} vs {bd} (floor {floor_b:e})");
         let floor = 10.0 * f64::EPSILON.sqrt() * ju * size(&dirs[1]) * size(&dirs[2]);
         assert!((c - cd).norm() <= floor, "{law:?} C: {c} vs {cd} (floor {floor:e})");
-        eprintln!("{law:?}: |B - B_fd| = {:.2e} (floor {floor_b:.2e}), |C - C_fd| = {:.2e} (floor {floor:.2e}), |C| = {:.2e}", (b - bd).norm(), (c - cd).norm(), c.norm());
+        eprintln!(
+            "{law:?}: |B - B_fd| = {:.2e} (floor {floor_b:.2e}), |C - C_fd| = {:.2e} (floor {floor:.2e}), |C| = {:.2e}",
+            (b - bd).norm(),
+            (c - cd).norm(),
+            c.norm()
+        );
         assert_eq!(c.norm() == 0.0, law == FrictionLaw::Constant, "{law:?}: C = 0 only for the constant law");
         // Tighter: C against the central difference of the analytic B along w, whose floor is
         // eps^(2/3) |B| size_w (no large linear terms) and truncation O(h^2) below it.
         let hw = H_BILINEAR / size(&dirs[2]);
-        let cb = (f.bilinear(&(y + dirs[2] * hw), &dirs[0], &dirs[1]) - f.bilinear(&(y - dirs[2] * hw), &dirs[0], &dirs[1]))
+        let cb = (f.bilinear(&(y + dirs[2] * hw), &dirs[0], &dirs[1])
+            - f.bilinear(&(y - dirs[2] * hw), &dirs[0], &dirs[1]))
             / (2.0 * hw);
         let floor_c = 10.0 * f64::EPSILON.powf(2.0 / 3.0) * b.norm() * size(&dirs[2]);
         eprintln!("{law:?}: |C - dB/dw| = {:.2e} (floor {floor_c:.2e})", (c - cb).norm());
@@ -331,7 +355,10 @@ fn coulomb_friction_changes_l1_smoothly() {
         base: Params { friction_law: FrictionLaw::Coulomb, friction_regularization: 1e-3, ..fam_c.base },
         axes: fam_c.axes.clone(),
     };
-    let (a, b) = (scan(&fam_c, 10.0, 40.0, &ScanOptions::default()).unwrap(), scan(&fam_t, 10.0, 40.0, &ScanOptions::default()).unwrap());
+    let (a, b) = (
+        scan(&fam_c, 10.0, 40.0, &ScanOptions::default()).unwrap(),
+        scan(&fam_t, 10.0, 40.0, &ScanOptions::default()).unwrap(),
+    );
     let (ha, hb) = (&a.crossings[0], &b.crossings[0]);
     let th = (0.46f64 / 1e-3).tanh();
     // tanh(460) = 1 to rounding: the two fields are the same function to 1e-15.
@@ -417,7 +444,13 @@ fn scan_finds_every_crossing_and_a_pair_inside_one_cell() {
 fn circle_is_closed_with_its_bautin_and_double_hopf_points() {
     let opts = CurveOptions { grid: [8, 8], marks: [vec![0.0], vec![]], ..CurveOptions::default() };
     let res = hopf_curves(&TwoOscFamily { fixed_b: 0.0 }, [[-1.5, 1.5], [-1.5, 1.5]], &opts).unwrap();
-    assert_eq!(res.curves.len(), 2, "{} seeds -> {:?}", res.n_seeds, res.curves.iter().map(|c| &c.ends).collect::<Vec<_>>());
+    assert_eq!(
+        res.curves.len(),
+        2,
+        "{} seeds -> {:?}",
+        res.n_seeds,
+        res.curves.iter().map(|c| &c.ends).collect::<Vec<_>>()
+    );
     assert!(res.n_seeds > 2, "several seeds per curve were deduplicated");
     let (circle, line): (Vec<_>, Vec<_>) = res.curves.iter().partition(|c| (c.points[0].lambda.im - 3.0).abs() > 0.5);
     let (circle, line) = (circle[0], line[0]);
@@ -444,7 +477,9 @@ fn circle_is_closed_with_its_bautin_and_double_hopf_points() {
         })
         .fold(0.0, f64::max);
     assert!(worst <= 1.01 * opts.chord_tol, "bulge {worst:e} > chord_tol {:e}", opts.chord_tol);
-    let kinds = |c: &super::curve::Curve, k: PointType| c.points.iter().filter(|p| p.kind == k).map(|p| p.u).collect::<Vec<_>>();
+    let kinds = |c: &super::curve::Curve, k: PointType| {
+        c.points.iter().filter(|p| p.kind == k).map(|p| p.u).collect::<Vec<_>>()
+    };
     let bautin = kinds(circle, PointType::Bautin);
     assert_eq!(bautin.len(), 2, "{bautin:?}");
     for u in &bautin {
@@ -501,4 +536,52 @@ fn seed_hopf_curve_in_load_and_mu_passes_through_model_md() {
         assert_eq!(p.criticality, Criticality::Subcritical);
     }
     eprintln!("{} points, {} eigen, ends {:?}", c.points.len(), res.counters.n_eig, c.ends);
+}
+
+/// `x' = b x - a y - x r^2`, `y' = a x + b y - y r^2`: a Hopf line `b = 0` whose frequency `a` falls
+/// to zero at `a = 0`, inside the box (there the pair turns into a double real eigenvalue).
+struct Slowing {
+    a: f64,
+    b: f64,
+}
+
+impl VectorField<2> for Slowing {
+    fn rhs(&self, x: &Vector2<f64>) -> Vector2<f64> {
+        let r2 = x.norm_squared();
+        Vector2::new(self.b * x[0] - self.a * x[1] - x[0] * r2, self.a * x[0] + self.b * x[1] - x[1] * r2)
+    }
+    fn jacobian(&self, x: &Vector2<f64>) -> Matrix2<f64> {
+        let (p, q) = (x[0], x[1]);
+        let r2 = p * p + q * q;
+        Matrix2::new(self.b - r2 - 2.0 * p * p, -self.a - 2.0 * p * q, self.a - 2.0 * p * q, self.b - r2 - 2.0 * q * q)
+    }
+}
+
+struct SlowingFamily;
+
+impl Family<2> for SlowingFamily {
+    type Field = Slowing;
+    fn field(&self, p: &[f64]) -> Result<Slowing, String> {
+        Ok(Slowing { a: p[0], b: p[1] })
+    }
+}
+
+#[test]
+fn a_vanishing_frequency_ends_the_curve_with_a_status_and_a_reason() {
+    let opts = CurveOptions { grid: [5, 5], ..CurveOptions::default() };
+    let res = hopf_curves(&SlowingFamily, [[-0.5, 1.0], [-1.0, 1.0]], &opts).unwrap();
+    // The upper half (a > 0) and its mirror (a < 0, where the pair's upper member is b - ia).
+    let right = res.curves.iter().find(|c| c.points.iter().all(|p| p.u[0] > 0.0)).expect("the a > 0 half");
+    let (start, end) = (&right.ends[0], &right.ends[1]);
+    let (near_zero, far) = if right.points[0].u[0] < 0.5 { (start, end) } else { (end, start) };
+    assert_eq!(far.0, EndStatus::LeftBox);
+    // At a = 0 the tracked eigenvalue either falls below the frequency floor or stops being simple
+    // (the step then halves to its floor): both end the curve with a status and a reason.
+    assert!(matches!(near_zero.0, EndStatus::FrequencyVanished | EndStatus::StepFloor), "{near_zero:?}");
+    assert!(!near_zero.1.is_empty());
+    let tip = if right.points[0].u[0] < 0.5 { &right.points[0] } else { right.points.last().unwrap() };
+    assert_eq!(tip.kind, PointType::End);
+    // It got within a step floor's reach of a = 0 (box units 1.5 wide; the floor is 1e-7).
+    assert!(tip.u[0] < 1e-3 && tip.u[1].abs() < 1e-9, "{:?}", tip.u);
+    assert!(right.points.iter().all(|p| p.criticality == Criticality::Supercritical || p.kind == PointType::End));
 }
