@@ -406,13 +406,15 @@ impl<'a, Fam> Ctx<'a, Fam> {
         let mut h = opts.step.clamp(opts.step_min, opts.step_max);
         let mut travelled = 0.0;
         let mut last_err = String::new();
-        // A seed on a face of the box, heading out: that end is the seed itself.
-        for k in 0..2 {
-            if (a.s[k] <= opts.tol && a.t[k] < 0.0) || (a.s[k] >= 1.0 - opts.tol && a.t[k] > 0.0) {
+        loop {
+            // On a face of the box and heading out (a seed on a face, or a point that landed on
+            // one): the curve leaves here.
+            if (0..2).any(|k| (a.s[k] <= opts.tol && a.t[k] < 0.0) || (a.s[k] >= 1.0 - opts.tol && a.t[k] > 0.0)) {
+                if let Some(p) = pts.last_mut() {
+                    p.kind = PointType::BoxExit;
+                }
                 return (EndStatus::LeftBox, format!("leaves the box at {:?}", self.phys(a.s)));
             }
-        }
-        loop {
             if pts.len() >= budget {
                 if let Some(p) = pts.last_mut() {
                     p.kind = PointType::End;
