@@ -111,6 +111,12 @@ def main(argv=None) -> int:
             break
         same, t_same = c, t_c
         step *= 0.7
+    print("  continuation work-precision (chord_tol, step_max): points, eigenvalue computations, ms, max polyline error")
+    for chord, smax in ((1e-4, 0.05), (1e-5, 0.05), (1e-6, 0.02), (1e-7, 0.01), (1e-8, 0.005)):
+        t, c = best_of(a.repeat, lambda c=chord, m=smax: ts.hopf_curve(SEED, **BOX, chord_tol=c, step_max=m))
+        err = np.abs(polyline_at(c, arm_pts) - exact) / WIDTH
+        print(f"    ({chord:.0e}, {smax}): {c.sizes['curve_point']:5d} {c.attrs['n_eigenvalue_computations']:6d} "
+              f"{t * 1e3:7.1f} {err.max():.2e}  (grid: {cost} {t_grid * 1e3:.1f} {err_grid.max():.2e})")  # fmt: skip
     t_default, default = best_of(a.repeat, lambda: ts.hopf_curve(SEED, **BOX))
     for label, c, t in (("same cost", same, t_same), ("defaults", default, t_default)):
         err = np.abs(polyline_at(c, arm_pts) - exact) / WIDTH

@@ -15,7 +15,7 @@ from ._frequency import describing_function, follow_cycle, hopf_load, linear_sta
 from ._hopf import (
     CRITICALITY_NAMES,
     END_STATUS_NAMES,
-    PARAMETERS,
+    HOPF_PARAMETERS,
     POINT_TYPE_NAMES,
     hopf_curve,
     hopf_cycle_guess,
@@ -37,7 +37,7 @@ __all__ = [
     "END_STATUS_NAMES",
     "INSTABILITY_NAMES",
     "OUTCOME_NAMES",
-    "PARAMETERS",
+    "HOPF_PARAMETERS",
     "PARAM_NAMES",
     "POINT_TYPE_NAMES",
     "REGIME_NAMES",

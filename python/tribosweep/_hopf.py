@@ -44,7 +44,7 @@ END_STATUS_NAMES: tuple[str, ...] = tuple(_FLAGS["end_status"])
 _MODE_NAMES: tuple[str, ...] = tuple(_FLAGS["mode"])
 #: Parameters the analysis can move along: every real model field but the discrete torsion sign,
 #: and the apparatus' arm length (which sets the three natural frequencies, MODEL.md §7).
-PARAMETERS: tuple[str, ...] = tuple(n for n in PARAM_NAMES if n != "torsion_sign") + ("arm_length",)
+HOPF_PARAMETERS: tuple[str, ...] = tuple(n for n in PARAM_NAMES if n != "torsion_sign") + ("arm_length",)
 _SCALED_STATE = ("z", "z_dot_over_omega", "x", "x_dot_over_omega", "L_phi", "L_phi_dot_over_omega")
 _NORMALISATION = (
     "q scaled as the displacements [z, zd/w, x, xd/w, L phi, L phid/w] with unit Euclidean norm (L: moment arm); "
@@ -101,8 +101,8 @@ def _spec(model: SliderModel, arg: str, spec) -> tuple[str, float, float]:
         name, lo, hi = spec
     except (TypeError, ValueError):
         raise ValueError(f"{arg} = {spec!r} must be a (name, low, high) tuple") from None
-    if name not in PARAMETERS:
-        raise ValueError(f"{arg} = {spec!r}: {name!r} is not a parameter to follow; valid names are {PARAMETERS}")
+    if name not in HOPF_PARAMETERS:
+        raise ValueError(f"{arg} = {spec!r}: {name!r} is not a parameter to follow; valid names are {HOPF_PARAMETERS}")
     try:
         lo, hi = float(lo), float(hi)
     except (TypeError, ValueError):
@@ -175,7 +175,7 @@ def sliding_branch(
     model : SliderModel
         Everything that does not move.
     parameter : (str, float, float)
-        ``(name, low, high)``: a real model field (see ``PARAMETERS``; units of the field) or
+        ``(name, low, high)``: a real model field (see ``HOPF_PARAMETERS``; units of the field) or
         ``"arm_length"`` [m] (the natural frequencies follow the apparatus' power laws, with the
         model's own frequencies at the seed arm length 7.2 cm, as ``apparatus_model(base=model)``).
         Both ends must give a valid model.
