@@ -23,6 +23,15 @@ from ._codes import (
 )
 from ._core import InvalidArgumentError, TribosweepError
 from ._frequency import describing_function, follow_cycle, hopf_load, linear_stability, periodic_orbit
+from ._hopf import (
+    CRITICALITY_NAMES,
+    END_STATUS_NAMES,
+    HOPF_PARAMETERS,
+    POINT_TYPE_NAMES,
+    hopf_curve,
+    hopf_cycle_guess,
+    sliding_branch,
+)
 from ._model import PARAM_NAMES, SliderModel
 from ._simulate import DEFAULT_Y0, ensemble, simulate
 from ._sweep import sweep
@@ -34,12 +43,16 @@ __all__ = [
     "ARM_EXPONENTS",
     "ATTRACTOR_NAMES",
     "BISTABLE_NAMES",
+    "CRITICALITY_NAMES",
     "DECIDED_BY_NAMES",
     "DEFAULT_Y0",
+    "END_STATUS_NAMES",
     "INSTABILITY_NAMES",
     "InvalidArgumentError",
     "OUTCOME_NAMES",
+    "HOPF_PARAMETERS",
     "PARAM_NAMES",
+    "POINT_TYPE_NAMES",
     "REGIME_NAMES",
     "STATUS",
     "STATUS_NAMES",
@@ -55,6 +68,8 @@ __all__ = [
     "describing_function",
     "ensemble",
     "follow_cycle",
+    "hopf_curve",
+    "hopf_cycle_guess",
     "hopf_load",
     "labels",
     "linear_stability",
@@ -62,5 +77,6 @@ __all__ = [
     "periodic_orbit",
     "relative_wear_rate",
     "simulate",
+    "sliding_branch",
     "sweep",
 ]

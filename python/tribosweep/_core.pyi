@@ -146,3 +146,38 @@ def tidf_solve(
     variant: str = "consistent",
     threads: int | None = None,
 ) -> dict[str, Any]: ...
+
+#: ``(name, reference, [(field, base, exponent), ...])``: no terms sets the field ``name``;
+#: terms set ``field = base (value / reference) ** exponent`` each (the arm length).
+AxisSpec = tuple[str, float, list[tuple[str, float, float]]]
+
+def hopf_flag_names() -> dict[str, list[str]]: ...
+def sliding_branch(
+    values: dict[str, float],
+    contact: ContactName,
+    friction_law: FrictionLawName,
+    axis: AxisSpec,
+    lo: float,
+    hi: float,
+    n_points: int = 201,
+    xtol: float = 1e-13,
+) -> dict[str, Any]: ...
+def hopf_curve(
+    values: dict[str, float],
+    contact: ContactName,
+    friction_law: FrictionLawName,
+    x_axis: AxisSpec,
+    y_axis: AxisSpec,
+    x_range: tuple[float, float],
+    y_range: tuple[float, float],
+    grid: tuple[int, int] = (16, 16),
+    step: float = 0.01,
+    step_min: float = 1e-7,
+    step_max: float = 0.05,
+    tol: float = 1e-10,
+    max_points: int = 5000,
+    max_angle: float = 0.1,
+    chord_tol: float = 1e-5,
+    x_marks: list[float] = ...,
+    y_marks: list[float] = ...,
+) -> dict[str, Any]: ...

@@ -20,6 +20,7 @@
 //! - [`status`]: the per-point status codes, defined in one place.
 
 pub mod ensemble;
+pub mod hopf;
 pub mod linear;
 pub mod model;
 pub mod ode;

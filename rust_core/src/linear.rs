@@ -12,7 +12,7 @@
 use crate::model::{idx, Jacobian, ParamError, Params, Slider, State};
 use crate::status::Status;
 use crate::ContactMode;
-use nalgebra::{Complex, Matrix3, Vector3};
+use nalgebra::{Complex, Matrix3, SMatrix, SVector, Vector3};
 
 type C64 = Complex<f64>;
 
@@ -123,7 +123,7 @@ pub fn eigenvalues(j: &Jacobian) -> Option<[C64; 6]> {
     if !j.iter().all(|v| v.is_finite()) {
         return None;
     }
-    let b = balance(j);
+    let (b, _) = balance(j);
     let schur = b.try_schur(f64::EPSILON, 10_000)?;
     let ev = schur.complex_eigenvalues();
     let mut out = [C64::new(0.0, 0.0); 6];
@@ -134,15 +134,16 @@ pub fn eigenvalues(j: &Jacobian) -> Option<[C64; 6]> {
 }
 
 /// Parlett-Reinsch balancing `D^-1 A D` with `D` a diagonal of powers of two (exact in floating point).
-fn balance(a: &Jacobian) -> Jacobian {
+/// Returns the balanced matrix and the diagonal of `D`.
+pub(crate) fn balance<const N: usize>(a: &SMatrix<f64, N, N>) -> (SMatrix<f64, N, N>, SVector<f64, N>) {
     let mut m = *a;
-    let n = 6;
+    let mut d = SVector::<f64, N>::repeat(1.0);
     for _sweep in 0..20 {
         let mut changed = false;
-        for i in 0..n {
+        for i in 0..N {
             let mut c = 0.0;
             let mut r = 0.0;
-            for k in 0..n {
+            for k in 0..N {
                 if k != i {
                     c += m[(k, i)].abs();
                     r += m[(i, k)].abs();
@@ -166,7 +167,8 @@ fn balance(a: &Jacobian) -> Jacobian {
             }
             if (cc + rr) < 0.95 * s {
                 changed = true;
-                for k in 0..n {
+                d[i] *= f;
+                for k in 0..N {
                     m[(i, k)] /= f;
                     m[(k, i)] *= f;
                 }
@@ -176,7 +178,7 @@ fn balance(a: &Jacobian) -> Jacobian {
             break;
         }
     }
-    m
+    (m, d)
 }
 
 /// Energy participation `[x, phi, z]` of the eigenvector of `lambda`.
@@ -185,7 +187,7 @@ fn balance(a: &Jacobian) -> Jacobian {
 /// `[u, lambda u]` with `(lambda^2 - A_q - lambda A_v) u = 0`, `A_q`, `A_v` the acceleration rows'
 /// position and velocity columns. `u` is the (bilinear) cross product of two rows of that rank-2
 /// 3x3 matrix: exact, no inverse iteration.
-fn participation(j: &Jacobian, p: &Params, lambda: C64) -> [f64; 3] {
+pub(crate) fn participation(j: &Jacobian, p: &Params, lambda: C64) -> [f64; 3] {
     let pos = [idx::Z, idx::X, idx::PHI];
     let vel = [idx::ZD, idx::XD, idx::PHID];
     let mut a = Matrix3::<C64>::zeros();

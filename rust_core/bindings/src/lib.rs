@@ -15,6 +15,8 @@ mod names;
 mod orbits;
 mod simulate;
 
+mod hopf;
+
 use pyo3::prelude::*;
 
 /// The compiled core of tribosweep (private: use the `tribosweep` package). Its only state is the
@@ -29,5 +31,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     linear::register(m)?;
     describing::register(m)?;
     orbits::register(m)?;
+    hopf::register(m)?;
     Ok(())
 }
