@@ -6,6 +6,9 @@ import numpy as np
 import numpy.typing as npt
 
 __all__ = [
+    "hopf_curve",
+    "hopf_flag_names",
+    "sliding_branch",
     "__version__",
     "TribosweepError",
     "InvalidArgumentError",
@@ -149,28 +152,30 @@ def tidf_solve(
 
 #: ``(name, reference, [(field, base, exponent), ...])``: no terms sets the field ``name``;
 #: terms set ``field = base (value / reference) ** exponent`` each (the arm length).
-AxisSpec = tuple[str, float, list[tuple[str, float, float]]]
+_AxisSpec = tuple[str, float, list[tuple[str, float, float]]]
 
 def hopf_flag_names() -> dict[str, list[str]]: ...
 def sliding_branch(
     values: dict[str, float],
-    contact: ContactName,
-    friction_law: FrictionLawName,
-    axis: AxisSpec,
+    contact: _ContactName,
+    friction_law: _FrictionLawName,
+    axis: _AxisSpec,
     lo: float,
     hi: float,
+    *,
     n_points: int = 201,
     xtol: float = 1e-13,
 ) -> dict[str, Any]: ...
 def hopf_curve(
     values: dict[str, float],
-    contact: ContactName,
-    friction_law: FrictionLawName,
-    x_axis: AxisSpec,
-    y_axis: AxisSpec,
+    contact: _ContactName,
+    friction_law: _FrictionLawName,
+    x_axis: _AxisSpec,
+    y_axis: _AxisSpec,
     x_range: tuple[float, float],
     y_range: tuple[float, float],
-    grid: tuple[int, int] = (16, 16),
+    *,
+    grid: tuple[int, int] = ...,
     step: float = 0.01,
     step_min: float = 1e-7,
     step_max: float = 0.05,

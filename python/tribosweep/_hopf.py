@@ -31,7 +31,7 @@ import numpy as np
 import xarray as xr
 
 from . import _apparatus, _core
-from ._flags import STATUS_NAMES, flag_attrs
+from ._codes import STATUS_NAMES, flag_attrs
 from ._model import PARAM_LONG_NAMES, PARAM_NAMES, PARAM_UNITS, SliderModel
 
 _FLAGS = _core.hopf_flag_names()
@@ -214,7 +214,7 @@ def sliding_branch(
     n_points = _int("n_points", n_points, 3, 1_000_000)
     tol = _real("tol", tol, 0.0, 1e-3)
     out = _core.sliding_branch(model.values(), model.contact, model.friction_law, _axis(model, name), lo, hi,
-                               n_points, tol)  # fmt: skip
+                               n_points=n_points, xtol=tol)  # fmt: skip
     ev = out["eigenvalues"]
     units, long = _units(name), _long_name(name)
     mode_attrs = flag_attrs(_MODE_NAMES, "mode of the pair, by eigenvector energy participation")
@@ -449,8 +449,9 @@ def hopf_curve(
     chord_tol = _real("chord_tol", chord_tol, 0.0, 0.1)
     xm, ym = _marks("x_marks", x_marks), _marks("y_marks", y_marks)
     out = _core.hopf_curve(model.values(), model.contact, model.friction_law, _axis(model, xn), _axis(model, yn),
-                           (xlo, xhi), (ylo, yhi), (gx, gy), step, step_min, step_max, tol, max_points, max_angle,
-                           chord_tol, xm, ym)  # fmt: skip
+                           (xlo, xhi), (ylo, yhi), grid=(gx, gy), step=step, step_min=step_min, step_max=step_max,
+                           tol=tol, max_points=max_points, max_angle=max_angle, chord_tol=chord_tol, x_marks=xm,
+                           y_marks=ym)  # fmt: skip
     pt = ("curve_point",)
     data = {
         "curve": (pt, out["curve"], {"long_name": "index of the curve along hopf_curve", "instance_dimension": "hopf_curve"}),

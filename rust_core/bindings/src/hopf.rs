@@ -91,7 +91,7 @@ fn hopf_flag_names(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
 /// Steady sliding along one axis over `[lo, hi]`: the tracked eigenvalues at every sample and every
 /// crossing of the imaginary axis with its normal form.
 #[pyfunction]
-#[pyo3(signature = (values, contact, friction_law, axis, lo, hi, n_points=201, xtol=1e-13))]
+#[pyo3(signature = (values, contact, friction_law, axis, lo, hi, *, n_points=201, xtol=1e-13))]
 #[allow(clippy::too_many_arguments)]
 fn sliding_branch<'py>(
     py: Python<'py>,
@@ -163,7 +163,7 @@ fn sliding_branch<'py>(
 /// Every Hopf curve in the box `[x_lo, x_hi] x [y_lo, y_hi]` (struct of arrays over all points,
 /// with the curve index, and per-curve end statuses and reasons).
 #[pyfunction]
-#[pyo3(signature = (values, contact, friction_law, x_axis, y_axis, x_range, y_range, grid=(16, 16), step=0.01, step_min=1e-7, step_max=0.05, tol=1e-10, max_points=5000, max_angle=0.1, chord_tol=1e-5, x_marks=vec![], y_marks=vec![]))]
+#[pyo3(signature = (values, contact, friction_law, x_axis, y_axis, x_range, y_range, *, grid=(16, 16), step=0.01, step_min=1e-7, step_max=0.05, tol=1e-10, max_points=5000, max_angle=0.1, chord_tol=1e-5, x_marks=vec![], y_marks=vec![]))]
 #[allow(clippy::too_many_arguments)]
 fn hopf_curve<'py>(
     py: Python<'py>,
