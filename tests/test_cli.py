@@ -41,7 +41,12 @@ def _check_regime_png(path, ds, x, y, png_size):
     for dim, label in ((x, ax.get_xlabel()), (y, ax.get_ylabel())):
         assert label == f"{ds[dim].attrs['long_name']} [{ds[dim].attrs['units']}]"
     names = [ts.REGIME_NAMES[r] for r in sorted(set(regime.ravel().tolist()))]
-    assert [t.get_text() for leg in fig.legends for t in leg.get_texts()] == [n.replace("_", " ") for n in names]
+    texts = [t.get_text() for leg in fig.legends for t in leg.get_texts()]
+    # The regimes present, in code order, then the marks drawn: the identified load range, and the
+    # Hopf curve where the file holds one.
+    assert texts[: len(names)] == [n.replace("_", " ") for n in names]
+    assert texts[len(names)] == "contact law identified\n(22-93 N)"
+    assert texts[len(names) + 1 :] == (["Hopf curve, subcritical\n(l1 > 0: a saddle cycle)"] if "hopf_normal_load" in ds else [])
     # Lay the Figure out as savefig did (120 dpi) to find each cell's centre in the file's pixels.
     fig.set_dpi(120)
     FigureCanvasAgg(fig).draw()
@@ -79,9 +84,11 @@ def test_sweep_info_plot(tmp_path, capsys, png_size):
 def test_default_sweep_and_extra_axes(tmp_path, capsys, png_size):
     nc = tmp_path / "new_dir" / "d.nc"
     png = tmp_path / "other_dir" / "d.png"
-    code, _, err = run(["sweep", "--strategy", "linear", "-o", nc, "--plot", png, "--no-progress"], capsys)
+    code, _, err = run(["sweep", "--strategy", "linear", "-o", nc, "--plot", png, "--no-progress",
+                         "--no-boundaries"], capsys)
     assert code == 0, err
     with xr.open_dataset(nc) as ds:
+        assert "hopf_normal_load" not in ds  # --no-boundaries: the cells alone, their colours checked
         _check_regime_png(png, ds.load(), "normal_load", "arm_length", png_size)
         np.testing.assert_allclose(ds.normal_load, np.linspace(10, 150, 15))
         np.testing.assert_allclose(ds.arm_length, np.linspace(0.05, 0.127, 4))
@@ -292,7 +299,7 @@ def test_every_sweep_argument_is_a_cli_flag_and_a_config_key():
     }
     missing = sorted(p for p in params - set(other) if p not in dests)
     assert missing == []
-    settings = params - set(other) - {"normal_load", "arm_length", "sliding_speed", "strategy", "output", "chunk_size", "max_points",
+    settings = params - set(other) - {"normal_load", "arm_length", "sliding_speed", "strategy", "output", "chunk_size", "max_points", "boundaries",
                                       "threads", "resume"}  # fmt: skip
     assert settings <= cli._SOLVER_KEYS
     # The help states the API's default for each (one source of defaults).

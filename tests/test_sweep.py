@@ -703,3 +703,51 @@ def test_resuming_with_another_core_build_is_refused(tmp_path, monkeypatch):
     monkeypatch.setattr(_plan, "core_build", lambda: "0123456789abcdef")
     with pytest.raises(ValueError, match="core_build differs"):
         ts.sweep(output=out, resume=True, **GRID)
+
+
+def test_the_stored_hopf_curve_separates_stable_from_unstable_points(tmp_path):
+    """A normal load x arm length sweep stores the Hopf curves crossing its box; at every arm length
+    the points more than 1 N below the curve are unstable and those more than 1 N above are stable
+    (the seed's mu: unstable below the Hopf load). 1 N: the curve is exact to 1e-10 of the box,
+    and the growth rate's sign is decided far from zero there (about 0.07 1/s per N)."""
+    ds = ts.sweep(normal_load=np.linspace(10.0, 150.0, 15), arm_length=np.linspace(0.05, 0.127, 5),
+                  output=tmp_path / "h.nc", **LINEAR)  # fmt: skip
+    with ds:
+        assert ds.hopf_normal_load.dims == ("hopf_point",) and ds.hopf_normal_load.attrs["units"] == "N"
+        assert "1 Hopf curve(s) in the box" in ds.attrs["hopf_curves"]
+        crit = str(ds.hopf_criticality.attrs["flag_meanings"]).split()
+        assert {crit[int(c)] for c in ds.hopf_criticality.values} == {"subcritical"}  # MODEL.md: subcritical
+        order = np.argsort(ds.hopf_arm_length.values)
+        arms, loads = ds.hopf_arm_length.values[order], ds.hopf_normal_load.values[order]
+        g = ds.growth_rate.isel(sliding_speed=0)
+        checked = 0
+        for arm in ds.arm_length.values:
+            if not arms[0] <= arm <= arms[-1]:
+                # The curve leaves the box: at this arm length every point lies on one side of it.
+                assert np.all(g.sel(arm_length=arm).values < 0) or np.all(g.sel(arm_length=arm).values > 0)
+                continue
+            f_h = np.interp(arm, arms, loads)
+            for f, rate in zip(ds.normal_load.values, g.sel(arm_length=arm).values):
+                if abs(f - f_h) > 1.0:
+                    assert (rate > 0) == (f < f_h), (arm, f, f_h, rate)
+                    checked += 1
+        assert checked >= 20
+    # A third swept axis: no curve, and the attribute says why.
+    ds3 = ts.sweep(normal_load=[10.0, 80.0], arm_length=[0.05, 0.1], sliding_speed=[0.3, 0.6], **LINEAR)
+    assert "hopf_normal_load" not in ds3 and "third axis" in ds3.attrs["hopf_curves"]
+
+
+def test_the_regime_map_draws_the_stored_hopf_curve_and_names_every_mark():
+    pytest.importorskip("matplotlib")
+    from tribosweep.plot import regime_map
+
+    ds = ts.sweep(normal_load=np.linspace(10.0, 150.0, 8), arm_length=np.linspace(0.05, 0.127, 4), **LINEAR)
+    fig = regime_map(ds)
+    ax = fig.axes[0]
+    solid = [ln for ln in ax.lines if ln.get_linestyle() == "-" and len(ln.get_xdata()) > 2]
+    assert len(solid) == 1
+    np.testing.assert_array_equal(solid[0].get_xdata(), ds.hopf_normal_load.values)
+    np.testing.assert_array_equal(solid[0].get_ydata(), ds.hopf_arm_length.values)
+    labels = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert any(lab.startswith("Hopf curve, subcritical") for lab in labels)
+    assert any(lab.startswith("contact law identified") for lab in labels)

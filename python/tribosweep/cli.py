@@ -126,7 +126,7 @@ _SETTINGS: dict[str, tuple[str, object, str, str]] = {
     "ftle_rtol": ("irregular", float, "R", "tolerance of the exponent's runs"),
 }
 _CONFIG_KEYS = {"normal_load", "arm_length", "sliding_speed", "strategy", "method", "output", "chunk_size", "threads",
-                "max_points",
+                "max_points", "boundaries",
                 "plot", "axes", "model", "solver", "census", "wear_reference"}  # fmt: skip
 _SOLVER_KEYS = set(_SETTINGS) | {"census"}
 #: [census] keys -> sweep() arguments.
@@ -211,6 +211,8 @@ def _add_sweep_arguments(p: argparse.ArgumentParser) -> None:
                    help="largest sweep accepted (default 10000000): a bigger one is refused before any work")
     p.add_argument("--plot", metavar="PNG", help="also write the regime map to this image")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--no-boundaries", dest="boundaries", action="store_false",
+                   help="do not store the Hopf curves crossing a normal load x arm length box")
     groups = {
         "integration": p.add_argument_group("integration (also keys of the [solver] table of --config)"),
         "irregular": p.add_argument_group(
@@ -293,6 +295,7 @@ def _run_sweep(args: argparse.Namespace) -> int:
         output=output,
         chunk_size=args.chunk_size or cfg.get("chunk_size"),
         max_points=args.max_points or cfg.get("max_points", 10_000_000),
+        boundaries=args.boundaries and cfg.get("boundaries", True),
         threads=args.threads or cfg.get("threads"),
         resume=args.resume,
         progress=not args.no_progress,

@@ -84,6 +84,36 @@ def _choose_dims(ds: xr.Dataset, x, y, facet) -> tuple[str, str, str | None, lis
     return x, y, facet, rest
 
 
+#: How a Hopf curve is drawn, by criticality (l1 > 0: subcritical, a saddle cycle surrounds stable
+#: sliding and the two coexist; l1 < 0: supercritical, a small stable cycle is born).
+_HOPF_STYLE: dict[str, tuple[str, str]] = {
+    "hopf_subcritical": ("-", "Hopf curve, subcritical\n(l1 > 0: a saddle cycle)"),
+    "hopf_supercritical": (":", "Hopf curve, supercritical\n(l1 < 0)"),
+}
+
+
+def _draw_hopf(ax, ds: xr.Dataset, x: str, y: str) -> set[str]:
+    """Draw the stored Hopf curves (one line per curve and criticality run); return legend keys."""
+    crit_names = str(ds.hopf_criticality.attrs.get("flag_meanings", "")).split()
+    crit = np.asarray(ds.hopf_criticality.values).astype(int)
+    curve = np.asarray(ds.hopf_curve_index.values)
+    px, py = ds[f"hopf_{x}"].values, ds[f"hopf_{y}"].values
+    keys = set()
+    for c in np.unique(curve):
+        idx = np.flatnonzero(curve == c)
+        # Split where criticality changes (a Bautin point), drawing each run in its style.
+        runs = np.split(idx, np.flatnonzero(np.diff(crit[idx]) != 0) + 1)
+        for r in runs:
+            name = crit_names[crit[r[0]]] if crit[r[0]] < len(crit_names) else "undetermined"
+            key = "hopf_supercritical" if name == "supercritical" else "hopf_subcritical"
+            if name not in ("supercritical", "subcritical"):
+                key = "hopf_subcritical" if name == "degenerate" else key
+            r = np.r_[r, r[-1] + 1] if r[-1] + 1 < idx[-1] + 1 else r  # join runs at their shared point
+            ax.plot(px[r], py[r], color="k", lw=1.4, ls=_HOPF_STYLE[key][0])
+            keys.add(key)
+    return keys
+
+
 def regime_map(ds: xr.Dataset, *, x: str | None = None, y: str | None = None, facet: str | None = None,
                max_facets: int = 6):  # fmt: skip
     """Regime map of a sweep over two dimensions, one panel per value of a third.
@@ -164,6 +194,8 @@ def regime_map(ds: xr.Dataset, *, x: str | None = None, y: str | None = None, fa
         ax.set_xlabel(_label(ds, x))
         if fi is not None:
             ax.set_title(f"{facet} = {ds[facet].values[fi]:g} {ds[facet].attrs.get('units', '')}".strip(), fontsize=9)
+        if "hopf_normal_load" in ds and {x, y} == {"normal_load", "arm_length"}:
+            present.update(_draw_hopf(ax, ds, x, y))
         for dim, line in ((x, ax.axvline), (y, ax.axhline)):
             if dim == "normal_load":
                 for bound in (22.0, 93.0):
@@ -174,10 +206,19 @@ def regime_map(ds: xr.Dataset, *, x: str | None = None, y: str | None = None, fa
     for key, hatch, label in _COEXISTING.values():
         if key in present:
             handles.append(Patch(facecolor="none", edgecolor="k", hatch=hatch, lw=0.3, label=label))
+    if "normal_load" in (x, y):
+        from matplotlib.lines import Line2D
+
+        handles.append(Line2D([], [], color="k", lw=0.6, ls="--", label="contact law identified\n(22-93 N)"))
+    for key, (style, label) in _HOPF_STYLE.items():
+        if key in present:
+            from matplotlib.lines import Line2D
+
+            handles.append(Line2D([], [], color="k", lw=1.4, ls=style, label=label))
     if "multi_period" in present:
         handles.append(Patch(facecolor="none", edgecolor="none", label="nT: a cycle of n mode periods\n(period doubling, subharmonic)"))
     fig.legend(handles=handles, loc="outside right center", fontsize=8, frameon=False)
-    title = f"regime ({ds.attrs.get('method', '?')})"
+    title = f"regime ({ds.attrs.get('strategy', ds.attrs.get('method', '?'))})"
     if fixed:
         title += "; " + ", ".join(fixed)
     fig.suptitle(title, fontsize=10)

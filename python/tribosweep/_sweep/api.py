@@ -78,6 +78,7 @@ def sweep(
     ftle_d0: float = _D.irregular.ftle_d0,
     ftle_rtol: float = _D.irregular.ftle_rtol,
     max_points: int = 10_000_000,
+    boundaries: bool = True,
     method: str | None = None,
     check_bistability: bool | None = None,
     command: str | None = None,
@@ -190,6 +191,10 @@ def sweep(
     max_points : int
         Largest sweep accepted (10^7 points by default): a typo such as ``10:20:100000000`` is refused
         before any work, naming the shape.
+    boundaries : bool
+        Store the Hopf curves that cross a normal load x arm length box (``hopf_*`` variables on
+        the dimension ``hopf_point``, from :func:`tribosweep.hopf_curve`); ``tribosweep plot`` draws
+        them over the map.
     method : str, optional
         Deprecated name of ``strategy`` (``method`` is the time integrator everywhere else).
     command : str, optional
@@ -283,11 +288,12 @@ def sweep(
     plan = Plan(model, axes, strategy, settings, int(chunk_size), wear_reference, wear_calibration)
     if command is None:
         command = f"tribosweep.sweep(shape={plan.shape}, dims={plan.dims}, strategy={strategy!r})"
+    curves, curve_attrs = schema.boundary_vars(plan) if boundaries else ({}, {})
     layout = (
         schema.coords(plan),
-        schema.static_vars(plan),
+        schema.static_vars(plan) | curves,
         schema.point_specs(plan.dims, wear_rate=wear_calibration is not None),
-        schema.global_attrs(plan, command, f_ref),
+        schema.global_attrs(plan, command, f_ref) | curve_attrs,
     )
 
     if output is None:

@@ -126,6 +126,9 @@ class NetCDFWriter:
             var[:] = values
         for name, (dims, values, a) in self.schema.static_vars.items():
             values = np.asarray(values)
+            for dim, size in zip(dims, values.shape):
+                if dim not in nc.dimensions:  # a variable on its own dimension (e.g. hopf_point)
+                    nc.createDimension(dim, size)
             fill = np.nan if values.dtype.kind == "f" else None
             var = nc.createVariable(name, values.dtype, dims, fill_value=fill)
             var.setncatts(clean_attrs(a))
