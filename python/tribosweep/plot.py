@@ -225,6 +225,104 @@ def regime_map(ds: xr.Dataset, *, x: str | None = None, y: str | None = None, fa
     return fig
 
 
+#: Colours of a categorical variable's values (Okabe-Ito, colour-blind safe), in flag order.
+_CATEGORY_COLORS = ("#56B4E9", "#E69F00", "#009E73", "#F0E442", "#0072B2", "#D55E00", "#CC79A7", "#000000",
+                    "#999999", "#882255", "#44AA99")  # fmt: skip
+
+
+def variable_map(ds: xr.Dataset, var: str, *, x: str | None = None, y: str | None = None, facet: str | None = None,
+                 ncols: int = 4):  # fmt: skip
+    """Map of any per-point variable of a sweep over two dimensions, one panel per value of a third.
+
+    A categorical variable (CF ``flag_values``/``flag_meanings``) gets one colour per value and a
+    legend of the names present; a continuous one a colour bar labelled with its long name and
+    units (logarithmic where its finite values are positive and span more than three decades).
+    Panels wrap into rows of ``ncols``; every facet value gets its panel. A variable with a
+    trailing dimension (``basin_fraction`` over ``attractor``) is drawn at its first value unless
+    that dimension is the facet.
+
+    Examples
+    --------
+    >>> import tribosweep as ts
+    >>> from tribosweep.plot import variable_map
+    >>> ds = ts.sweep(normal_load=[10.0, 30.0, 60.0], arm_length=[0.05, 0.1], strategy="linear", progress=False)
+    >>> fig = variable_map(ds, "growth_rate")
+    >>> fig.axes[-1].get_ylabel()
+    'largest real part of the eigenvalues of steady sliding (> 0: unstable) [s-1]'
+    """
+    Figure, Patch = _matplotlib()
+    from matplotlib.colors import BoundaryNorm, ListedColormap, LogNorm, Normalize
+
+    if var not in ds:
+        names = sorted(v for v in ds.data_vars if set(ds.regime.dims) <= set(ds[v].dims))
+        raise ValueError(f"var = {var!r} is not in the sweep: its per-point variables are {names}")
+    da = ds[var]
+    extra = [d for d in da.dims if d not in ds.regime.dims]
+    if extra and facet is None:
+        facet = extra[0]  # one panel per attractor (say): the sweep's other dimensions at their first value
+    if facet in extra:
+        x, y, _, rest = _choose_dims(ds, x, y, None)
+        rest = [d for d in ds.regime.dims if d not in (x, y)]
+    else:
+        x, y, facet, rest = _choose_dims(ds, x, y, facet)
+    da = da.isel({d: 0 for d in rest + [d for d in extra if d != facet]})
+    fvals = [None] if facet is None else list(range(ds.sizes[facet]))
+    n = len(fvals)
+    nc = max(1, min(ncols, n))
+    nr = -(-n // nc)
+    fig = Figure(figsize=(3.4 * nc + 2.2, 3.2 * nr + 0.6), layout="constrained")
+    axes = fig.subplots(nr, nc, squeeze=False, sharex=True, sharey=True).ravel()
+    for ax in axes[n:]:
+        ax.set_visible(False)
+    for k in range(max(0, n - nc), n):  # the lowest panel of each column shows its x ticks
+        axes[k].xaxis.set_tick_params(labelbottom=True)
+    flags = "flag_values" in da.attrs and "flag_meanings" in da.attrs
+    values = np.asarray(da.values, dtype=np.float64)
+    if flags:
+        codes = np.atleast_1d(da.attrs["flag_values"]).astype(np.float64).tolist()
+        names = str(da.attrs["flag_meanings"]).split()
+        cmap = ListedColormap([_CATEGORY_COLORS[i % len(_CATEGORY_COLORS)] for i in range(len(codes))])
+        index = np.full(values.shape, np.nan)
+        for i, c in enumerate(codes):
+            index[values == c] = i
+        values, norm = index, BoundaryNorm(np.arange(len(codes) + 1) - 0.5, cmap.N)
+    else:
+        finite = values[np.isfinite(values)]
+        log = finite.size and finite.min() > 0 and finite.max() / finite.min() > 1e3
+        norm = LogNorm(finite.min(), finite.max()) if log else Normalize(*(
+            (finite.min(), finite.max()) if finite.size else (0.0, 1.0)))  # fmt: skip
+        cmap = "viridis"
+    da = da.copy(data=values)
+    mesh = None
+    for k, (ax, fi) in enumerate(zip(axes, fvals)):
+        sub = da if fi is None else da.isel({facet: fi})
+        mesh = ax.pcolormesh(_edges(ds[x].values), _edges(ds[y].values), sub.transpose(y, x).values, cmap=cmap,
+                             norm=norm, shading="flat")  # fmt: skip
+        if fi is not None:
+            coord = ds[facet].values[fi]
+            label = f"{coord:.4g}" if np.issubdtype(np.asarray(coord).dtype, np.number) else str(coord)
+            if facet == "attractor" and "flag_meanings" in ds[facet].attrs:
+                label = str(ds[facet].attrs["flag_meanings"]).split()[fi]
+            ax.set_title(f"{facet} = {label} {ds[facet].attrs.get('units', '')}".strip(), fontsize=9)
+        if k // nc == nr - 1 or k + nc >= n:
+            ax.set_xlabel(_label(ds, x))
+        if k % nc == 0:
+            ax.set_ylabel(_label(ds, y))
+    long = da.attrs.get("long_name", var)
+    unit = da.attrs.get("units")
+    if flags:
+        present = sorted({int(v) for v in np.unique(values[np.isfinite(values)])})
+        handles = [Patch(facecolor=cmap(i), edgecolor="k", lw=0.3, label=names[i].replace("_", " ")) for i in present]
+        fig.legend(handles=handles, loc="outside right center", fontsize=8, frameon=False, title=var)
+    else:
+        bar = fig.colorbar(mesh, ax=axes[:n].tolist(), shrink=0.9)
+        bar.ax.set_ylabel(f"{long} [{unit}]" if unit else long, fontsize=8)
+    fixed = [f"{d} = {ds[d].values[0]:.4g} {ds[d].attrs.get('units', '')}".strip() for d in rest if ds.sizes[d] > 1]
+    blank = "; white: no value there" if np.isnan(values).any() else ""
+    fig.suptitle(var + ("; " + ", ".join(fixed) if fixed else "") + blank, fontsize=10)
+    return fig
+
+
 def save_regime_map(ds_or_path, path: str | os.PathLike, **kwargs) -> None:
     """Write :func:`regime_map` of a Dataset (or of a sweep file) to an image file (PNG, PDF, SVG).
 
@@ -235,12 +333,18 @@ def save_regime_map(ds_or_path, path: str | os.PathLike, **kwargs) -> None:
     path : path-like
         Image file; the format follows its extension.
     **kwargs
-        Passed to :func:`regime_map`.
+        Passed to :func:`regime_map`, or with ``var`` (any per-point variable but ``regime``) to
+        :func:`variable_map`.
     """
+    var = kwargs.pop("var", None)
+
+    def draw(ds):
+        return regime_map(ds, **kwargs) if var in (None, "regime") else variable_map(ds, var, **kwargs)
+
     if isinstance(ds_or_path, xr.Dataset):
-        fig = regime_map(ds_or_path, **kwargs)
+        fig = draw(ds_or_path)
     else:
         with xr.open_dataset(ds_or_path, engine="netcdf4") as ds:
-            fig = regime_map(ds, **kwargs)
+            fig = draw(ds)
     os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
     fig.savefig(path, dpi=120)

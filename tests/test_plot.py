@@ -1,0 +1,43 @@
+"""Maps of any sweep variable: the figure's content, not its file size."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import tribosweep as ts
+
+pytest.importorskip("matplotlib")
+from tribosweep.plot import variable_map  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def sweep3():
+    return ts.sweep(normal_load=[10.0, 40.0, 90.0], arm_length=[0.05, 0.1], sliding_speed=[0.3, 0.5, 0.7, 0.9, 1.1],
+                    strategy="linear", progress=False)  # fmt: skip
+
+
+def test_a_continuous_variable_has_a_labelled_colour_bar_and_its_values_in_every_facet(sweep3):
+    fig = variable_map(sweep3, "growth_rate")
+    panels = [ax for ax in fig.axes if ax.get_visible() and ax.collections and ax.get_label() != "<colorbar>"]
+    assert len(panels) == 5  # every speed gets its panel: none dropped
+    for k, ax in enumerate(panels):
+        want = sweep3.growth_rate.isel(sliding_speed=k).transpose("arm_length", "normal_load").values
+        np.testing.assert_array_equal(np.asarray(ax.collections[0].get_array()).reshape(want.shape), want)
+        assert ax.get_title() == f"sliding_speed = {sweep3.sliding_speed.values[k]:.4g} m s-1"
+    bar = fig.axes[-1]
+    assert bar.get_ylabel() == f"{sweep3.growth_rate.attrs['long_name']} [s-1]"
+    # Panels wrap in rows of 4: the fifth starts the second row, and every column shows its x ticks.
+    assert panels[4].get_position().y0 < panels[0].get_position().y0
+
+
+def test_a_categorical_variable_gets_its_flag_names_in_the_legend(sweep3):
+    fig = variable_map(sweep3, "regime", facet="sliding_speed")
+    names = str(sweep3.regime.attrs["flag_meanings"]).split()
+    present = sorted({int(v) for v in np.unique(sweep3.regime.values)})
+    assert [t.get_text() for t in fig.legends[0].get_texts()] == [names[i].replace("_", " ") for i in present]
+
+
+def test_an_unknown_variable_names_the_valid_ones(sweep3):
+    with pytest.raises(ValueError, match="var = 'nope' is not in the sweep: its per-point variables are"):
+        variable_map(sweep3, "nope")
