@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from . import _core
 from ._apparatus import ARM_EXPONENTS, apparatus_model, arm_frequencies
+from ._branch import BRANCH_FLAG_NAMES, POINT_TYPE_NAMES, bifurcation_diagram, branch, fold_curve, grazing_curve
 from ._census import ATTRACTOR_NAMES, census
 from ._chunk import BISTABLE_NAMES, REGIME_NAMES
 from ._flags import INSTABILITY_NAMES, OUTCOME_NAMES, STATUS, STATUS_NAMES
@@ -23,10 +24,12 @@ __all__ = [
     "ARM_EXPONENTS",
     "ATTRACTOR_NAMES",
     "BISTABLE_NAMES",
+    "BRANCH_FLAG_NAMES",
     "DEFAULT_Y0",
     "INSTABILITY_NAMES",
     "OUTCOME_NAMES",
     "PARAM_NAMES",
+    "POINT_TYPE_NAMES",
     "REGIME_NAMES",
     "STATUS",
     "STATUS_NAMES",
@@ -36,10 +39,14 @@ __all__ = [
     "__version__",
     "apparatus_model",
     "arm_frequencies",
+    "bifurcation_diagram",
+    "branch",
     "census",
     "describing_function",
     "ensemble",
     "follow_cycle",
+    "fold_curve",
+    "grazing_curve",
     "hopf_load",
     "linear_stability",
     "normal_mode_frequency_hz",

@@ -111,3 +111,40 @@ def tidf_solve(
     variant: str = "consistent",
     threads: int | None = None,
 ) -> dict[str, Any]: ...
+
+# Branches of periodic orbits (rust_core/bindings/src/branch.rs).
+def branch(
+    values: dict[str, float],
+    contact: str,
+    friction_law: FrictionLawName,
+    parameter: str,
+    value: float,
+    lo: float,
+    hi: float,
+    y0: npt.NDArray[np.float64] | None = None,
+    period: float | None = None,
+    direction: float = 1.0,
+    hopf_omega: float | None = None,
+    options: dict[str, float] = ...,
+    stop_at: str | None = None,
+) -> dict[str, Any]: ...
+def special_curve(
+    values: dict[str, float],
+    contact: str,
+    friction_law: FrictionLawName,
+    kind: Literal["fold", "grazing"],
+    x: str,
+    x_value: float,
+    x_lo: float,
+    x_hi: float,
+    y: str,
+    ys: npt.NDArray[np.float64],
+    y0: npt.NDArray[np.float64] | None = None,
+    period: float | None = None,
+    direction: float = 1.0,
+    hopf_omega: float | None = None,
+    options: dict[str, float] = ...,
+) -> dict[str, Any]: ...
+def branch_point_type_names() -> list[str]: ...
+def branch_flag_names() -> list[str]: ...
+def branch_defaults() -> dict[str, float]: ...

@@ -4,6 +4,8 @@
 //! the numerics. The public Python API (argument checking with clear messages, xarray Datasets)
 //! lives in `python/tribosweep/`; this module is private.
 
+mod branch;
+
 use numpy::ndarray::{Array1, Array2, Array3};
 use numpy::{IntoPyArray, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::exceptions::PyValueError;
@@ -1010,5 +1012,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(describing_function, m)?)?;
     m.add_function(wrap_pyfunction!(periodic_orbit, m)?)?;
     m.add_function(wrap_pyfunction!(tidf_solve, m)?)?;
+    branch::register(m)?;
     Ok(())
 }
