@@ -2,44 +2,52 @@
 //! model parameter, with Floquet multipliers at every point and the bifurcations of cycles
 //! located on the branch (issue 12, items 3 and 4).
 //!
-//! **The problem.** Unknowns `u = (y0 without zd, T, p)`, scaled: state components by the
-//! slider's characteristic sizes, `T` by the starting period, `p` by a parameter scale (its
-//! starting magnitude). Equations: the periodicity `y(T; y0, p) - y0 = 0` with the phase
-//! condition `zd(0) = 0` built in (as in [`crate::shooting`]), and one more row that picks the
-//! point on the curve: the pseudo-arclength condition `tau . (u - u_pred) = 0`. Its Jacobian is
-//! `[Phi - I (without the zd column) | f(y(T)) | dy(T)/dp]`, from one integration of the state
-//! with its monodromy matrix and parameter sensitivity ([`flow`]), with the saltation matrices of
-//! today's shooting at every contact switch.
+//! **The problem** (`solve.rs`). An orbit is a sequence of fixed-mode segments (one in contact
+//! for the bilateral law and for a unilateral orbit that never leaves the disk; flights, contacts
+//! and detachments otherwise). Unknowns `u = (y0 without zd, tau_1..tau_K, p)`, scaled: state
+//! components by the slider's characteristic sizes, durations by the starting period, `p` by its
+//! starting magnitude. Equations: the switching condition at the end of each segment but the
+//! last, periodicity `y_K - y0 = 0` with the phase condition `zd(0) = 0` built in (as in
+//! [`crate::shooting`]), and the pseudo-arclength row `tau . (u - u_pred) = 0`. One segment is
+//! plain shooting with the monodromy matrix `[Phi - I | f | dy/dp]` as Newton's matrix; with
+//! switches the Jacobian chains the segments' `Phi` (no saltation needed: the switches are
+//! equations), which keeps the problem smooth through grazing, where a flight's duration passes
+//! through zero (the one-run map has a square root there: Newton stalls on both sides). The
+//! Floquet multipliers are those of the monodromy matrix with the saltation matrices at the
+//! switches. `flow.rs` integrates a segment with `Phi` and `dy/dp` (48 components).
 //!
-//! **A step.** Tangent predictor `u + ds tau`; Newton corrector on the bordered system (the
-//! monodromy as its Jacobian; the first integrations at a graded, lower accuracy as in the
-//! shooting, convergence only judged at full accuracy). A step that does not converge, turns the
-//! tangent by more than `max_turn`, or lands farther from its prediction than half a step is
-//! halved; below `ds_min` the branch ends with a status and a reason. The tangent is the null
-//! vector of the 6x7 Jacobian, from the bordered system `[J; tau_prev] t = e_7` (so it keeps its
-//! orientation through folds).
+//! **A step** (`follow.rs`). Tangent predictor `u + ds tau`; Newton corrector on the bordered
+//! system (the first integrations at a graded, lower accuracy as in the shooting, convergence only
+//! judged at full accuracy). A step that does not converge, turns the tangent by more than
+//! `max_turn`, or lands farther from its prediction than half a step is halved; below `ds_min`
+//! the branch ends with a status and a reason. The tangent is the null vector of the Jacobian,
+//! from the bordered system `[J; tau_prev] t = e_n` (so it keeps its orientation through folds).
 //!
 //! **Test functions** between consecutive points, each located by a bracketed secant (Illinois)
 //! search along the segment with pseudo-arclength corrections, to `locate_tol` in scaled
-//! arclength:
+//! arclength (a count by bisection):
 //! - fold of cycles: the parameter component of the tangent changes sign;
 //! - period doubling: `Re prod (rho_i + 1)` over the non-trivial multipliers changes sign (a real
 //!   multiplier through -1);
-//! - Neimark-Sacker: the count of complex non-trivial multipliers outside the unit circle changes
-//!   (located on `Re prod_{i<j} (rho_i rho_j - 1)`, or by bisection on the count);
-//! - branch point: a real multiplier through +1 without a fold (never silent: flagged);
-//! - grazing: `min_gap = -max_t zc(t)` changes sign (the orbit first touches contact loss). It is
-//!   located with the bilateral law, which on the contact side is the same orbit and is smooth
-//!   there, while the unilateral flow has a square-root singularity at grazing. Past it the branch
-//!   goes on with the model's law: unilateral (the saltation matrices at the new switches), or the
-//!   bilateral law flagged outside its validity.
+//! - Neimark-Sacker: complex non-trivial multipliers cross the unit circle (located on
+//!   `Re prod_{i<j} (rho_i rho_j - 1)`, or by bisection on the count);
+//! - branch point: a real multiplier through +1 without a fold (another branch of cycles crosses:
+//!   never silent);
+//! - grazing: with the bilateral law, `min_gap = -max_t zc(t)` changes sign (the orbit first
+//!   touches contact loss; past it the law is outside its validity, flagged). With the unilateral
+//!   law an orbit stops being physical in its sequence (`sequence.rs`): the point is located on
+//!   the violated condition, the sequence changes (a flight or a detachment appears or vanishes,
+//!   a landing changes its event), and the branch goes on along the physical piece. Where it
+//!   turns back in the parameter, two cycles meet and end: a non-smooth fold, flagged.
 //!
 //! **Never silent.** A point whose tangent turned sharply or whose correction jumped (accepted only
-//! at `ds_min`), or whose trivial multiplier is off 1, carries a flag; the branch's end says why.
+//! at `ds_min`), whose trivial multiplier is off 1, or whose special point could not be located
+//! carries a flag; the branch's end says why.
 
 mod curve;
 mod flow;
 mod follow;
+mod sequence;
 mod solve;
 #[cfg(test)]
 mod tests;
