@@ -258,11 +258,59 @@ fn rebuild(seq: &Seq, taus: &[f64], change: &Change) -> (Seq, Vec<f64>) {
     (Seq { modes, events }, taus)
 }
 
-/// The first physical point after a change of sequence at `g`: the null directions of the new
-/// system there (one, or two where the new piece crosses the virtual one of zero-length
-/// segments), each tried both ways with one step; the first that lands on a physical orbit of the
-/// new sequence with every duration positive wins.
+/// The first physical point after a change of sequence at `g`.
+///
+/// A new segment: the orbit whose new segment lasts `eps` (scaled by the period; at the phase
+/// point the two halves together), corrected with that duration fixed from `g` with the segment
+/// inserted, centred on the touch. Near `g` the physical piece is parametrised by that duration,
+/// while the virtual piece through `g` keeps it at zero: the condition picks the physical one
+/// whichever way the parameter goes (if that fails, as for a removed segment:
+/// [`leave_along_null`]).
 fn leave(ctx: &mut Ctx<'_>, g: &Node, xi: &Xi, seq: &Seq, change: &Change) -> Result<Node, Failure> {
+    if let Change::Insert { i, t, .. } = *change {
+        let k = seq.k();
+        // (new segments, their neighbours that give up the time)
+        let (new, give): (Vec<usize>, Vec<usize>) = if t == 0.0 && i == 0 {
+            (vec![5, 5 + k - 1], vec![5 + 1, 5 + k - 2])
+        } else {
+            (vec![5 + i + 1], vec![5 + i, 5 + i + 2])
+        };
+        let mut c = Xi::zeros(xi.len());
+        for &n in &new {
+            c[n] = 1.0;
+        }
+        let cn = c.normalize();
+        let mut last = fail(Status::NotConverged, "no step".into());
+        for eps in [0.0625 * ctx.opts.ds, 0.25 * ctx.opts.ds, ctx.opts.ds] {
+            let mut guess = xi.clone();
+            for &n in &new {
+                guess[n] += eps / new.len() as f64;
+            }
+            for &n in &give {
+                guess[n] -= eps / give.len() as f64;
+            }
+            let anchor = xi + &c * (eps / c.norm_squared());
+            match ctx.correct(&guess, seq, &cn, &anchor) {
+                Ok(e) if valid(ctx, &e) && e.monitors.tau_min.0 > 0.0 => {
+                    let tan = ctx.tangent(&e.jac, &cn).unwrap_or_else(|| cn.clone());
+                    let s = g.point.arclength + (&e.xi - xi).norm();
+                    return Ok(node(ctx, e, tan, s));
+                }
+                Ok(_) => last = fail(Status::NotConverged, "the orbit with the new segment is not physical".into()),
+                Err(f) => last = f,
+            }
+        }
+        if let Ok(n) = leave_along_null(ctx, g, xi, seq) {
+            return Ok(n);
+        }
+        return Err(last);
+    }
+    leave_along_null(ctx, g, xi, seq)
+}
+
+/// One step from `g` along each null direction of the new system, both ways; the first that lands
+/// on a physical orbit with every duration positive wins.
+fn leave_along_null(ctx: &mut Ctx<'_>, g: &Node, xi: &Xi, seq: &Seq) -> Result<Node, Failure> {
     let (e, _) = ctx.evaluate(xi, seq, ctx.opts.rtol)?;
     let j = &e.jac;
     let jtj: DMatrix<f64> = j.transpose() * j;
@@ -276,31 +324,10 @@ fn leave(ctx: &mut Ctx<'_>, g: &Node, xi: &Xi, seq: &Seq, change: &Change) -> Re
         .filter(|&&k| eig.eigenvalues[k] <= 1e-6 * top || k == order[0])
         .map(|&k| eig.eigenvectors.column(k).into_owned())
         .collect();
-    // Prefer the direction that grows the new segments.
-    let new_tau: Vec<usize> = match *change {
-        Change::Insert { i, t, .. } if !(t == 0.0 && i == 0) => vec![5 + i + 1],
-        Change::Insert { .. } => vec![5, 5 + seq.k() - 1],
-        Change::Remove(_) => vec![],
-    };
     let mut tries: Vec<Xi> = Vec::new();
-    // Where two pieces cross (a segment of zero length on one of them), the new segment's
-    // duration projected on the null plane is orthogonal to the piece that keeps it zero: the
-    // pseudo-arclength corrector from there lands on the other, physical one.
-    if !new_tau.is_empty() && null.len() == 2 {
-        let mut e = Xi::zeros(xi.len());
-        for &i in &new_tau {
-            e[i] = 1.0;
-        }
-        let proj: Xi = null.iter().map(|v| v * v.dot(&e)).fold(Xi::zeros(xi.len()), |a, b| a + b);
-        if proj.norm() > 0.0 {
-            tries.push(proj.normalize());
-        }
-    }
     for v in &null {
-        let lead: f64 = new_tau.iter().map(|&i| v[i]).sum();
-        let v = if lead < 0.0 { -v.clone() } else { v.clone() };
         tries.push(v.clone());
-        tries.push(-v);
+        tries.push(-v.clone());
     }
     let mut last = fail(Status::NotConverged, "no null direction".into());
     for ds in [ctx.opts.ds, 0.25 * ctx.opts.ds, 0.0625 * ctx.opts.ds] {

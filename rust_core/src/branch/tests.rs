@@ -160,3 +160,37 @@ fn bad_input_is_rejected_before_any_work() {
     let e = branch(&p, "normal_load", -5.0, hopf, (-10.0, 40.0), &o).unwrap_err();
     assert!(e.to_string().contains("normal_load"), "{e}");
 }
+
+#[test]
+fn the_unilateral_branch_from_the_hopf_point_reaches_the_seed_bouncing_cycle() {
+    // Hopf point -> saddle cycle -> grazing at 36.83 N (the branch turns back onto orbits with a
+    // flight) -> fold near 19 N -> ... -> the stable bouncing cycle of MODEL.md §6 at the seed load.
+    let (p, fh, w) = seed_hopf();
+    let p = Params { contact: ContactModel::Unilateral, ..p };
+    let o = BranchOptions { max_points: 3000, ..Default::default() };
+    let b = branch(&p, "normal_load", fh, Start::Hopf { omega: w }, (1.0, 150.0), &o).unwrap();
+    for q in b.points.iter().filter(|q| q.point_type != PointType::Regular) {
+        eprintln!(
+            "{:>15} {:.5} N switches {} flags {}",
+            POINT_TYPE_NAMES[q.point_type as usize], q.parameter, q.n_switches, q.flags
+        );
+    }
+    assert_eq!(b.status, Status::Success, "{}", b.reason);
+    let g = b.points.iter().find(|q| q.point_type == PointType::Grazing).unwrap();
+    assert!((g.parameter - 36.83).abs() < 0.01 && g.flags & flags::PARAMETER_TURNS != 0);
+    assert!(b.points.iter().any(|q| q.point_type == PointType::Fold));
+    // The stable stretch through the seed load: omega there (linear interpolation between the two
+    // points around 84.46 N, about 0.3 N apart, where omega changes by 0.5 rad/s per N with
+    // curvature below 1e-3 per N^2) against MODEL.md's 640.371 rad/s (printed to 0.001).
+    let k = b
+        .points
+        .windows(2)
+        .position(|w| w[0].stable && w[1].stable && (w[0].parameter - 84.46) * (w[1].parameter - 84.46) <= 0.0);
+    let k = k.expect("a stable stretch through the seed load");
+    let (a, c) = (b.points[k], b.points[k + 1]);
+    let th = (84.46 - a.parameter) / (c.parameter - a.parameter);
+    let omega = |q: &BranchPoint| 2.0 * std::f64::consts::PI / q.period;
+    let om = omega(&a) + th * (omega(&c) - omega(&a));
+    assert!((om - 640.371).abs() < 0.002, "omega {om}");
+    assert_eq!(a.n_switches, 4);
+}
