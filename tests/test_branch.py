@@ -193,8 +193,10 @@ def test_bifurcation_diagram_marks_and_labels_the_special_points(bilateral):
     ax = fig.axes[0]
     labels = [t.get_text() for t in ax.texts]
     assert labels == ["H", "G"]
-    styles = {line.get_linestyle() for line in ax.lines if len(line.get_xdata()) == 2}
-    assert styles == {"--"}  # the saddle branch is unstable throughout
+    curves = [line for line in ax.lines if len(line.get_xdata()) > 1]
+    # The saddle branch is unstable throughout: one dashed line through every point.
+    assert len(curves) == 1 and curves[0].get_linestyle() == "--"
+    assert len(curves[0].get_xdata()) == bilateral.sizes["branch_point"]
 
 
 @pytest.mark.parametrize(

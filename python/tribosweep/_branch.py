@@ -436,9 +436,16 @@ def bifurcation_diagram(ds: xr.Dataset, *, amplitude: str = "A1", ax=None):
     a = ds[amplitude].values
     scale, unit = (1e6, "um") if ds[amplitude].attrs.get("units") == "m" else (1.0, ds[amplitude].attrs.get("units", ""))
     stable = ds.stable.values.astype(bool)
-    for i in range(len(p) - 1):
-        both = stable[i] and stable[i + 1]
-        ax.plot(p[i:i + 2], a[i:i + 2] * scale, color="C0" if both else "C3", ls="-" if both else "--", lw=1.4)
+    # A segment is stable when both its ends are; runs of equal segments are drawn as one line
+    # (so that the dashes show on a dense branch).
+    seg = stable[:-1] & stable[1:]
+    start = 0
+    for i in range(1, len(seg) + 1):
+        if i == len(seg) or seg[i] != seg[start]:
+            solid = bool(seg[start])
+            ax.plot(p[start:i + 1], a[start:i + 1] * scale, color="C0" if solid else "C3", ls="-" if solid else "--",
+                    lw=1.4)  # fmt: skip
+            start = i
     types = ds.point_type.values
     for i, t in enumerate(types):
         name = POINT_TYPE_NAMES[int(t)]
