@@ -152,6 +152,21 @@ def test_the_fold_curve_bounds_the_coexistence_the_census_sees(bouncing):
         assert int(outside.n_attractors) == 1 and q[1] == 0 and q[2] == 0 and q[0] > 0.9, (mu, fold, q)
 
 
+def test_the_grazing_curve_is_made_of_grazing_orbits():
+    curve = ts.grazing_curve(SEED_U, x=("normal_load", 1.0, 250.0), y=("mu", 0.21, 0.225), n=4, from_hopf=True)
+    assert ts.STATUS_NAMES[int(curve.status)] == "success", curve.attrs["reason"]
+    np.testing.assert_allclose(curve.mu.values, [0.21, 0.215, 0.22, 0.225])
+    # The grazing load rises with mu, as the Hopf load does (MODEL.md §4).
+    assert np.all(np.diff(curve.normal_load.values) > 0)
+    for i in range(curve.sizes["curve_point"]):
+        c = curve.isel(curve_point=i)
+        model = SEED.replace(mu=float(c.mu), normal_load=float(c.normal_load))
+        orb = ts.periodic_orbit(model, (c.state0.values, float(c.period)))
+        # Plain shooting from the curve's orbit: its top touches the disk. Shooting converges to a
+        # scaled residual of 1e-9 (of |z_st|, about 1e-14 m here); 1e-11 m is 1e-6 of |z_st|.
+        assert abs(model.static_point()[0] + float(orb.state0[0])) < 1e-11
+
+
 def test_the_unilateral_branch_goes_through_grazing_onto_flights():
     # From the Hopf point: the saddle grazes at 36.83 N, where the branch turns back (a non-smooth
     # fold) onto orbits with a flight, which fold smoothly near 19 N.

@@ -350,6 +350,9 @@ def _curve(kind: str, model, x, y, n, orbit, from_hopf, start, direction, option
              "method": "slice by slice: the special point located in x by the one-parameter branch at each y",
              "reason": " | ".join(reasons), "contact": model.contact, "friction_law": model.friction_law,
              "n_flows": flows, "n_rhs": rhs}  # fmt: skip
+    if kind == "grazing":
+        attrs["comment"] = ("the contact side's grazing (the pin first leaves the disk), followed with the bilateral law, "
+                            "on which that orbit is the same")  # fmt: skip
     attrs |= {f"continuation_{k}": (int(v) if k in _INT_OPTIONS else v) for k, v in (DEFAULTS | opts).items()}
     ds = _dataset(merged, "curve_point", xn, attrs)
     ds = ds.rename({"parameter": xn})

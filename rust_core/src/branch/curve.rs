@@ -82,6 +82,10 @@ fn anchors(trail: &[BranchPoint], special: &BranchPoint) -> Vec<BranchPoint> {
 
 /// Follow the special point `kind` of the branch of `p` in `x` over the values `ys` of `y`.
 ///
+/// A grazing curve is that of the contact side's grazing (the pin first leaves the disk), followed
+/// with the bilateral law, on which that orbit is the same; a fold curve follows smooth folds and
+/// grazing points where the branch turns back.
+///
 /// The first slice, at `y = ys[0]`, is a branch in `x` from `start` at `x = x_value` until its first
 /// `kind` point (within `x_bounds`). Each further slice moves an anchor orbit of the previous one to
 /// the new `y` and locates the point there. The curve ends early, with its status and reason, when a
@@ -112,6 +116,11 @@ pub fn special_curve(
     }
     let mut q = *p;
     q.set(y, y0)?;
+    if kind == CurveKind::Grazing {
+        // The grazing orbit is on the contact side, where the unilateral orbit is the bilateral
+        // one: the bilateral law follows it, smoothly on both sides of the grazing point.
+        q.contact = crate::model::ContactModel::Bilateral;
+    }
     let target = kind.point_type();
     let ox = BranchOptions { stop_at: Some(target), ..*opts };
     let mut curve = Curve {
@@ -167,7 +176,11 @@ pub fn special_curve(
             // Locate the special point in x at y_b, heading the way the previous slice did.
             let mut qb = q;
             qb.set(y, yb)?;
-            let dir = if a.dp_ds >= 0.0 { 1.0 } else { -1.0 };
+            let mut dir = if a.dp_ds >= 0.0 { 1.0 } else { -1.0 };
+            // An anchor already past the grazing point at the new y: head back to it.
+            if kind == CurveKind::Grazing && (end.min_gap > 0.0) != (a.min_gap > 0.0) {
+                dir = -dir;
+            }
             let start = Start::Orbit { state0: end.state0, period: end.period, direction: dir };
             let bx = branch(&qb, x, a.parameter, start, x_bounds, &ox)?;
             add(&mut curve, &bx);
