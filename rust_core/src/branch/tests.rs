@@ -79,7 +79,7 @@ fn multipliers_agree_with_independent_shooting() {
 #[test]
 fn segment_jacobian_matches_finite_differences() {
     // The seed bouncing cycle as 5 segments (flight, contact, hop, contact, flight).
-    let (s, y) = crate::shooting::tests::bouncing_cycle_start();
+    let (s, _) = crate::shooting::tests::bouncing_cycle_start();
     let b = unilateral_from_bouncing(1.0, 2);
     let q = b.points[0];
     assert_eq!(q.n_switches, 4);
@@ -94,7 +94,6 @@ fn segment_jacobian_matches_finite_differences() {
         stats: Default::default(),
         n_flows: 0,
     };
-    let _ = y;
     // Sequence and durations from a run that locates the switches.
     let model = ctx.model(s.p.normal_load).unwrap();
     let fs = flow::FlowSettings { method: o.method, rtol: 1e-12, sizes: ctx.sizes, p_ref: ctx.p_ref, max_switches: 64 };
