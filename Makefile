@@ -52,6 +52,7 @@ bench: install-test
 	$(BIN)/python benches/bench_trajectories.py --n 1000
 	$(BIN)/python benches/bench_frequency.py
 	$(BIN)/python benches/bench_hopf.py
+	$(BIN)/python benches/bench_branch.py
 	$(BIN)/python benches/bench_sweep.py --points 100000 --memory-points 1000000
 	$(BIN)/python benches/bench_census.py
 	$(BIN)/python benches/work_precision.py --out bench_out

@@ -69,7 +69,7 @@ def test_arm_length_hopf_point_lies_on_the_load_curve():
 def test_hopf_curve_loads_equal_hopf_load_at_five_arm_lengths():
     arms = [0.052, 0.06, 0.068, 0.076, 0.085]
     ds = ts.hopf_curve(SEED, x=("normal_load", 1.0, 250.0), y=("arm_length", 0.05, 0.127), y_marks=arms)
-    marks = ds.where(ds.point_type == ts.POINT_TYPE_NAMES.index("mark"), drop=True)
+    marks = ds.where(ds.point_type == ts.HOPF_POINT_TYPE_NAMES.index("mark"), drop=True)
     # Located in arclength to the corrector tolerance (1e-10 box units of the 0.077 m range).
     assert np.allclose(np.sort(marks.arm_length.values), arms, rtol=0, atol=1e-10 * 0.077)
     for load, arm in zip(marks.normal_load.values, marks.arm_length.values):
@@ -85,7 +85,7 @@ def test_hopf_curve_in_load_and_mu_passes_through_model_md(seed_values):
     mus = [0.2, 0.215, 0.25, 0.3, 0.35]
     ds = ts.hopf_curve(SEED, x=("normal_load", 1.0, 250.0), y=("mu", 0.15, 0.4), y_marks=mus)
     assert ds.sizes["hopf_curve"] == 1
-    marks = ds.where(ds.point_type == ts.POINT_TYPE_NAMES.index("mark"), drop=True).sortby("mu")
+    marks = ds.where(ds.point_type == ts.HOPF_POINT_TYPE_NAMES.index("mark"), drop=True).sortby("mu")
     assert np.allclose(marks.mu.values, mus, rtol=0, atol=1e-10 * 0.25)  # as above, range 0.25
     for mu, load in zip(mus, marks.normal_load.values):
         ref = seed_values["hopf_load_N"][str(mu)]
@@ -142,12 +142,12 @@ def test_curve_leaving_the_box_ends_on_its_faces():
     left = ts.END_STATUS_NAMES.index("left_box")
     assert int(ds.start_status[0]) == left and int(ds.end_status[0]) == left
     assert all(r for r in np.concatenate([ds.start_reason.values, ds.end_reason.values]))
-    exits = ds.where(ds.point_type == ts.POINT_TYPE_NAMES.index("box_exit"), drop=True)
+    exits = ds.where(ds.point_type == ts.HOPF_POINT_TYPE_NAMES.index("box_exit"), drop=True)
     assert sorted(exits.normal_load.values) == [10.0, 100.0]  # the face coordinate is fixed exactly
     for load, mu in zip(exits.normal_load.values, exits.mu.values):
         assert rel(_exact_hopf_load(SEED.replace(mu=float(mu))), load) < 1e-6  # as above
     # The exits are the curve's two ends, and no point is outside the box.
-    assert {int(ds.point_type[0]), int(ds.point_type[-1])} == {ts.POINT_TYPE_NAMES.index("box_exit")}
+    assert {int(ds.point_type[0]), int(ds.point_type[-1])} == {ts.HOPF_POINT_TYPE_NAMES.index("box_exit")}
     assert ds.normal_load.min() >= 10.0 and ds.normal_load.max() <= 100.0
     assert ds.mu.min() >= 0.2 and ds.mu.max() <= 0.3
     # Several grid edges saw the curve; it was traced once.

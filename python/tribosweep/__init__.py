@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from . import _core
 from ._apparatus import ARM_EXPONENTS, apparatus_model, arm_frequencies
+from ._branch import BRANCH_FLAG_NAMES, bifurcation_diagram, branch, fold_curve, grazing_curve
+from ._branch import POINT_TYPE_NAMES as BRANCH_POINT_TYPE_NAMES
 from ._census import census
 from ._codes import (
     ATTRACTOR_NAMES,
@@ -27,11 +29,11 @@ from ._hopf import (
     CRITICALITY_NAMES,
     END_STATUS_NAMES,
     HOPF_PARAMETERS,
-    POINT_TYPE_NAMES,
     hopf_curve,
     hopf_cycle_guess,
     sliding_branch,
 )
+from ._hopf import POINT_TYPE_NAMES as HOPF_POINT_TYPE_NAMES
 from ._model import PARAM_NAMES, SliderModel
 from ._simulate import DEFAULT_Y0, ensemble, simulate
 from ._sweep import sweep
@@ -43,6 +45,8 @@ __all__ = [
     "ARM_EXPONENTS",
     "ATTRACTOR_NAMES",
     "BISTABLE_NAMES",
+    "BRANCH_FLAG_NAMES",
+    "BRANCH_POINT_TYPE_NAMES",
     "CRITICALITY_NAMES",
     "DECIDED_BY_NAMES",
     "DEFAULT_Y0",
@@ -52,7 +56,7 @@ __all__ = [
     "OUTCOME_NAMES",
     "HOPF_PARAMETERS",
     "PARAM_NAMES",
-    "POINT_TYPE_NAMES",
+    "HOPF_POINT_TYPE_NAMES",
     "REGIME_NAMES",
     "STATUS",
     "STATUS_NAMES",
@@ -64,10 +68,14 @@ __all__ = [
     "__version__",
     "apparatus_model",
     "arm_frequencies",
+    "bifurcation_diagram",
+    "branch",
     "census",
     "describing_function",
     "ensemble",
     "follow_cycle",
+    "fold_curve",
+    "grazing_curve",
     "hopf_curve",
     "hopf_cycle_guess",
     "hopf_load",

@@ -6,6 +6,11 @@ import numpy as np
 import numpy.typing as npt
 
 __all__ = [
+    "branch",
+    "branch_defaults",
+    "branch_flag_names",
+    "branch_point_type_names",
+    "special_curve",
     "hopf_curve",
     "hopf_flag_names",
     "sliding_branch",
@@ -186,3 +191,42 @@ def hopf_curve(
     x_marks: list[float] = ...,
     y_marks: list[float] = ...,
 ) -> dict[str, Any]: ...
+
+# Branches of periodic orbits (rust_core/bindings/src/branch.rs).
+def branch(
+    values: dict[str, float],
+    contact: _ContactName,
+    friction_law: _FrictionLawName,
+    parameter: str,
+    value: float,
+    lo: float,
+    hi: float,
+    *,
+    y0: npt.NDArray[np.float64] | None = None,
+    period: float | None = None,
+    direction: float = 1.0,
+    hopf_omega: float | None = None,
+    options: dict[str, float] = ...,
+    stop_at: str | None = None,
+) -> dict[str, Any]: ...
+def special_curve(
+    values: dict[str, float],
+    contact: _ContactName,
+    friction_law: _FrictionLawName,
+    kind: Literal["fold", "grazing"],
+    x: str,
+    x_value: float,
+    x_lo: float,
+    x_hi: float,
+    y: str,
+    ys: npt.NDArray[np.float64],
+    *,
+    y0: npt.NDArray[np.float64] | None = None,
+    period: float | None = None,
+    direction: float = 1.0,
+    hopf_omega: float | None = None,
+    options: dict[str, float] = ...,
+) -> dict[str, Any]: ...
+def branch_point_type_names() -> list[str]: ...
+def branch_flag_names() -> list[str]: ...
+def branch_defaults() -> dict[str, float]: ...

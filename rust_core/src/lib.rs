@@ -17,8 +17,11 @@
 //!   paths (`ensemble::batch`, `ensemble::lanes`) and the scalar driver, one entry point.
 //! - [`linear`], [`tidf`], [`shooting`]: linear stability of steady sliding, the triple-input
 //!   describing function with all its roots, periodic orbits with Floquet multipliers.
+//! - [`branch`]: branches of periodic orbits by pseudo-arclength continuation, with folds, period
+//!   doublings, torus and grazing points located on them, and two-parameter curves of folds and grazing.
 //! - [`status`]: the per-point status codes, defined in one place.
 
+pub mod branch;
 pub mod ensemble;
 pub mod hopf;
 pub mod linear;

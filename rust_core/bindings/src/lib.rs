@@ -17,6 +17,8 @@ mod simulate;
 
 mod hopf;
 
+mod branch;
+
 use pyo3::prelude::*;
 
 /// The compiled core of tribosweep (private: use the `tribosweep` package). Its only state is the
@@ -32,5 +34,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     describing::register(m)?;
     orbits::register(m)?;
     hopf::register(m)?;
+    branch::register(m)?;
     Ok(())
 }

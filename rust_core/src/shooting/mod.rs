@@ -47,7 +47,7 @@ mod switches;
 #[cfg(test)]
 use switches::missed_crossing;
 pub use switches::*;
-use switches::{join, run_watched, split, Cap, Forced, StopAtSwitch};
+use switches::{join, split, Forced, StopAtSwitch};
 
 /// Options of the shooting solver.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -192,7 +192,7 @@ pub fn shoot_from_root(s: &Slider, root: &Root, opts: &ShootingOptions) -> Perio
     shoot_impl(s, &y0, t, opts, false)
 }
 
-fn scales(s: &Slider) -> State {
+pub(crate) fn scales(s: &Slider) -> State {
     State::from(crate::steady::characteristic_sizes(s))
 }
 
@@ -264,7 +264,7 @@ fn flow(
 }
 
 /// The free unknowns: every state component except `zd` (fixed at 0 by the phase condition).
-const FREE: [usize; 5] = [idx::Z, idx::X, idx::XD, idx::PHI, idx::PHID];
+pub(crate) const FREE: [usize; 5] = [idx::Z, idx::X, idx::XD, idx::PHI, idx::PHID];
 
 /// Periodic orbit through the neighbourhood of `y0` with period near `period` (MODEL.md §6).
 ///

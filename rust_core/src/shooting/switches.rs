@@ -75,6 +75,18 @@ impl OdeSystem<42> for Variational<'_> {
 /// `S = I + (f+ - f-) n^T / (n^T f-)` with `n` the gradient of the switching function.
 /// Identity for events that do not switch the vector field.
 pub fn saltation(s: &Slider, y: &State, before: ContactMode, after: ContactMode, index: usize) -> Jacobian {
+    let Some(n) = switch_normal(s, y, index) else { return Jacobian::identity() };
+    if before == after {
+        return Jacobian::identity();
+    }
+    let fm = s.rhs(y, before);
+    let fp = s.rhs(y, after);
+    Jacobian::identity() + (fp - fm) * n.transpose() / n.dot(&fm)
+}
+
+/// Gradient `n = grad h` of the switching function of event `index` at `y` (`None` for events
+/// that switch no vector field).
+pub(crate) fn switch_normal(s: &Slider, y: &State, index: usize) -> Option<State> {
     let p = &s.p;
     let mut n = State::zeros();
     match index {
@@ -87,14 +99,9 @@ pub fn saltation(s: &Slider, y: &State, before: ContactMode, after: ContactMode,
         // Switch law: band edges `v_r = +-eta` and the stick bound `mu_s N - |F_req| = 0`.
         event::BAND_HI | event::BAND_LO => n = s.slip_velocity_gradient(),
         event::STICK => n = s.stick_margin_gradient(y),
-        _ => return Jacobian::identity(),
+        _ => return None,
     }
-    if before == after {
-        return Jacobian::identity();
-    }
-    let fm = s.rhs(y, before);
-    let fp = s.rhs(y, after);
-    Jacobian::identity() + (fp - fm) * n.transpose() / n.dot(&fm)
+    Some(n)
 }
 
 /// A sign change of the gap or the law's normal force that the step-end test cannot see: the
@@ -225,14 +232,14 @@ impl<const N: usize, O: Observer<N, ContactMode>> Observer<N, ContactMode> for W
 
 /// Step-size cap of a local refinement: steps at most `h` until time `until`.
 #[derive(Clone, Copy, Debug)]
-pub(super) struct Cap {
-    pub(super) until: f64,
-    pub(super) h: f64,
-    pub(super) refinements: u32,
+pub(crate) struct Cap {
+    pub(crate) until: f64,
+    pub(crate) h: f64,
+    pub(crate) refinements: u32,
 }
 
 impl Cap {
-    pub(super) const NONE: Cap = Cap { until: f64::NEG_INFINITY, h: f64::INFINITY, refinements: 0 };
+    pub(crate) const NONE: Cap = Cap { until: f64::NEG_INFINITY, h: f64::INFINITY, refinements: 0 };
     /// Most local refinements in one run.
     pub(super) const MAX: u32 = 200;
 }
@@ -243,7 +250,7 @@ impl Cap {
 /// in a capped step). Returns when `inner` stops the run, at `t_end`, or on failure
 /// (`EventChatter` after [`Cap::MAX`] refinements).
 #[allow(clippy::too_many_arguments)]
-pub(super) fn run_watched<const N: usize, S, O, F>(
+pub(crate) fn run_watched<const N: usize, S, O, F>(
     make: F,
     slider: &Slider,
     method: Method,

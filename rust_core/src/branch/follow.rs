@@ -1,0 +1,418 @@
+//! The walk along a branch: starts, steps, special points, changes of the mode sequence
+//! (grazing), the end.
+
+use super::flow::switches;
+use super::solve::{fail, node, valid, Ctx, Failure, Node, Seq, Xi};
+use super::{flags, BranchPoint, PointType, C64, POINT_TYPE_NAMES};
+use crate::linear::eigenvalues;
+use crate::model::{idx, ContactMode, ContactModel, Slider, State};
+use crate::status::Status;
+use nalgebra::{SMatrix, SVector};
+use std::f64::consts::PI;
+
+pub(super) fn unit(n: usize, i: usize) -> Xi {
+    let mut v = Xi::zeros(n);
+    v[i] = 1.0;
+    v
+}
+
+/// The first point from an orbit: shoot at fixed parameter, read its mode sequence off one run
+/// that locates its switches, correct as segments, then the tangent towards `direction`.
+pub(super) fn first_from_orbit(ctx: &mut Ctx<'_>, y: &State, t: f64, direction: f64) -> Result<Node, Failure> {
+    let p = ctx.base.get(ctx.name).unwrap_or(f64::NAN);
+    let s = Slider::new(ctx.base).map_err(|e| fail(Status::InvalidInput, e.to_string()))?;
+    let so = crate::shooting::ShootingOptions { rtol: ctx.opts.rtol, tol: ctx.opts.tol, ..Default::default() };
+    let o = crate::shooting::shoot(&s, y, t, &so);
+    if o.status != Status::Success {
+        return Err(fail(o.status, format!("shooting from the given orbit ended with {}", o.status.name())));
+    }
+    let model = ctx.model(p)?;
+    let fs = super::flow::FlowSettings {
+        method: ctx.opts.method,
+        rtol: ctx.opts.rtol,
+        sizes: ctx.sizes,
+        p_ref: ctx.p_ref,
+        max_switches: ctx.opts.max_switches,
+    };
+    let list = switches(&model, &o.state0, o.period, &fs, &mut ctx.stats)
+        .map_err(|st| fail(st, format!("the orbit's run failed ({})", st.name())))?;
+    let mut modes = vec![s.mode_at(&o.state0)];
+    let mut events = Vec::new();
+    let mut taus = Vec::new();
+    let mut t0 = 0.0;
+    for sw in &list {
+        modes.push(sw.after);
+        events.push(sw.index);
+        taus.push(sw.t - t0);
+        t0 = sw.t;
+    }
+    taus.push(o.period - t0);
+    let seq = Seq { modes, events };
+    let xi = ctx.pack(&o.state0, &taus, p);
+    let ip = seq.ip();
+    let ep = unit(seq.n(), ip);
+    let e = ctx.correct(&xi, &seq, &ep, &xi)?;
+    let guess = ep * direction.signum();
+    let tangent =
+        ctx.tangent(&e.jac, &guess).ok_or_else(|| fail(Status::NotConverged, "no tangent at the start".into()))?;
+    Ok(node(ctx, e, tangent, 0.0))
+}
+
+/// The Hopf point as a branch point, and the first orbit: amplitude `hopf_amplitude |z_st|`
+/// along the critical eigenvector, corrected with its projection on that direction fixed.
+pub(super) fn first_from_hopf(
+    ctx: &mut Ctx<'_>,
+    s: &Slider,
+    omega: f64,
+    points: &mut Vec<BranchPoint>,
+) -> Result<Node, Failure> {
+    let j = s.jacobian(&State::zeros(), ContactMode::Contact);
+    let v = critical_vector(&j, omega).ok_or_else(|| fail(Status::NotConverged, "no critical eigenvector".into()))?;
+    let seq = Seq::contact();
+    let t = 2.0 * PI / omega;
+    let p = ctx.base.get(ctx.name).unwrap_or(f64::NAN);
+    let amp = ctx.opts.hopf_amplitude * s.z_st.abs();
+    let mut y = State::from_fn(|i, _| amp * v[i].re);
+    y[idx::ZD] = 0.0;
+    let xi_h = ctx.pack(&State::zeros(), &[t], p);
+    let xi = ctx.pack(&y, &[t], p);
+    let c = (&xi - &xi_h).normalize();
+    let e = ctx.correct(&xi, &seq, &c, &xi)?;
+    // The Hopf point: the equilibrium as a zero-amplitude orbit, multipliers exp(lambda T).
+    let lam = eigenvalues(&j).unwrap_or([C64::new(f64::NAN, f64::NAN); 6]);
+    let mut rho = lam.map(|l| (l * t).exp());
+    rho.sort_by(|a, b| b.norm().total_cmp(&a.norm()).then(b.im.total_cmp(&a.im)));
+    let trivial = (0..6).min_by(|&a, &b| (rho[a] - 1.0).norm().total_cmp(&(rho[b] - 1.0).norm())).unwrap_or(0);
+    let dxi = &e.xi - &xi_h;
+    let tangent =
+        ctx.tangent(&e.jac, &dxi).ok_or_else(|| fail(Status::NotConverged, "no tangent at the start".into()))?;
+    let first = node(ctx, e, tangent, dxi.norm());
+    points.push(BranchPoint {
+        parameter: p,
+        period: t,
+        state0: State::zeros(),
+        multipliers: rho,
+        trivial,
+        trivial_error: (rho[trivial] - 1.0).norm(),
+        stable: false,
+        n_unstable: (0..6).filter(|&k| k != trivial && rho[k].norm() > 1.0).count() as u8,
+        a0: 0.0,
+        a1: 0.0,
+        z_max: 0.0,
+        z_min: 0.0,
+        min_gap: -s.z_st,
+        min_law_force: s.p.normal_load,
+        open_fraction: 0.0,
+        n_switches: 0,
+        dp_ds: 0.0,
+        arclength: 0.0,
+        point_type: PointType::Hopf,
+        contact: ctx.base.contact,
+        newton_iterations: 0,
+        residual: 0.0,
+        flags: 0,
+    });
+    Ok(first)
+}
+
+/// Eigenvector of `j` for the eigenvalue nearest `i omega`, scaled so that `v_z = 1` (inverse
+/// iteration on the complex 6x6 system, shifted by a relative 1e-9 off the eigenvalue).
+fn critical_vector(j: &crate::model::Jacobian, omega: f64) -> Option<SVector<C64, 6>> {
+    let target = C64::new(0.0, omega);
+    let lam = eigenvalues(j)?;
+    let l = *lam.iter().min_by(|a, b| (*a - target).norm().total_cmp(&(*b - target).norm()))?;
+    let shift = l * (1.0 + 1e-9);
+    let zero = C64::new(0.0, 0.0);
+    let a = SMatrix::<C64, 6, 6>::from_fn(|r, c| C64::new(j[(r, c)], 0.0) - if r == c { shift } else { zero });
+    let lu = a.lu();
+    let mut v = SVector::<C64, 6>::repeat(C64::new(1.0, 0.0));
+    for _ in 0..3 {
+        v = lu.solve(&v)?;
+        let n = v.norm();
+        v /= C64::new(n, 0.0);
+    }
+    let vz = v[idx::Z];
+    (vz.norm() > 1e-12).then(|| v / vz)
+}
+
+/// How a test function is searched: on its value (secant), or on a count (bisection).
+#[derive(Clone, Copy, PartialEq)]
+pub(super) enum Search {
+    Secant,
+    Bisect,
+}
+
+/// Follow the branch from `cur` (see [`super::branch`]); pushes the points, returns how it ended.
+pub(super) fn follow(
+    ctx: &mut Ctx<'_>,
+    mut cur: Node,
+    (lo, hi): (f64, f64),
+    points: &mut Vec<BranchPoint>,
+) -> (Status, String) {
+    let o = ctx.opts;
+    let name = ctx.name.to_string();
+    let inside = |p: f64| p >= lo && p <= hi;
+    let p0 = cur.point.parameter;
+    points.push(cur.point);
+    if !inside(p0) {
+        return (Status::Success, format!("the first orbit is at {name} = {p0:.10e}, outside [{lo}, {hi}]"));
+    }
+    let small = o.hopf_amplitude * ctx.sizes[idx::Z];
+    let mut ds = o.ds;
+    loop {
+        if points.len() >= o.max_points {
+            let p = cur.point.parameter;
+            return (Status::Success, format!("max_points = {} reached at {name} = {p:.10e}", o.max_points));
+        }
+        let seq = cur.e.seq.clone();
+        let pred = &cur.e.xi + &cur.tangent * ds;
+        let attempt = ctx.correct(&pred, &seq, &cur.tangent, &pred).and_then(|e| {
+            let t = ctx.tangent(&e.jac, &cur.tangent);
+            t.map(|t| (e, t)).ok_or_else(|| fail(Status::NotConverged, "singular Jacobian: no tangent".into()))
+        });
+        let (e, tangent) = match attempt {
+            Ok(v) => v,
+            Err(f) => {
+                ds *= 0.5;
+                if ds < o.ds_min {
+                    let p = cur.point.parameter;
+                    let why = format!("the step was halved below ds_min = {:e} after {name} = {p:.10e}", o.ds_min);
+                    return (f.status, format!("{why}: {}", f.reason));
+                }
+                continue;
+            }
+        };
+        let mut next = node(ctx, e, tangent, cur.point.arclength + ds);
+        let turn = cur.tangent.dot(&next.tangent).clamp(-1.0, 1.0).acos();
+        let jump = (&next.e.xi - &pred).norm();
+        if turn > o.max_turn || jump > 0.5 * ds {
+            if ds * 0.5 >= o.ds_min {
+                ds *= 0.5;
+                continue;
+            }
+            next.point.flags |= flags::SWITCH_SUSPECTED;
+        }
+        if !valid(ctx, &next.e) {
+            // The mode sequence changes between `cur` and `next` (a grazing): locate it, change
+            // the sequence, and go on along the physical piece.
+            match super::sequence::change_sequence(ctx, &cur, &next).map_err(|f| {
+                let p = cur.point.parameter;
+                let why = format!("the mode sequence changes after {name} = {p:.10e}, and the change failed");
+                fail(f.status, format!("{why}: {}", f.reason))
+            }) {
+                Ok((g, n)) => {
+                    if !inside(g.point.parameter) {
+                        let p = g.point.parameter;
+                        return (
+                            Status::Success,
+                            format!("the branch grazes at {name} = {p:.10e}, outside [{lo}, {hi}]"),
+                        );
+                    }
+                    points.push(g.point);
+                    let turns = g.point.flags & flags::PARAMETER_TURNS != 0;
+                    let stop = match o.stop_at {
+                        Some(PointType::Grazing) => true,
+                        Some(PointType::Fold) => turns,
+                        _ => false,
+                    };
+                    if stop {
+                        let p = g.point.parameter;
+                        let kind = if turns { "non-smooth fold (grazing)" } else { "grazing" };
+                        return (Status::Success, format!("stopped at the first {kind} point, {name} = {p:.10e}"));
+                    }
+                    points.push(n.point);
+                    cur = n;
+                    ds = o.ds;
+                    continue;
+                }
+                Err(f) => return (f.status, f.reason),
+            }
+        }
+        let amp = next.point.z_max - next.point.z_min;
+        if amp < small && inside(next.point.parameter) {
+            let p = next.point.parameter;
+            next.point.point_type = PointType::End;
+            points.push(next.point);
+            let why = "the branch is back at steady sliding (a Hopf point nearby)";
+            return (Status::Success, format!("the amplitude fell to {amp:.3e} m at {name} = {p:.10e}: {why}"));
+        }
+        let mut specials = locate_all(ctx, &cur, &next, ds);
+        specials.retain(|n| inside(n.point.parameter));
+        specials.sort_by(|a, b| a.point.arclength.total_cmp(&b.point.arclength));
+        if let Some(i) = o.stop_at.and_then(|k| specials.iter().position(|n| n.point.point_type == k)) {
+            points.extend(specials.iter().take(i + 1).map(|n| n.point));
+            let k = POINT_TYPE_NAMES[specials[i].point.point_type as usize];
+            let p = specials[i].point.parameter;
+            return (Status::Success, format!("stopped at the first {k} point, {name} = {p:.10e}"));
+        }
+        points.extend(specials.iter().map(|n| n.point));
+        if !inside(next.point.parameter) {
+            let bound = if next.point.parameter > hi { hi } else { lo };
+            return land(ctx, &cur, &next, bound, points);
+        }
+        let (p, period) = (next.point.parameter, next.point.period);
+        points.push(next.point);
+        if period > o.max_period_ratio * ctx.t_ref {
+            let why = "a homoclinic orbit or a switch to another branch nearby";
+            return (Status::Success, format!("the period grew to {period:.6e} s at {name} = {p:.10e}: {why}"));
+        }
+        let it = next.e.iterations;
+        let factor = if it <= 2 {
+            1.5
+        } else if it >= 5 {
+            0.5
+        } else {
+            1.0
+        };
+        ds = (ds * factor).clamp(o.ds_min, o.ds_max);
+        cur = next;
+    }
+}
+
+/// The point where the linear unknown `i` of `cur`'s sequence reaches `value` between `cur` and
+/// `next`: interpolated, then corrected with that unknown fixed.
+pub(super) fn on_plane(ctx: &mut Ctx<'_>, cur: &Node, next: &Node, i: usize, value: f64) -> Result<Node, Failure> {
+    let (a, b) = (cur.e.xi[i], next.e.xi[i]);
+    let th = ((value - a) / (b - a)).clamp(0.0, 1.0);
+    let mut xi = &cur.e.xi + (&next.e.xi - &cur.e.xi) * th;
+    xi[i] = value;
+    let e = ctx.correct(&xi, &cur.e.seq, &unit(xi.len(), i), &xi)?;
+    let t = ctx.tangent(&e.jac, &cur.tangent).unwrap_or_else(|| cur.tangent.clone());
+    let s = cur.point.arclength + th * (next.point.arclength - cur.point.arclength);
+    Ok(node(ctx, e, t, s))
+}
+
+/// The last point, exactly on `bound`.
+fn land(ctx: &mut Ctx<'_>, cur: &Node, next: &Node, bound: f64, points: &mut Vec<BranchPoint>) -> (Status, String) {
+    let name = ctx.name.to_string();
+    match on_plane(ctx, cur, next, cur.e.seq.ip(), bound / ctx.p_ref) {
+        Ok(mut n) => {
+            n.point.point_type = PointType::End;
+            n.point.parameter = bound;
+            points.push(n.point);
+            (Status::Success, format!("reached the bound {name} = {bound}"))
+        }
+        Err(f) => {
+            let why = format!("the branch crosses the bound {name} = {bound}, but the orbit there did not converge");
+            (f.status, format!("{why}: {}", f.reason))
+        }
+    }
+}
+
+/// A test function and how it is searched.
+type Test<'a> = (PointType, Box<dyn Fn(&Node) -> f64 + 'a>, Search);
+
+/// Every special point between `cur` and `next` (`ds` apart), located.
+fn locate_all(ctx: &mut Ctx<'_>, cur: &Node, next: &Node, ds: f64) -> Vec<Node> {
+    let mut tests: Vec<Test<'_>> = Vec::new();
+    let ip = cur.e.seq.ip();
+    let fold = cur.tangent[ip] * next.tangent[ip] < 0.0;
+    if fold {
+        tests.push((PointType::Fold, Box::new(move |n: &Node| n.tangent[ip]), Search::Secant));
+    }
+    if let (Some(a), Some(b)) = (cur.spec, next.spec) {
+        // A count change, located on the smooth test function when that changes sign too.
+        type Pick = fn(&super::solve::Spectrum) -> (u8, f64);
+        let count = |kind, ca: u8, cb: u8, fa: f64, fb: f64, f: Pick| -> Test<'_> {
+            if fa * fb < 0.0 {
+                (kind, Box::new(move |n: &Node| n.spec.map_or(f64::NAN, |s| f(&s).1)), Search::Secant)
+            } else {
+                let mid = 0.5 * (ca as f64 + cb as f64);
+                (kind, Box::new(move |n: &Node| n.spec.map_or(f64::NAN, |s| f(&s).0 as f64 - mid)), Search::Bisect)
+            }
+        };
+        // Only crossings of the unit circle count: a collision of two real multipliers into a
+        // complex pair (or back) off the circle changes the kinds, not the number outside.
+        let crosses = a.n_out != b.n_out;
+        if crosses && a.n_real_neg != b.n_real_neg {
+            tests.push(count(PointType::PeriodDoubling, a.n_real_neg, b.n_real_neg, a.pd, b.pd, |s| {
+                (s.n_real_neg, s.pd)
+            }));
+        }
+        if crosses && a.n_complex != b.n_complex {
+            tests.push(count(PointType::NeimarkSacker, a.n_complex, b.n_complex, a.ns, b.ns, |s| (s.n_complex, s.ns)));
+        }
+        if crosses && a.n_real_pos != b.n_real_pos && !fold {
+            tests.push(count(PointType::BranchPoint, a.n_real_pos, b.n_real_pos, 0.0, 0.0, |s| (s.n_real_pos, 0.0)));
+        }
+    }
+    // Grazing of the bilateral law (the unilateral law changes its mode sequence there instead).
+    if ctx.base.contact == ContactModel::Bilateral && (cur.point.min_gap > 0.0) != (next.point.min_gap > 0.0) {
+        tests.push((PointType::Grazing, Box::new(|n: &Node| n.point.min_gap), Search::Secant));
+    }
+    let mut out = Vec::new();
+    for (kind, f, search) in tests {
+        match locate(ctx, cur, next, ds, kind, &*f, search) {
+            Ok(n) => out.push(n),
+            Err(_) => {
+                // Not located: reported at the bracket's far end, flagged.
+                let mut n = node(ctx, next.e.clone(), next.tangent.clone(), next.point.arclength);
+                n.point.point_type = kind;
+                n.point.flags |= flags::NOT_LOCATED;
+                out.push(n);
+            }
+        }
+    }
+    out
+}
+
+/// Locate a zero of `test` between `cur` and `next` by pseudo-arclength corrections from `cur`
+/// along its tangent: a bracketed secant (Illinois), or bisection for a count, to `locate_tol`.
+pub(super) fn locate(
+    ctx: &mut Ctx<'_>,
+    cur: &Node,
+    next: &Node,
+    ds: f64,
+    kind: PointType,
+    test: &dyn Fn(&Node) -> f64,
+    search: Search,
+) -> Result<Node, Failure> {
+    let seq = cur.e.seq.clone();
+    let (mut a, mut fa, mut b, mut fb) = (0.0, test(cur), ds, test(next));
+    let mut side = 0;
+    let mut best: Option<Node> = None;
+    for _ in 0..100 {
+        if b - a <= ctx.opts.locate_tol && best.is_some() {
+            break;
+        }
+        let mut x = 0.5 * (a + b);
+        if search == Search::Secant && fa.is_finite() && fb.is_finite() && fb != fa {
+            let s = a - fa * (b - a) / (fb - fa);
+            let margin = 0.01 * (b - a);
+            if s > a + margin && s < b - margin {
+                x = s;
+            }
+        }
+        let pred = &cur.e.xi + &cur.tangent * x;
+        let e = ctx.correct(&pred, &seq, &cur.tangent, &pred)?;
+        let t = ctx.tangent(&e.jac, &cur.tangent).ok_or_else(|| fail(Status::NotConverged, "no tangent".into()))?;
+        let n = node(ctx, e, t, cur.point.arclength + x);
+        let fx = test(&n);
+        if !fx.is_finite() {
+            return Err(fail(Status::NonFinite, "non-finite test function".into()));
+        }
+        let stop = fx == 0.0;
+        if (fx > 0.0) == (fa > 0.0) {
+            a = x;
+            fa = fx;
+            if side == 1 {
+                fb *= 0.5;
+            }
+            side = 1;
+        } else {
+            b = x;
+            fb = fx;
+            if side == -1 {
+                fa *= 0.5;
+            }
+            side = -1;
+        }
+        best = Some(n);
+        if stop {
+            break;
+        }
+    }
+    let mut node = best.ok_or_else(|| fail(Status::NotConverged, "nothing to locate".into()))?;
+    node.point.point_type = kind;
+    Ok(node)
+}
