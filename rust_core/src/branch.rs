@@ -47,6 +47,7 @@
 mod curve;
 mod flow;
 mod follow;
+mod locate;
 mod sequence;
 mod solve;
 #[cfg(test)]

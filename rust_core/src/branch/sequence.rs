@@ -3,7 +3,7 @@
 //! down in flight, or a landing changes its event), the grazing point is located and the branch
 //! goes on in the new sequence along its physical piece.
 
-use super::follow::{locate, on_plane, unit, Search};
+use super::locate::{locate, on_plane, unit, Search};
 use super::solve::{fail, node, valid, Ctx, Failure, Node, Seq, Xi};
 use super::{flags, PointType};
 use crate::model::{event, ContactMode};
