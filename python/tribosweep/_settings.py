@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -328,7 +328,3 @@ class SweepSettings:
 
 #: The defaults, for signatures that restate none of them.
 DEFAULTS = SweepSettings()
-
-
-def as_tuple(value: Sequence[float] | None) -> tuple[float, ...] | None:
-    return None if value is None else tuple(float(x) for x in np.ravel(value))

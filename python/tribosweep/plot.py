@@ -103,12 +103,13 @@ def _draw_hopf(ax, ds: xr.Dataset, x: str, y: str) -> set[str]:
         idx = np.flatnonzero(curve == c)
         # Split where criticality changes (a Bautin point), drawing each run in its style.
         runs = np.split(idx, np.flatnonzero(np.diff(crit[idx]) != 0) + 1)
-        for r in runs:
+        for k, r in enumerate(runs):
             name = crit_names[crit[r[0]]] if crit[r[0]] < len(crit_names) else "undetermined"
+            # Only a proven l1 < 0 is drawn supercritical; degenerate or undetermined stretches are
+            # drawn as the conservative case (coexistence possible).
             key = "hopf_supercritical" if name == "supercritical" else "hopf_subcritical"
-            if name not in ("supercritical", "subcritical"):
-                key = "hopf_subcritical" if name == "degenerate" else key
-            r = np.r_[r, r[-1] + 1] if r[-1] + 1 < idx[-1] + 1 else r  # join runs at their shared point
+            if k + 1 < len(runs):
+                r = np.r_[r, runs[k + 1][0]]  # join the run to the next at their shared point
             ax.plot(px[r], py[r], color="k", lw=1.4, ls=_HOPF_STYLE[key][0])
             keys.add(key)
     return keys

@@ -304,7 +304,7 @@ def sweep(
     output = Path(output)
     output.parent.mkdir(parents=True, exist_ok=True)
     parts = Parts(output, plan, resume)
-    sums = parts._checksums()
+    sums = parts.checksums()
     done = [k for k in range(plan.n_chunks) if parts.is_done(k, sums)]
     todo = [k for k in range(plan.n_chunks) if k not in set(done)]
     n_done = sum(plan.chunk_range(k)[1] - plan.chunk_range(k)[0] for k in done)

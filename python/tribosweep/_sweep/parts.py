@@ -114,7 +114,7 @@ class Parts:
             f.flush()
             os.fsync(f.fileno())
 
-    def _checksums(self) -> dict[int, str]:
+    def checksums(self) -> dict[int, str]:
         out: dict[int, str] = {}
         try:
             lines = self.ledger.read_text().splitlines()
@@ -137,7 +137,7 @@ class Parts:
         p = self.path(k)
         if not p.exists():
             return False
-        sums = self._checksums() if checksums is None else checksums
+        sums = self.checksums() if checksums is None else checksums
         why = ""
         try:
             data = p.read_bytes()
