@@ -92,13 +92,13 @@ def test_ensemble_matches_single_runs():
             assert int(ens.n_accept.values[i]) == int(one.n_accept.values)
 
 
-@pytest.mark.slow
 def bouncing_start(factor: float = 1.05) -> np.ndarray:
     """A state 5 % outside the seed's bouncing cycle (on its section), found by following the cycle from mu = 0.30."""
     orb, _ = ts.follow_cycle(ts.SliderModel(contact="unilateral"))
     return orb.state0.values * factor
 
 
+@pytest.mark.slow
 def test_unilateral_seed_reaches_bouncing_cycle(seed_values):
     """MODEL.md §6: with unilateral contact the seed has a stable bouncing cycle.
 
