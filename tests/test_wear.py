@@ -164,3 +164,29 @@ def test_sweep_wear_reference_and_calibration_options():
     assert ds.wear_rate.item() == pytest.approx(1e-9 * (f + 0.46 / L1), rel=1e-12)
     assert ds.wear_rate.attrs["units"] == "kg m-1"
     assert ds.attrs["wear_reference_normal_load"] == 50.0
+
+
+def test_sweep_mild_wear_fraction_comes_from_the_census():
+    """Wear uses the census fractions: mild wear holds after the disturbances that return to sliding.
+
+    At the seed (unilateral contact) sliding is stable and coexists with the bouncing cycle, so the
+    mild-wear model holds only in part: its fraction is the census's basin stability, with the
+    census's binomial standard error. At 20 N sliding is linearly unstable: no disturbance
+    returns, exactly (fraction 0, SE 0).
+    """
+    ds = ts.sweep(normal_load=[20.0, 84.46], arm_length=[0.072], sliding_speed=[0.46], samples=64, progress=False,
+                  model=ts.SliderModel(contact="unilateral"))  # fmt: skip
+    frac = ds.mild_wear_fraction.values.ravel()
+    se = ds.mild_wear_fraction_se.values.ravel()
+    names = ds.wear_applicability.attrs["flag_meanings"].split()
+    appl = [names[a] for a in ds.wear_applicability.values.ravel()]
+    assert float(ds.growth_rate.values.ravel()[0]) > 0
+    assert (frac[0], se[0]) == (0.0, 0.0) and appl[0] == "outside_mild_wear_regime"
+    seed = ds.isel(normal_load=1).squeeze()
+    assert frac[1] == seed.basin_stability.item()
+    assert se[1] == seed.basin_fraction_se.sel(attractor=0).item()
+    # Coexistence: the fraction is strictly inside (0, 1), more than 3 standard errors from both ends
+    # (the seed's basin stability is about 0.7: test_census.py finds sliding and the cycle both).
+    assert 3 * se[1] < frac[1] < 1 - 3 * se[1]
+    assert appl[1] == "mild_wear_in_part"
+    assert seed.wear_rate_relative.item() == pytest.approx(1.0, rel=1e-12)  # the rate while sliding

@@ -82,8 +82,12 @@ BISTABLE_VALUES: tuple[int, ...] = (-1, 0, 1, 2)
 BISTABLE_NAMES: tuple[str, ...] = ("not_checked", "one_attractor", "coexisting", "no_saddle")
 BISTABLE: dict[str, int] = dict(zip(BISTABLE_NAMES, BISTABLE_VALUES))
 
-#: Whether the mild-wear model applies at a point, in code order.
-WEAR_APPLICABILITY_NAMES: tuple[str, ...] = ("mild_wear_regime", "outside_mild_wear_regime", "undetermined")
+#: Whether the mild-wear model applies at a point, in code order. ``mild_wear_in_part``: steady
+#: sliding is stable but coexists with vibration (census): mild wear holds after the fraction
+#: ``mild_wear_fraction`` of disturbances that return to sliding, not after the others.
+WEAR_APPLICABILITY_NAMES: tuple[str, ...] = (
+    "mild_wear_regime", "outside_mild_wear_regime", "undetermined", "mild_wear_in_part",
+)  # fmt: skip
 
 #: What a census sample reaches, in code order (the ``attractor`` dimension).
 ATTRACTOR_NAMES: tuple[str, ...] = ("sliding", "cycle", "irregular", "escape")

@@ -245,6 +245,59 @@ class WearCalibration:
         return asdict(self)
 
 
+def mild_fraction(regime, growth_rate, bistable, basin_stability, basin_stability_se) -> tuple[np.ndarray, np.ndarray]:
+    """Fraction of disturbances after which the mild-wear model applies, and its standard error.
+
+    Mild wear (eq. 8) is the wear of steady sliding. Where the census saw steady sliding coexist
+    with vibration, which state the contact is in depends on the last disturbance, so the model
+    holds only for the fraction of disturbances that return to sliding (``basin_stability``, with
+    its binomial standard error). Elsewhere the fraction is exact:
+
+    * 0 (SE 0) where steady sliding is linearly unstable (``growth_rate > 0``): it is no
+      attractor, and any disturbance grows away from it, whatever the motion then settles on;
+    * 1 (SE 0) at stable steady sliding where the describing function predicts no saddle cycle
+      (``bistable = no_saddle``: nothing else to reach);
+    * the census's ``basin_stability`` where a census ran;
+    * NaN where it is unknown: stable sliding with a saddle but no census (``census=False``, or a
+      strategy that takes none), and points whose linear stage failed.
+
+    Parameters
+    ----------
+    regime, bistable : integer arrays (``REGIME_NAMES`` and ``BISTABLE_NAMES`` codes)
+    growth_rate : float array, 1/s (largest real part of the eigenvalues of steady sliding)
+    basin_stability, basin_stability_se : float arrays (NaN where no census ran)
+
+    Returns
+    -------
+    (numpy.ndarray, numpy.ndarray)
+        ``mild_wear_fraction`` and ``mild_wear_fraction_se``.
+
+    Examples
+    --------
+    >>> from tribosweep._codes import REGIME, BISTABLE
+    >>> nan = float("nan")
+    >>> f, se = mild_fraction([REGIME["steady_sliding"], REGIME["steady_sliding"], REGIME["contact_loss"]],
+    ...                       [-0.33, -2.0, 0.5], [BISTABLE["coexisting"], BISTABLE["no_saddle"], BISTABLE["not_checked"]],
+    ...                       [0.75, nan, nan], [0.0625, nan, nan])
+    >>> f.tolist(), se.tolist()
+    ([0.75, 1.0, 0.0], [0.0625, 0.0, 0.0])
+    """
+    from ._codes import BISTABLE, REGIME
+
+    regime = np.asarray(regime)
+    growth = np.asarray(growth_rate, dtype=np.float64)
+    bistable = np.asarray(bistable)
+    p = np.asarray(basin_stability, dtype=np.float64)
+    se = np.asarray(basin_stability_se, dtype=np.float64)
+    unstable = growth > 0
+    stable = growth < 0
+    censused = stable & np.isin(bistable, (BISTABLE["one_attractor"], BISTABLE["coexisting"])) & np.isfinite(p)
+    alone = stable & (regime == REGIME["steady_sliding"]) & (bistable == BISTABLE["no_saddle"])
+    frac = np.where(unstable, 0.0, np.where(censused, p, np.where(alone, 1.0, np.nan)))
+    frac_se = np.where(unstable | alone, 0.0, np.where(censused, se, np.nan))
+    return frac, frac_se
+
+
 def calibrated_wear_rate(calibration: WearCalibration | dict, normal_load, sliding_speed, frequency_hz):
     """Absolute mild-wear rate per sliding distance [kg/m] (eq. 8 / eq. 13).
 

@@ -33,7 +33,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import _wear
-from .._codes import REGIME
+from .._codes import BISTABLE, REGIME
 from .._settings import SweepSettings
 from . import stages
 from .schema import OPTIONAL_POINT_VARIABLES
@@ -147,10 +147,15 @@ def compute_chunk(
     if wear.get("calibration"):
         out.update({k: np.full(n, np.nan) for k in OPTIONAL_POINT_VARIABLES})
 
-    # Wear (MODEL.md §8): only in the mild (steady-sliding) regime.
+    # Wear (MODEL.md §8): only in the mild (steady-sliding) regime; where sliding coexists with
+    # vibration, only after the fraction of disturbances that return to sliding (the census's).
     mild = out["regime"] == REGIME["steady_sliding"]
     undetermined = out["regime"] == REGIME["failed"]
-    out["wear_applicability"][:] = np.where(mild, 0, np.where(undetermined, 2, 1))
+    in_part = mild & (out["bistable"] == BISTABLE["coexisting"])
+    out["wear_applicability"][:] = np.where(in_part, 3, np.where(mild, 0, np.where(undetermined, 2, 1)))
+    out["mild_wear_fraction"], out["mild_wear_fraction_se"] = _wear.mild_fraction(
+        out["regime"], out["growth_rate"], out["bistable"], out["basin_stability"], out["basin_fraction_se"][:, 0]
+    )
     if wear:
         rel = _wear.relative_wear_rate(
             full["normal_load"], full["sliding_speed"], out["normal_mode_frequency"],

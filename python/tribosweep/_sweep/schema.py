@@ -139,6 +139,10 @@ POINT_VARIABLES: dict[str, tuple[str, str | None, str]] = {
     "min_slip_velocity": ("f8", "m s-1", "minimum sliding velocity of the contact point"),
     "wear_rate_relative": ("f8", "1", "mild-wear rate per sliding distance relative to the reference point"),
     "wear_applicability": ("u1", None, "whether the mild-wear model applies"),
+    "mild_wear_fraction": ("f8", "1", "fraction of disturbances after which the contact slides steadily, so that "
+                                      "the mild-wear model applies"),
+    "mild_wear_fraction_se": ("f8", "1", "standard error of mild_wear_fraction (binomial, from the census; 0 where "
+                                         "it is exact)"),
     "wall_time": ("f8", "s", "wall-clock time of the point (its chunk's stage times shared evenly)"),
     "n_rhs": ("i8", "1", "right-hand-side evaluations of the time integration (0: none run)"),
     "tidf_roots": ("i8", "1", "describing-function roots in 150-3000 rad/s (-1: not computed)"),
@@ -218,6 +222,15 @@ def point_specs(dims: tuple[str, ...], *, wear_rate: bool = False) -> list[VarSp
         "harmonic (z2_amplitude for n = 2), and z1_amplitude is small"
     )
     by_name["wall_time"].attrs["comment"] = "a measurement: differs between runs"
+    by_name["wear_rate_relative"].attrs["comment"] = (
+        "the rate while the contact slides steadily (NaN where steady sliding is not what a small disturbance "
+        "reaches); where steady sliding coexists with vibration (wear_applicability mild_wear_in_part) it holds only "
+        "after the fraction mild_wear_fraction of disturbances; vibrating contacts wear much faster (outside the model)"
+    )
+    by_name["mild_wear_fraction"].attrs["comment"] = (
+        "0 where steady sliding is linearly unstable; 1 at stable sliding with no saddle cycle predicted; the census's "
+        "basin_stability where a census ran; NaN where unknown (stable sliding with a saddle and no census)"
+    )
     by_name["irregular_ftle"].attrs["comment"] = (
         "only where regime is irregular (a bounded transient that neither repeated nor decayed by t_max), from where "
         "it ended: Benettin's two-trajectory method, separation solver_ftle_d0 in units of the characteristic sizes "
