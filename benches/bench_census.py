@@ -5,6 +5,7 @@ run in the same process (the machines are shared: absolute seconds drift with th
 
     python benches/bench_census.py                 # one point K = 1024, 2,000-point sweep at K = 16
     python benches/bench_census.py --sweep-points 120 --samples 16 --threads 2
+    python benches/bench_census.py --scipy 128 --sweep-points 0   # labels against scipy, 128 starts
 """
 
 from __future__ import annotations
@@ -31,6 +32,37 @@ def one_point(k: int, threads: int | None) -> None:
           f"rhs per disturbance {ds.n_rhs.values.mean():.0f}")  # fmt: skip
 
 
+def scipy_agreement(n: int, horizon: float = 1.5) -> None:
+    """The census's labels at the seed against the independent scipy classification, with its cost."""
+    from concurrent.futures import ProcessPoolExecutor
+
+    from tribosweep.bench import census_check, reference
+
+    m = ts.SliderModel(contact="unilateral")
+    t0 = time.perf_counter()
+    ds = ts.census(m, samples=n, threads=1)
+    t_core = time.perf_counter() - t0
+    params = {k: float(v) for k, v in m.values().items()}
+    orbit, _ = ts.follow_cycle(m)
+    cyc = reference.solve_unilateral(params, orbit.state0.values, 0.3, rtol=1e-9, t_eval=np.linspace(0.1, 0.3, 4001))
+    half = 0.5 * float(np.ptp(cyc.y[0]))
+    sad = float(ds.attrs["saddle_a1"])
+    t0 = time.perf_counter()
+    with ProcessPoolExecutor(os.cpu_count()) as pool:
+        labels = list(pool.map(census_check.classify_unilateral, [params] * n, ds.y0.values, [horizon] * n,
+                               [sad] * n, [half] * n, chunksize=4))  # fmt: skip
+    t_scipy = time.perf_counter() - t0
+    core = [ts.ATTRACTOR_NAMES[a] for a in ds.attractor_reached.values]
+    both = [(a, b) for a, b in zip(core, labels) if b != "unsettled" and a != "irregular"]
+    agree = sum(a == b for a, b in both)
+    print(f"scipy classification of the seed census, {n} starts, horizon {horizon} s: {len(both)} settled in both, "
+          f"{agree} agree ({100 * agree / max(len(both), 1):.1f} %); census {t_core:.2f} s on one thread (to the "
+          f"attractor), scipy {t_scipy:.1f} s on {os.cpu_count()} processes (to the horizon only)")  # fmt: skip
+    for i, (a, b) in enumerate(zip(core, labels)):
+        if b != "unsettled" and a != "irregular" and a != b:
+            print(f"  disagree: sample {i}: census {a}, scipy {b}")
+
+
 def sweep(n_loads: int, n_arms: int, n_speeds: int, k: int, threads: int | None) -> None:
     axes = dict(normal_load=np.linspace(10, 150, n_loads), arm_length=np.linspace(0.05, 0.127, n_arms),
                 sliding_speed=np.linspace(0.3, 0.6, n_speeds), progress=False, threads=threads)  # fmt: skip
@@ -53,14 +85,17 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--samples-one", type=int, default=1024)
     ap.add_argument("--samples", type=int, default=16)
-    ap.add_argument("--sweep-points", type=int, choices=(120, 2000), default=2000)
+    ap.add_argument("--sweep-points", type=int, choices=(0, 120, 2000), default=2000)
+    ap.add_argument("--scipy", type=int, default=0, help="compare this many census labels with scipy's")
     ap.add_argument("--threads", type=int, default=None)
     a = ap.parse_args()
     print(f"cores {os.cpu_count()}, load average {os.getloadavg()[0]:.2f}")
     one_point(a.samples_one, a.threads)
+    if a.scipy:
+        scipy_agreement(a.scipy)
     if a.sweep_points == 2000:
         sweep(40, 10, 5, a.samples, a.threads)
-    else:
+    elif a.sweep_points == 120:
         sweep(12, 10, 1, a.samples, a.threads)
 
 

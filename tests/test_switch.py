@@ -1,6 +1,6 @@
 """The switch friction law (event-driven stick-slip, Leine et al. 1998) against independent answers.
 
-- Trajectories against ``tribosweep.bench.reference.SwitchReference``: the same switch model written separately with
+- Trajectories against ``tribosweep.bench.reference_switch.SwitchReference``: the same switch model written separately with
   scipy's ``solve_ivp`` (DOP853 at rtol 1e-12) and its own directional, terminal events.
 - Floquet multipliers of stick-slip cycles from the shooting (saltation matrices at every stick,
   slip and transition switch) against the finite-difference monodromy of the integrated flow.
@@ -24,7 +24,7 @@ import pytest
 
 from tribosweep import SliderModel, _core
 from tribosweep._frequency import periodic_orbit
-from tribosweep.bench.reference import SwitchReference
+from tribosweep.bench.reference_switch import SwitchReference
 
 STICK_SLIP = dict(friction_law="switch", sliding_speed=0.01, mu_static=0.3, stribeck_velocity=0.02)
 REVERSING = dict(STICK_SLIP, mu_static=0.6, stribeck_velocity=0.005)

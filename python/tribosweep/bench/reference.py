@@ -37,7 +37,6 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 __all__ = [
-    "SwitchReference",
     "PARAM_ORDER",
     "STATE_SCALE",
     "UnilateralSolution",
@@ -422,6 +421,95 @@ def _events(c: _Coeffs, mode: str):
     return [touch]
 
 
+def _event_values(c: _Coeffs, mode: str, y: np.ndarray) -> np.ndarray:
+    """The terminal events of :func:`_events` at the states ``y`` (6, n), one row per event, in trigger sign.
+
+    Each row is the event function times its direction, so a trigger is a rise through 0, in
+    units of its scale (``|z_st|`` for the gap, ``F_st`` for forces).
+    """
+    if mode == "contact":
+        return np.vstack([(c.z_st + y[0]) / abs(c.z_st), -c.normal_law(y) / c.f_st])
+    return (np.minimum(-c.k_s * (c.z_st + y[0]), c.normal_law(y)) / c.f_st)[None, :]
+
+
+#: A missed crossing must rise from below ``-HIDDEN_DEPTH`` (in units of the event's scale): a
+#: grazing touch of 0 by rounding is not a flight.
+HIDDEN_DEPTH: float = 1e-10
+
+
+#: Interior points per accepted step at which :func:`_hidden_crossing` evaluates the events.
+HIDDEN_CHECK_POINTS: int = 8
+
+
+def _hidden_crossing(c: _Coeffs, mode: str, sol, t_start: float, t_stop: float) -> float | None:
+    """Time of the first event crossing that solve_ivp missed inside a step, or None.
+
+    solve_ivp looks for sign changes of the event functions only between step ends. A flight
+    shorter than one step (the pin lifts off and lands again inside it) changes no sign there
+    and is missed; the run then continues free with the pin inside the disk, for ever. Each
+    step's dense output is sampled at ``HIDDEN_CHECK_POINTS`` interior points; a rise through 0
+    between two samples, from below ``-HIDDEN_DEPTH``, before the segment's own end
+    (``t_stop``) is a missed event, located by brentq on the dense output. The sample at the
+    restart point itself is skipped: there the event function is 0 to rounding, on either side.
+    """
+    from scipy.optimize import brentq
+
+    edges = np.asarray(sol.sol.ts)
+    frac = np.arange(1, HIDDEN_CHECK_POINTS + 2) / (HIDDEN_CHECK_POINTS + 1)
+    a, b = edges[:-1], edges[1:]
+    t = (a[:, None] + (b - a)[:, None] * frac[None, :]).ravel()
+    t = t[(t > t_start) & (t <= t_stop)]
+    if t.size < 2:
+        return None
+    g = _event_values(c, mode, sol.sol(t))
+    rise = (g[:, :-1] < -HIDDEN_DEPTH) & (g[:, 1:] >= 0.0)
+    rise[:, -1] &= t[-1] < t_stop  # the crossing solve_ivp located itself ends the segment
+    hits = np.flatnonzero(rise.any(axis=0))
+    if not hits.size:
+        return None
+    j = int(hits[0])
+    row = int(np.flatnonzero(rise[:, j])[0])
+
+    def f(tt):
+        return _event_values(c, mode, sol.sol(np.array([tt])))[row, 0]
+
+    return float(brentq(f, t[j], t[j + 1], xtol=1e-15, rtol=4 * np.finfo(float).eps))
+
+
+@dataclass
+class _Pass:
+    nfev: int
+    t_samples: np.ndarray
+    y_samples: np.ndarray
+
+
+#: Length of the eventless step that carries a run past a grazing touch, s (a millionth of a
+#: torsion period at the seed: far below any flight or contact phase the model resolves).
+GRAZING_STEP: float = 1e-9
+
+
+def _grazing_pass(params: dict, c: _Coeffs, mode: str, t: float, y: np.ndarray, t_end: float, rtol: float, atol,
+                  method: str, t_eval) -> tuple[str, float, np.ndarray, _Pass]:
+    """Step ``GRAZING_STEP`` past a grazing touch without events, in the first consistent mode.
+
+    A mode is consistent if none of its events is triggered at the end of the step (all below 0
+    in trigger sign). Raises RuntimeError if neither mode is (a sticking contact).
+    """
+    t1 = min(t + GRAZING_STEP, t_end)
+    for m in (mode, "free" if mode == "contact" else "contact"):
+        sol = solve_ivp(_make_rhs(params, "unilateral", m), (t, t1), y, method=method, rtol=rtol, atol=atol,
+                        dense_output=True)  # fmt: skip
+        y1 = sol.y[:, -1].copy()
+        if sol.status == 0 and np.all(_event_values(c, m, y1[:, None]) < 0.0):
+            if t_eval is None:
+                samples = np.array([t1])
+            else:
+                samples = t_eval[(t_eval > t) & (t_eval <= t1)]
+            ys = sol.sol(samples) if samples.size else np.empty((6, 0))
+            return m, t1, y1, _Pass(int(sol.nfev), samples, ys)
+    raise RuntimeError(f"contact chatter (grazing) at t = {t} s: neither mode is consistent past it")
+
+
 def solve_unilateral(params: dict, y0, t_end: float, rtol: float = 1e-12, atol=None, t_eval=None,
                      method: str = "DOP853", max_switches: int = 100_000,
                      min_segment: float = 1e-12) -> UnilateralSolution:
@@ -434,7 +522,12 @@ def solve_unilateral(params: dict, y0, t_end: float, rtol: float = 1e-12, atol=N
     Grazing guard: the events are *directional* and the restart happens exactly at the
     located root, so the event function of the new mode starts at zero (to rounding) and
     moving away from its trigger direction; a crossing at the restart point is therefore not
-    re-detected. If a grazing contact still produces segments shorter than ``min_segment``
+    re-detected. A crossing and its return inside one step (a flight shorter than a step)
+    changes no sign at the step ends; :func:`_hidden_crossing` finds it on the dense output
+    (without it, a missed landing leaves the pin free inside the disk for the rest of the run).
+    Two zero-length segments in a row at one instant are a grazing touch; :func:`_grazing_pass`
+    carries the run past it in the mode that stays consistent. If a grazing contact still
+    produces segments shorter than ``min_segment``
     seconds 20 times in a row, the run is declared chattering and a RuntimeError is raised
     (a sticking-contact model would be needed there).
 
@@ -475,11 +568,17 @@ def solve_unilateral(params: dict, y0, t_end: float, rtol: float = 1e-12, atol=N
     nfev, n_short = 0, 0
     while True:
         sol = solve_ivp(_make_rhs(params, "unilateral", mode), (t, t_end), y, method=method, rtol=rtol,
-                        atol=atol, events=_events(c, mode), dense_output=t_eval is not None)
+                        atol=atol, events=_events(c, mode), dense_output=True)
         if sol.status < 0:
             raise RuntimeError(f"solve_ivp failed at t = {t} s: {sol.message}")
         nfev += sol.nfev
         t_seg_end, y = sol.t[-1], sol.y[:, -1].copy()  # t_end, or the located event
+        t_hidden = _hidden_crossing(c, mode, sol, t, t_seg_end)
+        if t_hidden is not None:  # an event inside a step that solve_ivp could not see: it ends the segment
+            keep = sol.t < t_hidden
+            sol.t, sol.y, sol.status = np.append(sol.t[keep], t_hidden), np.column_stack(
+                [sol.y[:, keep], sol.sol(t_hidden)]), 1  # fmt: skip
+            t_seg_end, y = t_hidden, sol.sol(t_hidden).copy()
         if t_eval is None:
             keep = slice(1, None) if t_sw else slice(None)  # the restart point is already stored
             seg_t, seg_y = sol.t[keep], sol.y[:, keep]
@@ -500,6 +599,17 @@ def solve_unilateral(params: dict, y0, t_end: float, rtol: float = 1e-12, atol=N
                                f"{n_short} segments shorter than {min_segment} s")
         t = t_seg_end
         mode = "free" if mode == "contact" else "contact"
+        if n_short >= 2:
+            # Zero-length segments in both modes at one instant: a grazing touch (the pin meets the
+            # disk with no normal speed, or the law force touches 0). Pass it in the mode that stays
+            # consistent over a short eventless step.
+            mode, t, y, seg = _grazing_pass(params, c, mode, t, y, t_end, rtol, atol, method, t_eval)
+            nfev += seg.nfev
+            if seg.t_samples.size:
+                ts.append(seg.t_samples)
+                ys.append(seg.y_samples)
+                ms.append(np.full(seg.t_samples.shape, mode))
+            n_short = 0
         t_sw.append(t)
         y_sw.append(y.copy())
         modes.append(mode)
@@ -572,162 +682,3 @@ def linear_eigenvalues(params: dict) -> np.ndarray:
     """
     lam = np.linalg.eigvals(linear_jacobian(params))
     return lam[np.lexsort((lam.imag, np.abs(lam.imag)))]
-
-
-# --- the switch friction law (event-driven stick-slip) ----------------------------------------------
-#
-# The switch model of Leine et al. (1998) on the slider, bilateral contact, written from the
-# equations and not from the Rust core: three modes, each a smooth vector field, with scipy's own
-# terminal, directional events ending each one.
-#
-# - ``slip`` (``|v_r| > eta``): total friction ``mu(v_r) N sign(v_r)``; ends when ``v_r`` reaches
-#   the band edge ``sign(v_r) eta`` moving inwards.
-# - ``stick``: friction ``F_req``, the force that makes ``d v_r/dt = 0``; ends when ``|F_req|``
-#   reaches ``mu_s N`` from below.
-# - ``transition``: friction ``mu_s N sign(F_req)``; ends at the edge ``sign(F_req) eta`` (slip) or
-#   when ``|F_req|`` falls back to ``mu_s N`` (stick).
-#
-# The dynamic friction force of the ODE is the total less ``mu(V) F_st``;
-# ``mu(v) = mu_k + (mu_s - mu_k) exp(-|v|/v_s)`` with ``mu(V) = mu``.
-
-SWITCH_EDGE_TOL = 1e-3  # as the core: within 1e-3 eta of the target edge, leaving stick slips at once
-
-
-class SwitchReference:
-    """The switch-law slider with bilateral contact (see the comment above).
-
-    ``values``: every real model parameter by name (``SliderModel.values()``), including
-    ``mu_static``, ``stribeck_velocity`` and ``stick_band``.
-    """
-
-    def __init__(self, values: dict[str, float]):
-        p = dict(values)
-        self.p = p
-        f, k0, ka = p["normal_load"], p["contact_stiffness"], p["contact_quadratic"]
-        self.z_st = -2.0 * f / (k0 + math.sqrt(k0 * k0 + 4.0 * ka * f))
-        self.k_s = k0 - 2.0 * ka * self.z_st
-        e = math.exp(-p["sliding_speed"] / p["stribeck_velocity"])
-        self.mu_k = (p["mu"] - p["mu_static"] * e) / (1.0 - e)
-        self.f0 = self.mu(p["sliding_speed"]) * f
-        self.sl = p["torsion_sign"] * p["moment_arm"]
-
-    def mu(self, v: float) -> float:
-        p = self.p
-        return self.mu_k + (p["mu_static"] - self.mu_k) * math.exp(-abs(v) / p["stribeck_velocity"])
-
-    def normal(self, y) -> float:
-        p = self.p
-        z = y[0]
-        return p["normal_load"] - self.k_s * z + p["contact_quadratic"] * z * z - p["contact_damping"] * y[1] \
-            + p["twist_coupling"] * y[4]
-
-    def v_r(self, y) -> float:
-        return self.p["sliding_speed"] - (y[3] + self.sl * y[5])
-
-    def spring_accel(self, y) -> tuple[float, float]:
-        p = self.p
-        wx, wt = p["omega_friction"], p["omega_torsion"]
-        a_x = -2.0 * p["zeta_friction"] * wx * y[3] - wx * wx * y[2]
-        a_t = -2.0 * p["zeta_torsion"] * wt * y[5] - wt * wt * y[4]
-        return a_x, a_t
-
-    def f_req(self, y) -> float:
-        """Total friction force that holds v_r constant: 0 = xdd + sL phidd with the dynamic force F - F0."""
-        p = self.p
-        a_x, a_t = self.spring_accel(y)
-        compliance = 1.0 / p["mass"] + self.sl * self.sl / p["inertia"]
-        return -(a_x + self.sl * a_t) / compliance + self.f0
-
-    def friction(self, y, mode: str) -> float:
-        """Total friction force in ``mode``."""
-        if mode == "slip":
-            v = self.v_r(y)
-            return self.mu(v) * self.normal(y) * math.copysign(1.0, v)
-        if mode == "stick":
-            return self.f_req(y)
-        return self.p["mu_static"] * self.normal(y) * math.copysign(1.0, self.f_req(y))
-
-    def rhs(self, t, y, mode: str):
-        p = self.p
-        wz = p["omega_normal"]
-        fz = self.normal(y) - p["normal_load"]
-        fx = self.friction(y, mode) - self.f0
-        a_x, a_t = self.spring_accel(y)
-        return np.array([
-            y[1],
-            fz / p["mass"] - 2.0 * p["zeta_normal"] * wz * y[1] - wz * wz * y[0],
-            y[3],
-            fx / p["mass"] + a_x,
-            y[5],
-            self.sl / p["inertia"] * fx + a_t,
-        ])
-
-    def mode_in_band(self, y) -> str:
-        req = self.f_req(y)
-        if abs(req) <= self.p["mu_static"] * self.normal(y):
-            return "stick"
-        if math.copysign(1.0, req) * self.v_r(y) >= self.p["stick_band"] * (1.0 - SWITCH_EDGE_TOL):
-            return "slip"
-        return "transition"
-
-    def mode_at(self, y) -> str:
-        return "slip" if abs(self.v_r(y)) > self.p["stick_band"] else self.mode_in_band(y)
-
-    def events(self, y, mode: str):
-        """Terminal events of ``mode`` as (function, next-mode rule) pairs."""
-        eta, mus = self.p["stick_band"], self.p["mu_static"]
-        out = []
-        if mode == "slip":
-            sgn = math.copysign(1.0, self.v_r(y))
-
-            def edge(t, yy):
-                return sgn * (self.v_r(yy) - sgn * eta)
-
-            out.append((edge, self.mode_in_band))
-        else:
-            def bound(t, yy):
-                return mus * self.normal(yy) - abs(self.f_req(yy))
-
-            if mode == "stick":
-                out.append((bound, lambda yy: "slip" if math.copysign(1.0, self.f_req(yy)) * self.v_r(yy)
-                            >= eta * (1.0 - SWITCH_EDGE_TOL) else "transition"))
-            else:
-                sgn = math.copysign(1.0, self.f_req(y))
-
-                def edge(t, yy):
-                    return sgn * (sgn * eta - self.v_r(yy))
-
-                def back(t, yy):
-                    return -bound(t, yy)
-
-                out.append((edge, lambda yy: "slip"))
-                out.append((back, lambda yy: "stick"))
-        for fn, _ in out:
-            fn.terminal = True
-            fn.direction = -1.0  # every function above is positive inside its mode
-        return out
-
-    def solve(self, y0, t_end: float, t_eval, rtol: float = 1e-12, atol=None, max_segments: int = 10_000):
-        """States at ``t_eval`` and the list of (time, mode before, mode after) switches."""
-        t_eval = np.asarray(t_eval, dtype=float)
-        t, y = 0.0, np.asarray(y0, dtype=float)
-        mode = self.mode_at(y)
-        out = np.full((t_eval.size, 6), np.nan)
-        switches = []
-        for _ in range(max_segments):
-            evs = self.events(y, mode)
-            sol = solve_ivp(lambda tt, yy, m=mode: self.rhs(tt, yy, m), (t, t_end), y, method="DOP853", rtol=rtol,
-                            atol=atol, dense_output=True, events=[e[0] for e in evs])
-            t1 = sol.t[-1]
-            sel = (t_eval >= t) & (t_eval <= t1)
-            if sel.any():
-                out[sel] = sol.sol(t_eval[sel]).T
-            if sol.status != 1:
-                return out, switches
-            k = next(i for i, te in enumerate(sol.t_events) if te.size)
-            y = sol.y_events[k][0]
-            t = float(sol.t_events[k][0])
-            new = evs[k][1](y)
-            switches.append((t, mode, new))
-            mode = new
-        raise RuntimeError("too many mode switches")

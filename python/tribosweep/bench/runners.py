@@ -91,14 +91,14 @@ def _scipy_batch(scene: Scene, method: str, rtol: float, repeat: int) -> BatchRu
 
 
 def _scipy_switch_batch(scene: Scene, rtol: float) -> BatchRun:
-    """End states of the switch law by the independent ``reference.SwitchReference`` (bilateral; untimed)."""
-    from . import reference
+    """End states of the switch law by the independent ``reference_switch.SwitchReference`` (bilateral; untimed)."""
+    from . import reference_switch
 
     base = scene.model.values()
     z = np.full(scene.n, np.nan)
     for i in range(scene.n):
         values = dict(base, **{k: float(v[i]) for k, v in scene.params.items()})
-        y, _ = reference.SwitchReference(values).solve(scene.y0[i], scene.t_end, [scene.t_end], rtol=rtol,
+        y, _ = reference_switch.SwitchReference(values).solve(scene.y0[i], scene.t_end, [scene.t_end], rtol=rtol,
                                                        atol=scene.atol(rtol))  # fmt: skip
         z[i] = y[-1, 0]
     zeros = np.zeros(scene.n, dtype=np.int64)

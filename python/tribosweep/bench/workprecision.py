@@ -105,7 +105,7 @@ def _reference(scene: Scene, *, check_k: int, progress: bool) -> dict:
             info["check_method"] = "scipy DOP853 rtol 1e-12, event-driven (reference.solve_unilateral)"
         elif scene.model.friction_law == "switch" and scene.model.contact == "bilateral" and _has("scipy"):
             chk = _scipy_switch_batch(head, 1e-13)
-            info["check_method"] = "scipy DOP853 rtol 1e-13, event-driven switch law (reference.SwitchReference)"
+            info["check_method"] = "scipy DOP853 rtol 1e-13, event-driven switch law (reference_switch.SwitchReference)"
         else:
             chk = run_rust(head, "dopri5", 1e-12, repeat=1)
             info["check_method"] = "rust dopri5 rtol 1e-12"
