@@ -432,50 +432,6 @@ def _event_values(c: _Coeffs, mode: str, y: np.ndarray) -> np.ndarray:
     return (np.minimum(-c.k_s * (c.z_st + y[0]), c.normal_law(y)) / c.f_st)[None, :]
 
 
-#: A missed crossing must rise from below ``-HIDDEN_DEPTH`` (in units of the event's scale): a
-#: grazing touch of 0 by rounding is not a flight.
-HIDDEN_DEPTH: float = 1e-10
-
-
-#: Interior points per accepted step at which :func:`_hidden_crossing` evaluates the events.
-HIDDEN_CHECK_POINTS: int = 8
-
-
-def _hidden_crossing(c: _Coeffs, mode: str, sol, t_start: float, t_stop: float) -> float | None:
-    """Time of the first event crossing that solve_ivp missed inside a step, or None.
-
-    solve_ivp looks for sign changes of the event functions only between step ends. A flight
-    shorter than one step (the pin lifts off and lands again inside it) changes no sign there
-    and is missed; the run then continues free with the pin inside the disk, for ever. Each
-    step's dense output is sampled at ``HIDDEN_CHECK_POINTS`` interior points; a rise through 0
-    between two samples, from below ``-HIDDEN_DEPTH``, before the segment's own end
-    (``t_stop``) is a missed event, located by brentq on the dense output. The sample at the
-    restart point itself is skipped: there the event function is 0 to rounding, on either side.
-    """
-    from scipy.optimize import brentq
-
-    edges = np.asarray(sol.sol.ts)
-    frac = np.arange(1, HIDDEN_CHECK_POINTS + 2) / (HIDDEN_CHECK_POINTS + 1)
-    a, b = edges[:-1], edges[1:]
-    t = (a[:, None] + (b - a)[:, None] * frac[None, :]).ravel()
-    t = t[(t > t_start) & (t <= t_stop)]
-    if t.size < 2:
-        return None
-    g = _event_values(c, mode, sol.sol(t))
-    rise = (g[:, :-1] < -HIDDEN_DEPTH) & (g[:, 1:] >= 0.0)
-    rise[:, -1] &= t[-1] < t_stop  # the crossing solve_ivp located itself ends the segment
-    hits = np.flatnonzero(rise.any(axis=0))
-    if not hits.size:
-        return None
-    j = int(hits[0])
-    row = int(np.flatnonzero(rise[:, j])[0])
-
-    def f(tt):
-        return _event_values(c, mode, sol.sol(np.array([tt])))[row, 0]
-
-    return float(brentq(f, t[j], t[j + 1], xtol=1e-15, rtol=4 * np.finfo(float).eps))
-
-
 @dataclass
 class _Pass:
     nfev: int
@@ -483,17 +439,19 @@ class _Pass:
     y_samples: np.ndarray
 
 
-#: Length of the eventless step that carries a run past a grazing touch, s (a millionth of a
-#: torsion period at the seed: far below any flight or contact phase the model resolves).
+#: Length of the eventless step taken at every restart, s (a ten-millionth of a torsion period at
+#: the seed: far below any flight or contact phase the model resolves).
 GRAZING_STEP: float = 1e-9
 
 
 def _grazing_pass(params: dict, c: _Coeffs, mode: str, t: float, y: np.ndarray, t_end: float, rtol: float, atol,
                   method: str, t_eval) -> tuple[str, float, np.ndarray, _Pass]:
-    """Step ``GRAZING_STEP`` past a grazing touch without events, in the first consistent mode.
+    """Step ``GRAZING_STEP`` past a restart point without events, in the first consistent mode.
 
-    A mode is consistent if none of its events is triggered at the end of the step (all below 0
-    in trigger sign). Raises RuntimeError if neither mode is (a sticking contact).
+    ``mode`` (the new one) is tried first, then the old one (a grazing touch: the pin meets the
+    disk with no normal speed, or the law force touches 0 and rises again). A mode is consistent
+    if none of its events is triggered at the end of the step (all below 0 in trigger sign).
+    Raises RuntimeError if neither is (a sticking contact).
     """
     t1 = min(t + GRAZING_STEP, t_end)
     for m in (mode, "free" if mode == "contact" else "contact"):
@@ -522,12 +480,11 @@ def solve_unilateral(params: dict, y0, t_end: float, rtol: float = 1e-12, atol=N
     Grazing guard: the events are *directional* and the restart happens exactly at the
     located root, so the event function of the new mode starts at zero (to rounding) and
     moving away from its trigger direction; a crossing at the restart point is therefore not
-    re-detected. A crossing and its return inside one step (a flight shorter than a step)
-    changes no sign at the step ends; :func:`_hidden_crossing` finds it on the dense output
-    (without it, a missed landing leaves the pin free inside the disk for the rest of the run).
-    Two zero-length segments in a row at one instant are a grazing touch; :func:`_grazing_pass`
-    carries the run past it in the mode that stays consistent. If a grazing contact still
-    produces segments shorter than ``min_segment``
+    re-detected. A restart exactly on the root (an event function of exactly 0) would re-trigger
+    at once in solve_ivp and skip a whole contact phase, so every restart first takes one short
+    eventless step (:func:`_grazing_pass`) in the mode that stays consistent: the new mode, or
+    the old one at a grazing touch. If a grazing contact still produces segments shorter than
+    ``min_segment``
     seconds 20 times in a row, the run is declared chattering and a RuntimeError is raised
     (a sticking-contact model would be needed there).
 
@@ -568,19 +525,13 @@ def solve_unilateral(params: dict, y0, t_end: float, rtol: float = 1e-12, atol=N
     nfev, n_short = 0, 0
     while True:
         sol = solve_ivp(_make_rhs(params, "unilateral", mode), (t, t_end), y, method=method, rtol=rtol,
-                        atol=atol, events=_events(c, mode), dense_output=True)
+                        atol=atol, events=_events(c, mode), dense_output=t_eval is not None)
         if sol.status < 0:
             raise RuntimeError(f"solve_ivp failed at t = {t} s: {sol.message}")
         nfev += sol.nfev
         t_seg_end, y = sol.t[-1], sol.y[:, -1].copy()  # t_end, or the located event
-        t_hidden = _hidden_crossing(c, mode, sol, t, t_seg_end)
-        if t_hidden is not None:  # an event inside a step that solve_ivp could not see: it ends the segment
-            keep = sol.t < t_hidden
-            sol.t, sol.y, sol.status = np.append(sol.t[keep], t_hidden), np.column_stack(
-                [sol.y[:, keep], sol.sol(t_hidden)]), 1  # fmt: skip
-            t_seg_end, y = t_hidden, sol.sol(t_hidden).copy()
         if t_eval is None:
-            keep = slice(1, None) if t_sw else slice(None)  # the restart point is already stored
+            keep = slice(1, None) if ts else slice(None)  # the restart point is already stored
             seg_t, seg_y = sol.t[keep], sol.y[:, keep]
         else:
             # Samples in (t, t_seg_end]; the first segment also takes t = 0.
@@ -599,20 +550,23 @@ def solve_unilateral(params: dict, y0, t_end: float, rtol: float = 1e-12, atol=N
                                f"{n_short} segments shorter than {min_segment} s")
         t = t_seg_end
         mode = "free" if mode == "contact" else "contact"
-        if n_short >= 2:
-            # Zero-length segments in both modes at one instant: a grazing touch (the pin meets the
-            # disk with no normal speed, or the law force touches 0). Pass it in the mode that stays
-            # consistent over a short eventless step.
-            mode, t, y, seg = _grazing_pass(params, c, mode, t, y, t_end, rtol, atol, method, t_eval)
-            nfev += seg.nfev
-            if seg.t_samples.size:
-                ts.append(seg.t_samples)
-                ys.append(seg.y_samples)
-                ms.append(np.full(seg.t_samples.shape, mode))
-            n_short = 0
+        # At the restart the new mode's events are 0 to rounding (exactly 0 re-triggers at once in
+        # solve_ivp, a zero-length segment that skips a whole contact phase). Step past it without
+        # events in the mode that stays consistent: the new one, or at a grazing touch (the pin
+        # meets the disk with no normal speed, or the law force touches 0) the old one.
         t_sw.append(t)
         y_sw.append(y.copy())
-        modes.append(mode)
+        mode, t, y, seg = _grazing_pass(params, c, mode, t, y, t_end, rtol, atol, method, t_eval)
+        nfev += seg.nfev
+        if seg.t_samples.size:
+            ts.append(seg.t_samples)
+            ys.append(seg.y_samples)
+            ms.append(np.full(seg.t_samples.shape, mode))
+        if mode == modes[-1]:  # passed a grazing touch: no switch after all
+            t_sw.pop()
+            y_sw.pop()
+        else:
+            modes.append(mode)
         if len(t_sw) > max_switches:
             raise RuntimeError(f"more than max_switches = {max_switches} contact switches")
         if t >= t_end:
