@@ -53,7 +53,7 @@ def main(argv=None) -> int:
     ap.add_argument("--searches", type=int, default=200)
     ap.add_argument("--shoots", type=int, default=20)
     a = ap.parse_args(argv)
-    model = ts.SliderModel()
+    model = ts.SliderModel(contact="bilateral")  # the describing function's law (and its shooting orbit)
     p = model.values()
     df = ts.describing_function(model)
     r = df.isel(root=int(np.argmax(df.physical.values)))

@@ -8,7 +8,7 @@ import xarray as xr
 
 import tribosweep as ts
 
-SEED = ts.SliderModel()
+SEED = ts.SliderModel(contact="bilateral")
 SEED_U = ts.SliderModel(contact="unilateral")
 
 

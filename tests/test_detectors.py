@@ -14,7 +14,7 @@ import tribosweep as ts
 from tribosweep import STATUS
 from tribosweep.bench import reference
 
-SEED = ts.SliderModel()
+SEED = ts.SliderModel(contact="bilateral")
 Z_ST = SEED.static_point()[0]
 
 

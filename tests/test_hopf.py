@@ -11,7 +11,7 @@ import xarray as xr
 
 import tribosweep as ts
 
-SEED = ts.SliderModel()
+SEED = ts.SliderModel(contact="bilateral")
 
 
 def rel(a, b):

@@ -164,7 +164,7 @@ def test_linear_stage_at_the_seed(seed_values):
 
 def test_linear_eigenvalues_match_the_reference_jacobian_at_several_points():
     # The vectorised numpy Jacobian against finite differences of an independent RHS (MODEL.md §2).
-    base = ts.SliderModel(mu=0.3, normal_load=40.0)
+    base = ts.SliderModel(contact="bilateral", mu=0.3, normal_load=40.0)
     v = base.values()
     _z_st, k_s = base.static_point()
 
@@ -206,7 +206,7 @@ def test_extra_axis_dimension_and_attributes():
 
 
 def test_mu_static_follows_a_swept_mu_when_unset():
-    model = ts.SliderModel(friction_law="coulomb")
+    model = ts.SliderModel(contact="bilateral", friction_law="coulomb")
     ds = ts.sweep(model, normal_load=[50.0], extra_axes={"mu": [0.2, 0.25]}, **LINEAR)
     assert ds.regime.shape[-1] == 2
     plan_params = _plan.Plan(model, {"normal_load": np.array([1.0]), "arm_length": np.array([0.072]),
@@ -217,7 +217,7 @@ def test_mu_static_follows_a_swept_mu_when_unset():
 
 def test_arm_length_sets_the_frequencies():
     ds = ts.sweep(arm_length=[0.05, 0.072, 0.127], **LINEAR)
-    seed = ts.SliderModel()
+    seed = ts.SliderModel(contact="bilateral")
     assert ds.omega_normal.sel(arm_length=0.072).item() == seed.omega_normal
     np.testing.assert_allclose(ds.omega_torsion.values, ts.arm_frequencies(ds.arm_length.values)["omega_torsion"])
     assert ds.arm_length_extrapolated.values.tolist() == [0, 0, 0]
@@ -350,7 +350,7 @@ def test_transient_decays_at_a_stable_point_and_is_thread_independent():
 
 def test_compute_chunk_is_pure_and_picklable():
     assert pickle.loads(pickle.dumps(_chunk.compute_chunk)) is _chunk.compute_chunk
-    args = (ts.SliderModel().values(), "unilateral", "constant",
+    args = (ts.SliderModel(contact="bilateral").values(), "unilateral", "constant",
             {"normal_load": np.array([10.0, 50.0]), "mu": np.array([0.2, 0.3])}, "linear",
             {"wear": {"normal_load": 84.46, "sliding_speed": 0.46, "frequency_hz": 229.2}})  # fmt: skip
     a = _chunk.compute_chunk(*pickle.loads(pickle.dumps(args)))

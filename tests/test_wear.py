@@ -51,7 +51,7 @@ def test_constants_against_the_report():
 
 
 def test_normal_mode_frequency_at_seed(seed_values):
-    f = normal_mode_frequency_hz(ts.SliderModel())
+    f = normal_mode_frequency_hz(ts.SliderModel(contact="bilateral"))
     assert f == pytest.approx(seed_values["normal_mode_frequency_hz_seed"], abs=0.05)
     assert f == pytest.approx(seed_values["linear_eigenvalues_seed"][2][1] / (2 * math.pi), rel=1e-5)
 
@@ -70,7 +70,7 @@ def test_reference_frequency_is_the_normal_mode_of_the_apparatus():
 
 
 def test_relative_rate_is_one_at_the_reference():
-    f = normal_mode_frequency_hz(ts.SliderModel())
+    f = normal_mode_frequency_hz(ts.SliderModel(contact="bilateral"))
     assert relative_wear_rate(84.46, 0.46, f) == pytest.approx(1.0, rel=1e-14)
     assert relative_wear_rate(50.0, 1.0, 300.0, reference_load=50.0, reference_speed=1.0,
                               reference_frequency_hz=300.0) == pytest.approx(1.0, rel=1e-14)  # fmt: skip
