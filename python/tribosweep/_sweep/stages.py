@@ -296,6 +296,9 @@ def classify(summary: dict, stable: np.ndarray, t_max: float) -> tuple[np.ndarra
                 regime[i] = REGIME["contact_loss"]
             else:
                 regime[i] = REGIME["self_excited"]
+            if stable[i]:
+                note = "sliding is linearly stable: this cycle, reached from the run's start, coexists with it"
+                reason[i] = f"{reason[i]}; {note}" if reason[i] else note
     return regime, status, reason.astype(str), decided
 
 
