@@ -1,4 +1,4 @@
-"""Apparatus model (MODEL.md §7): arm-length power laws fitted to the report's tables, flags, validation."""
+"""Apparatus model (docs/model.md §7): arm-length power laws fitted to the report's tables, flags, validation."""
 
 from __future__ import annotations
 
@@ -57,7 +57,8 @@ def test_tables_are_the_reports(seed_values):
 
 @pytest.mark.parametrize(("mode", "expected"), [("normal", -0.68), ("friction", -0.82), ("torsion", -0.43)])
 def test_exponents_near_model_md(mode, expected):
-    assert ARM_EXPONENTS[mode] == pytest.approx(expected, abs=0.005)  # MODEL.md prints two decimals
+    # The exponents of the spec this reading started from, printed to two decimals: half a unit of the last.
+    assert ARM_EXPONENTS[mode] == pytest.approx(expected, abs=0.005)
 
 
 @pytest.mark.parametrize("mode", ["normal", "friction", "torsion"])

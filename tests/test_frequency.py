@@ -1,4 +1,4 @@
-"""Frequency domain against MODEL.md §4-6: linear stability, Hopf loads, describing-function roots, shooting."""
+"""Frequency domain against docs/model.md §4-6: linear stability, Hopf loads, describing-function roots, shooting."""
 
 from __future__ import annotations
 
@@ -93,7 +93,7 @@ def test_finer_grid_finds_the_same_roots():
 
 
 def test_no_root_where_sliding_is_unstable():
-    # MODEL.md §6: where sliding is linearly unstable the describing function has no root
+    # docs/model.md §6: where sliding is linearly unstable the describing function has no root
     # near the torsion mode (the Hopf bifurcation is subcritical).
     ds = ts.describing_function(ts.SliderModel(contact="bilateral", normal_load=15.0))
     assert not np.any(ds.physical.values == 1)
@@ -112,7 +112,7 @@ def test_bilateral_orbit_from_the_seed_root(seed_values):
     assert rel(float(orb.A1), ref["A1"]) < 1e-3 and rel(float(orb.A2), ref["A2"]) < 2e-3
     assert rel(float(orb.z_max), ref["z_max"]) < 1e-3
     assert bool(orb.contact_opens) and abs(float(orb.fraction_off_disk) - 0.26) < 0.01
-    # The describing function is within 3.3 % in A1 of this orbit, below it (MODEL.md §6). seed_values prints
+    # The describing function is within 3.3 % in A1 of this orbit, below it (docs/model.md §6). seed_values prints
     # both amplitudes to five digits; their rounding moves the ratio by at most 0.5/21524 + 0.5/22267 = 4.6e-5.
     ratio = seed_values["tidf_root_seed"]["A1"] / ref["A1"]
     assert float(root.A1) / float(orb.A1) == pytest.approx(ratio, abs=4.6e-5)

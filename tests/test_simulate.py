@@ -1,4 +1,4 @@
-"""Time-domain core against truth: scipy at tight tolerance, analytic limits, the bouncing cycle of MODEL.md §6."""
+"""Time-domain core against truth: scipy at tight tolerance, analytic limits, the bouncing cycle of docs/model.md §6."""
 
 from __future__ import annotations
 
@@ -100,7 +100,7 @@ def bouncing_start(factor: float = 1.05) -> np.ndarray:
 
 @pytest.mark.slow
 def test_unilateral_seed_reaches_bouncing_cycle(seed_values):
-    """MODEL.md §6: with unilateral contact the seed has a stable bouncing cycle.
+    """docs/model.md §6: with unilateral contact the seed has a stable bouncing cycle.
 
     The run starts 5 % off the cycle (found by continuation from mu = 0.30, not by one long
     transient, whose landing flips with the last bit of a float) and must settle back on it: a

@@ -8,6 +8,7 @@ functions. Figures are built without ``pyplot`` (no global state, no GUI backend
 from __future__ import annotations
 
 import os
+import textwrap
 
 import numpy as np
 import xarray as xr
@@ -177,7 +178,7 @@ def regime_map(ds: xr.Dataset, *, x: str | None = None, y: str | None = None, fa
         ax.pcolormesh(_edges(ds[x].values), _edges(ds[y].values), z, cmap=cmap, norm=norm, shading="flat")
         if "bistable" in ds:
             # Stable sliding coexisting with another motion: hatched, since the regime then depends
-            # on the initial disturbance (MODEL.md §6: the seed point is such a case).
+            # on the initial disturbance (docs/model.md §6: the seed point is such a case).
             b = ds.bistable.isel({d: 0 for d in rest})
             b = (b if fi is None else b.isel({facet: fi})).transpose(y, x).values
             xe, ye = _edges(ds[x].values), _edges(ds[y].values)
@@ -255,7 +256,7 @@ def variable_map(ds: xr.Dataset, var: str, *, x: str | None = None, y: str | Non
     >>> from tribosweep.plot import variable_map
     >>> ds = ts.sweep(normal_load=[10.0, 30.0, 60.0], arm_length=[0.05, 0.1], strategy="linear", progress=False)
     >>> fig = variable_map(ds, "growth_rate")
-    >>> fig.axes[-1].get_ylabel()
+    >>> fig.axes[-1].get_ylabel().replace("\\n", " ")
     'largest real part of the eigenvalues of steady sliding (> 0: unstable) [s-1]'
     """
     Figure, Patch = _matplotlib()
@@ -324,7 +325,9 @@ def variable_map(ds: xr.Dataset, var: str, *, x: str | None = None, y: str | Non
         fig.legend(handles=handles, loc="outside right center", fontsize=8, frameon=False, title=var)
     else:
         bar = fig.colorbar(mesh, ax=axes[:n].tolist(), shrink=0.9)
-        bar.ax.set_ylabel(f"{long} [{unit}]" if unit else long, fontsize=8)
+        # Wrapped to the bar's height (about 42 characters of 8 pt per 3.2-inch row), never cut off.
+        text = f"{long} [{unit}]" if unit else long
+        bar.ax.set_ylabel(textwrap.fill(text, 42 * nr, break_long_words=False), fontsize=8)
     fixed = [f"{d} = {ds[d].values[0]:.4g} {ds[d].attrs.get('units', '')}".strip() for d in rest if ds.sizes[d] > 1]
     blank = "; white: no value there" if np.isnan(values).any() else ""
     fig.suptitle(var + ("; " + ", ".join(fixed) if fixed else "") + blank, fontsize=10)

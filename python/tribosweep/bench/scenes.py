@@ -152,7 +152,7 @@ STICK_SLIP_SWITCH_MODEL = STICK_SLIP_MODEL.replace(friction_law="switch")
 
 
 def make_scenes(quick: bool = False, names: Iterable[str] | None = None, n: int | None = None) -> list[Scene]:
-    """The benchmark scenes (MODEL.md §3, §6): seed, unilateral, stick_slip, large_amplitude.
+    """The benchmark scenes (docs/model.md §3, §6): seed, unilateral, stick_slip, large_amplitude.
 
     Parameters
     ----------
