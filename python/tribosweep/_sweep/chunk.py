@@ -147,7 +147,7 @@ def compute_chunk(
     if wear.get("calibration"):
         out.update({k: np.full(n, np.nan) for k in OPTIONAL_POINT_VARIABLES})
 
-    # Wear (docs/model.md §8): only in the mild (steady-sliding) regime.
+    # Wear (MODEL.md §8): only in the mild (steady-sliding) regime.
     mild = out["regime"] == REGIME["steady_sliding"]
     undetermined = out["regime"] == REGIME["failed"]
     out["wear_applicability"][:] = np.where(mild, 0, np.where(undetermined, 2, 1))
