@@ -1,7 +1,7 @@
 """Frequency-domain speed: warm-started TIDF Newton solves, all-roots searches, shooting solves.
 
 Issue 3's benchmark. Baseline in the same process: scipy.optimize.root (MINPACK hybrd) on the same
-five equations, written here independently from MODEL.md §5 in numpy. Per-core rates (one thread).
+five equations, written here independently from docs/model.md §5 in numpy. Per-core rates (one thread).
 
     python benches/bench_frequency.py [--solves 20000] [--searches 200] [--shoots 20]
 """
@@ -20,7 +20,7 @@ from tribosweep import _core
 
 
 def tidf_residual(x, p):
-    """The consistent reading of MODEL.md §5, scaled like the Rust core: 4 harmonic equations / K_s,
+    """The consistent reading of docs/model.md §5, scaled like the Rust core: 4 harmonic equations / K_s,
     the DC balance / (K_s |z_st|)."""
     w, a0, a1, a2, th = x
     z_st, k_s = ts.SliderModel(**p).static_point()
@@ -53,7 +53,7 @@ def main(argv=None) -> int:
     ap.add_argument("--searches", type=int, default=200)
     ap.add_argument("--shoots", type=int, default=20)
     a = ap.parse_args(argv)
-    model = ts.SliderModel()
+    model = ts.SliderModel(contact="bilateral")  # the describing function's law (and its shooting orbit)
     p = model.values()
     df = ts.describing_function(model)
     r = df.isel(root=int(np.argmax(df.physical.values)))

@@ -45,7 +45,7 @@ def main(argv=None) -> int:
     mu = np.array([p["mu"] for p in params_list])
     load = np.array([p["normal_load"] for p in params_list])
     P = baselines.params_to_array(params_list)
-    model = ts.SliderModel()
+    model = ts.SliderModel(contact="bilateral")  # the issue-2 ensemble: the report's bilateral model
     grid = {"mu": mu, "normal_load": load}
 
     def rust(method, rtol, threads=1):

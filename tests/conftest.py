@@ -16,7 +16,7 @@ _CANDIDATES = [ROOT / "tests" / "data" / "seed_values.json", ROOT.parent / "shar
 
 @pytest.fixture(scope="session")
 def seed_values() -> dict:
-    """Reference values of MODEL.md, computed independently (scipy, tight tolerances)."""
+    """Reference values of docs/model.md, computed independently (scipy, tight tolerances)."""
     for p in _CANDIDATES:
         if p.exists():
             return json.loads(p.read_text())

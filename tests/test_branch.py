@@ -1,4 +1,4 @@
-"""Branches of periodic orbits (issue 12, items 3-4) against MODEL.md, plain shooting and the attractor census."""
+"""Branches of periodic orbits (issue 12, items 3-4) against docs/model.md, plain shooting and the attractor census."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import xarray as xr
 
 import tribosweep as ts
 
-SEED = ts.SliderModel()
+SEED = ts.SliderModel(contact="bilateral")
 SEED_U = ts.SliderModel(contact="unilateral")
 
 
@@ -40,7 +40,7 @@ def test_bilateral_branch_from_the_hopf_point_reaches_the_seed_saddle_cycle(bila
     assert names(ds)[0] == "hopf" and names(ds)[-1] == "end"
     end = ds.isel(branch_point=-1)
     assert float(end.parameter) == 84.46
-    # MODEL.md gives the period to 7 digits: 1e-6 relative is their resolution.
+    # docs/model.md gives the period to 7 digits: 1e-6 relative is their resolution.
     assert abs(float(end.period) / ref["period_s"] - 1) < 1e-6
     # Moduli as printed (5 digits).
     np.testing.assert_allclose(end.floquet_modulus.values, ref["floquet_moduli"], atol=1e-4)
@@ -156,7 +156,7 @@ def test_the_grazing_curve_is_made_of_grazing_orbits():
     curve = ts.grazing_curve(SEED_U, x=("normal_load", 1.0, 250.0), y=("mu", 0.21, 0.225), n=4, from_hopf=True)
     assert ts.STATUS_NAMES[int(curve.status)] == "success", curve.attrs["reason"]
     np.testing.assert_allclose(curve.mu.values, [0.21, 0.215, 0.22, 0.225])
-    # The grazing load rises with mu, as the Hopf load does (MODEL.md §4).
+    # The grazing load rises with mu, as the Hopf load does (docs/model.md §4).
     assert np.all(np.diff(curve.normal_load.values) > 0)
     for i in range(curve.sizes["curve_point"]):
         c = curve.isel(curve_point=i)

@@ -19,7 +19,7 @@ def seed64():
 
 
 def test_seed_sees_sliding_and_the_bouncing_cycle(seed64, seed_values):
-    # MODEL.md §6: at the seed with unilateral contact, steady sliding and the 640.4 rad/s bouncing
+    # docs/model.md §6: at the seed with unilateral contact, steady sliding and the 640.4 rad/s bouncing
     # cycle coexist. Both fractions must be strictly inside (0, 1); with p near 0.3 and K = 64 the
     # standard error is 0.057, so each is more than 4 standard errors from either end.
     p, se = seed64.basin_fraction.values, seed64.basin_fraction_se.values

@@ -1,8 +1,8 @@
 """Run-time checks that flag a failure: each fires on a constructed failing case and stays silent on a benign one.
 
-Numbers are from the seed configuration (MODEL.md §3): z_st = -16.56 um; the bilateral law's static saddle
+Numbers are from the seed configuration (docs/model.md §3): z_st = -16.56 um; the bilateral law's static saddle
 is at z = 256.7 um, past which K_a z^2 blows the motion up in finite time (t = 2.93 ms from 300 um at rest);
-sliding is unstable at mu = 0.35 below 225 N (MODEL.md §4).
+sliding is unstable at mu = 0.35 below 225 N (docs/model.md §4).
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ import tribosweep as ts
 from tribosweep import STATUS
 from tribosweep.bench import reference
 
-SEED = ts.SliderModel()
+SEED = ts.SliderModel(contact="bilateral")
 Z_ST = SEED.static_point()[0]
 
 

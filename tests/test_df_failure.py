@@ -39,7 +39,7 @@ def test_newton_basin_converges_near_the_root_and_fails_far_away():
 
 def _expected_validity(loads, arms, a1_error):
     """The validity code of each point by criteria that do not go through the map's code: linear stability
-    from the numpy reference (MODEL.md §6: where sliding is unstable the Hopf bifurcation is subcritical and
+    from the numpy reference (docs/model.md §6: where sliding is unstable the Hopf bifurcation is subcritical and
     the describing function has no root), and the root's two-harmonic waveform A0 + A1 sin psi +
     A2 sin(2 psi + theta) sampled here against |z_st| from the reference's static point (contact opens)."""
     base = ts.SliderModel(contact="bilateral")
@@ -109,7 +109,7 @@ def test_model_cost_numbers(tmp_path, monkeypatch, png_size, saved_figures):
     # timed): it is algebraic (none at any point), while the transient integrates every point.
     assert np.all(runs["tidf", True].n_rhs.values == 0)
     assert np.all(runs["transient", True].n_rhs.values > 0)
-    assert d["tidf_a1_error_max"] < 0.10  # within 10 % of the orbits (MODEL.md §6)
+    assert d["tidf_a1_error_max"] < 0.10  # within 10 % of the orbits (docs/model.md §6)
     # auto decides every settled point as the transient does.
     assert d["regime_agreement"] == 1.0 and d["settled_points"] >= 8
     # The chart (6.0 x 4.4 in at 100 dpi): log-log, the describing function's point at its median A1 error.

@@ -1,4 +1,4 @@
-"""Frequency domain against MODEL.md §4-6: linear stability, Hopf loads, describing-function roots, shooting."""
+"""Frequency domain against docs/model.md §4-6: linear stability, Hopf loads, describing-function roots, shooting."""
 
 from __future__ import annotations
 
@@ -20,7 +20,7 @@ def circ_deg(a_rad, b_deg):
 
 
 def test_seed_eigenvalues(seed_values):
-    ds = ts.linear_stability(ts.SliderModel())
+    ds = ts.linear_stability(ts.SliderModel(contact="bilateral"))
     ref = seed_values["linear_eigenvalues_seed"]
     for mode, (re, im) in zip(["friction", "torsion", "normal"], ref):
         assert rel(float(ds.mode_growth_rate.sel(mode=mode)), re) < 1e-4, mode
@@ -32,7 +32,7 @@ def test_seed_eigenvalues(seed_values):
 @pytest.mark.parametrize("mu", ["0.2", "0.215", "0.25", "0.3", "0.35"])
 def test_hopf_loads(mu, seed_values):
     ref = seed_values["hopf_load_N"][mu]
-    h = ts.hopf_load(ts.SliderModel(mu=float(mu)), (1.0, 250.0))
+    h = ts.hopf_load(ts.SliderModel(contact="bilateral", mu=float(mu)), (1.0, 250.0))
     assert len(h) == 1
     assert rel(h[0]["normal_load"], ref) < 1e-3
     assert h[0]["direction"] == "unstable_to_stable" and h[0]["mode"] == "torsion"
@@ -40,7 +40,7 @@ def test_hopf_loads(mu, seed_values):
 
 @pytest.mark.parametrize("mu, stable", [(0.15, True), (0.10, True), (0.40, False), (0.45, False)])
 def test_no_hopf_load_outside_the_band(mu, stable):
-    m = ts.SliderModel(mu=mu)
+    m = ts.SliderModel(contact="bilateral", mu=mu)
     assert ts.hopf_load(m, (1.0, 250.0)) == []
     loads = np.geomspace(1, 250, 25)
     out = _core.linear_stability(m.values(), "bilateral", "constant", ["normal_load"], loads[:, None], threads=2)
@@ -49,7 +49,7 @@ def test_no_hopf_load_outside_the_band(mu, stable):
 
 def test_seed_tidf_root(seed_values):
     ref = seed_values["tidf_root_seed"]
-    ds = ts.describing_function(ts.SliderModel())
+    ds = ts.describing_function(ts.SliderModel(contact="bilateral"))
     assert ds.attrs["search_outcome"] == "roots"
     phys = ds.where(ds.physical == 1, drop=True)
     assert phys.sizes["root"] == 1
@@ -75,7 +75,7 @@ def test_seed_tidf_root(seed_values):
 
 def test_dead_load_variant(seed_values):
     ref = seed_values["tidf_root_seed_eq46_dead_load"]
-    ds = ts.describing_function(ts.SliderModel(), variant="dead_load")
+    ds = ts.describing_function(ts.SliderModel(contact="bilateral"), variant="dead_load")
     r = ds.where(ds.physical == 1, drop=True).isel(root=0)
     assert abs(float(r.omega) - ref["omega"]) < 7e-4
     for k in ("A0", "A1", "A2"):
@@ -84,7 +84,7 @@ def test_dead_load_variant(seed_values):
 
 
 def test_finer_grid_finds_the_same_roots():
-    m = ts.SliderModel()
+    m = ts.SliderModel(contact="bilateral")
     a = ts.describing_function(m, n_grid=1000)
     b = ts.describing_function(m, n_grid=2000)
     assert a.sizes["root"] == b.sizes["root"]
@@ -93,15 +93,15 @@ def test_finer_grid_finds_the_same_roots():
 
 
 def test_no_root_where_sliding_is_unstable():
-    # MODEL.md §6: where sliding is linearly unstable the describing function has no root
+    # docs/model.md §6: where sliding is linearly unstable the describing function has no root
     # near the torsion mode (the Hopf bifurcation is subcritical).
-    ds = ts.describing_function(ts.SliderModel(normal_load=15.0))
+    ds = ts.describing_function(ts.SliderModel(contact="bilateral", normal_load=15.0))
     assert not np.any(ds.physical.values == 1)
 
 
 def test_bilateral_orbit_from_the_seed_root(seed_values):
     ref = seed_values["bilateral_periodic_orbit_seed"]
-    m = ts.SliderModel()
+    m = ts.SliderModel(contact="bilateral")
     df = ts.describing_function(m)
     root = df.isel(root=int(np.argmax(df.physical.values)))
     orb = ts.periodic_orbit(m, root)
@@ -112,7 +112,7 @@ def test_bilateral_orbit_from_the_seed_root(seed_values):
     assert rel(float(orb.A1), ref["A1"]) < 1e-3 and rel(float(orb.A2), ref["A2"]) < 2e-3
     assert rel(float(orb.z_max), ref["z_max"]) < 1e-3
     assert bool(orb.contact_opens) and abs(float(orb.fraction_off_disk) - 0.26) < 0.01
-    # The describing function is within 3.3 % in A1 of this orbit, below it (MODEL.md §6). seed_values prints
+    # The describing function is within 3.3 % in A1 of this orbit, below it (docs/model.md §6). seed_values prints
     # both amplitudes to five digits; their rounding moves the ratio by at most 0.5/21524 + 0.5/22267 = 4.6e-5.
     ratio = seed_values["tidf_root_seed"]["A1"] / ref["A1"]
     assert float(root.A1) / float(orb.A1) == pytest.approx(ratio, abs=4.6e-5)
@@ -164,11 +164,11 @@ def test_seed_report_table_is_computed(tmp_path):
 @pytest.mark.parametrize(
     "call, needle",
     [
-        (lambda: ts.describing_function(ts.SliderModel(), omega_range=(300.0, 200.0)), "omega_range"),
-        (lambda: ts.describing_function(ts.SliderModel(), variant="literal"), "variant"),
-        (lambda: ts.hopf_load(ts.SliderModel(), (-1.0, 10.0)), "load_range"),
-        (lambda: ts.periodic_orbit(ts.SliderModel(), ([0.0] * 5, 0.01)), "y0"),
-        (lambda: ts.periodic_orbit(ts.SliderModel(), ([0.0] * 6, -0.01)), "period"),
+        (lambda: ts.describing_function(ts.SliderModel(contact="bilateral"), omega_range=(300.0, 200.0)), "omega_range"),
+        (lambda: ts.describing_function(ts.SliderModel(contact="bilateral"), variant="literal"), "variant"),
+        (lambda: ts.hopf_load(ts.SliderModel(contact="bilateral"), (-1.0, 10.0)), "load_range"),
+        (lambda: ts.periodic_orbit(ts.SliderModel(contact="bilateral"), ([0.0] * 5, 0.01)), "y0"),
+        (lambda: ts.periodic_orbit(ts.SliderModel(contact="bilateral"), ([0.0] * 6, -0.01)), "period"),
     ],
 )
 def test_bad_frequency_arguments(call, needle):
@@ -196,7 +196,7 @@ def test_batched_orbits_equal_single_solves_for_any_thread_count():
 
 
 def test_batched_orbits_reject_bad_shapes():
-    m = ts.SliderModel()
+    m = ts.SliderModel(contact="bilateral")
     with pytest.raises(ValueError, match=r"roots has shape"):
         _core.periodic_orbits(m.values(), "bilateral", "constant", ["mu"], np.array([[0.2], [0.21]]),
                               roots=np.zeros((1, 5)))  # fmt: skip

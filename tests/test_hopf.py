@@ -1,5 +1,5 @@
-"""Hopf points of steady sliding and Hopf curves (issue 12, items 1-2), against MODEL.md §4, the
-independent Brent search of ``hopf_load``, and shooting of the small cycle (MODEL.md §6)."""
+"""Hopf points of steady sliding and Hopf curves (issue 12, items 1-2), against docs/model.md §4, the
+independent Brent search of ``hopf_load``, and shooting of the small cycle (docs/model.md §6)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import xarray as xr
 
 import tribosweep as ts
 
-SEED = ts.SliderModel()
+SEED = ts.SliderModel(contact="bilateral")
 
 
 def rel(a, b):
@@ -45,7 +45,7 @@ def test_seed_hopf_point_matches_hopf_load_and_is_subcritical(seed_branch):
     pt = ds.isel(hopf_point=0)
     # Newton to 1e-13 of the range against Brent to 1e-10 relative: 1e-9 is ten times the looser one.
     assert rel(float(pt.hopf_normal_load), _exact_hopf_load(SEED)) < 1e-9
-    assert ts.CRITICALITY_NAMES[int(pt.criticality)] == "subcritical"  # MODEL.md §6: a saddle cycle
+    assert ts.CRITICALITY_NAMES[int(pt.criticality)] == "subcritical"  # docs/model.md §6: a saddle cycle
     assert float(pt.l1) > 0 and bool(pt.is_hopf) and int(pt.other_unstable) == 0
     assert int(pt.direction) == 1 and int(pt.cycle_side) == 1  # gains stability; cycle above: the stable side
     assert int(pt.hopf_mode) == 1  # torsion
@@ -97,7 +97,7 @@ def test_hopf_curve_in_load_and_mu_passes_through_model_md(seed_values):
 
 
 def test_l1_sign_agrees_with_the_saddle_cycle_found_by_shooting(seed_branch):
-    """MODEL.md §6: the seed's Hopf point is subcritical, so a small unstable cycle surrounds stable sliding.
+    """docs/model.md §6: the seed's Hopf point is subcritical, so a small unstable cycle surrounds stable sliding.
 
     The normal form predicts its first harmonic of z, A = sqrt(s |F - F_H|) with
     s = amplitude_squared_slope (from l1 and d Re(lambda)/dF), and its non-trivial Floquet multiplier

@@ -91,7 +91,7 @@ def test_benettin_gives_the_lorenz_exponent():
 
 
 def test_ftle_of_the_seed_bouncing_cycle_is_zero_within_its_standard_error():
-    # MODEL.md §6: the unilateral seed's stable bouncing cycle at 640.37 rad/s, reached robustly by
+    # docs/model.md §6: the unilateral seed's stable bouncing cycle at 640.37 rad/s, reached robustly by
     # continuation (follow_cycle), measured from a point on it. Along a periodic orbit the largest
     # exponent is exactly 0 (the direction along the flow); the estimate must sit within 3 of its
     # standard errors of 0, and those must be small against the chaotic point's ~100 1/s.

@@ -138,4 +138,4 @@ def test_bifurcation_diagram_rejects_bad_mu():
     with pytest.raises(ValueError, match="mu"):
         pf.bifurcation_diagram([0.42, 0.41])
     with pytest.raises(ValueError, match="contact"):
-        pf.shooting_pd_map([80.0], [0.41], model=ts.SliderModel())
+        pf.shooting_pd_map([80.0], [0.41], model=ts.SliderModel(contact="bilateral"))

@@ -26,7 +26,7 @@ def test_a_continuous_variable_has_a_labelled_colour_bar_and_its_values_in_every
         np.testing.assert_array_equal(np.asarray(ax.collections[0].get_array()).reshape(want.shape), want)
         assert ax.get_title() == f"sliding_speed = {sweep3.sliding_speed.values[k]:.4g} m s-1"
     bar = fig.axes[-1]
-    assert bar.get_ylabel() == f"{sweep3.growth_rate.attrs['long_name']} [s-1]"
+    assert bar.get_ylabel().replace("\n", " ") == f"{sweep3.growth_rate.attrs['long_name']} [s-1]"  # wrapped to fit
     # Panels wrap in rows of 4: the fifth starts the second row, and every column shows its x ticks.
     assert panels[4].get_position().y0 < panels[0].get_position().y0
 

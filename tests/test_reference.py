@@ -1,6 +1,6 @@
 """Tests of the independent reference (tribosweep.bench.reference) and the numba baseline.
 
-Truth first: the reference is checked against closed forms and the values of MODEL.md /
+Truth first: the reference is checked against closed forms and the values of docs/model.md /
 seed_values.json before anything else is compared with it.
 """
 
@@ -44,7 +44,7 @@ def _damped(q0, v0, mass, damping, stiffness, t):
 def test_static_point_seed(seed_values):
     p = ref.seed_parameters()
     z_st, k_s = ref.static_point(p)
-    # MODEL.md §3: z_st = -16.5612 um, K_s = 5.4607e6 N/m at 84.46 N (half a unit in the last digit).
+    # docs/model.md §3: z_st = -16.5612 um, K_s = 5.4607e6 N/m at 84.46 N (half a unit in the last digit).
     assert abs(z_st - (-16.5612e-6)) <= 0.5e-10
     assert abs(k_s - 5.4607e6) <= 50.0
     sp = seed_values["static_point"]
@@ -96,14 +96,14 @@ def test_linear_eigenvalues_seed(seed_values):
     upper = lam[lam.imag > 0]
     assert upper.size == 3
     for got, (re, im) in zip(upper, seed_values["linear_eigenvalues_seed"]):
-        # 4 significant digits of each part (MODEL.md §4).
+        # 4 significant digits of each part (docs/model.md §4).
         assert got.real == pytest.approx(re, rel=5e-4)
         assert got.imag == pytest.approx(im, rel=5e-4)
     assert np.all(lam.real < 0)  # sliding is stable at the seed point
 
 
 def test_hopf_loads(seed_values):
-    """MODEL.md §4: the torsion mode is unstable below the Hopf load (z_st, K_s follow the load)."""
+    """docs/model.md §4: the torsion mode is unstable below the Hopf load (z_st, K_s follow the load)."""
     base = ref.seed_parameters()
 
     def growth(load, mu):

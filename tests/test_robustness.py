@@ -58,13 +58,13 @@ def test_bouncing_cycle_from_just_outside_it(seed_values):
 
 def test_bilateral_decay_from_a_small_disturbance():
     # test_simulate.py::test_bilateral_seed_decays_to_sliding_from_small_disturbance
-    names, _ = steady_outcomes(ts.SliderModel(), 60.0, [0.5e-6, 0, 0, 0, 0, 0], 0.215, 1e-8, decay_amplitude=0.2e-6)
+    names, _ = steady_outcomes(ts.SliderModel(contact="bilateral"), 60.0, [0.5e-6, 0, 0, 0, 0, 0], 0.215, 1e-8, decay_amplitude=0.2e-6)
     assert set(names) == {"decayed"}, names
 
 
 def test_bilateral_escape_where_sliding_is_unstable():
     # test_simulate.py::test_unstable_sliding_without_unilateral_contact_diverges
-    names, _ = steady_outcomes(ts.SliderModel(), 20.0, ts.DEFAULT_Y0, 0.35, 1e-8)
+    names, _ = steady_outcomes(ts.SliderModel(contact="bilateral"), 20.0, ts.DEFAULT_Y0, 0.35, 1e-8)
     assert set(names) == {"diverged"}, names
 
 

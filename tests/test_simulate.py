@@ -1,4 +1,4 @@
-"""Time-domain core against truth: scipy at tight tolerance, analytic limits, the bouncing cycle of MODEL.md §6."""
+"""Time-domain core against truth: scipy at tight tolerance, analytic limits, the bouncing cycle of docs/model.md §6."""
 
 from __future__ import annotations
 
@@ -22,7 +22,7 @@ def seed_scipy():
 @pytest.mark.parametrize("method", METHODS)
 def test_seed_trajectory_matches_scipy(method, seed_scipy):
     t, y_ref = seed_scipy
-    ds = ts.simulate(ts.SliderModel(), 0.5, method=method, rtol=1e-10, t_eval=t)
+    ds = ts.simulate(ts.SliderModel(contact="bilateral"), 0.5, method=method, rtol=1e-10, t_eval=t)
     assert int(ds.status) == ts.STATUS["success"]
     zmax = np.abs(y_ref[:, 0]).max()
     err = np.abs(ds.z.values - y_ref[:, 0]).max() / zmax
@@ -67,9 +67,9 @@ def test_threads_give_identical_results():
     rng = np.random.default_rng(1)
     n = 64
     params = {"mu": rng.uniform(0.15, 0.3, n), "normal_load": rng.uniform(17, 152, n)}
-    a = ts.ensemble(ts.SliderModel(), 0.05, params, rtol=1e-7, threads=1)
-    b = ts.ensemble(ts.SliderModel(), 0.05, params, rtol=1e-7, threads=2)
-    c = ts.ensemble(ts.SliderModel(), 0.05, params, rtol=1e-7, threads=5)
+    a = ts.ensemble(ts.SliderModel(contact="bilateral"), 0.05, params, rtol=1e-7, threads=1)
+    b = ts.ensemble(ts.SliderModel(contact="bilateral"), 0.05, params, rtol=1e-7, threads=2)
+    c = ts.ensemble(ts.SliderModel(contact="bilateral"), 0.05, params, rtol=1e-7, threads=5)
     for v in ["z_end", "phi_dot_end", "n_rhs", "min_normal_force"]:
         assert np.array_equal(a[v].values, b[v].values), v
         assert np.array_equal(a[v].values, c[v].values), v
@@ -100,7 +100,7 @@ def bouncing_start(factor: float = 1.05) -> np.ndarray:
 
 @pytest.mark.slow
 def test_unilateral_seed_reaches_bouncing_cycle(seed_values):
-    """MODEL.md §6: with unilateral contact the seed has a stable bouncing cycle.
+    """docs/model.md §6: with unilateral contact the seed has a stable bouncing cycle.
 
     The run starts 5 % off the cycle (found by continuation from mu = 0.30, not by one long
     transient, whose landing flips with the last bit of a float) and must settle back on it: a
@@ -117,7 +117,7 @@ def test_unilateral_seed_reaches_bouncing_cycle(seed_values):
 
 
 def test_bilateral_seed_decays_to_sliding_from_small_disturbance():
-    ds = ts.ensemble(ts.SliderModel(), 60.0, {"mu": [0.215]}, y0=[0.5e-6, 0, 0, 0, 0, 0], steady=True,
+    ds = ts.ensemble(ts.SliderModel(contact="bilateral"), 60.0, {"mu": [0.215]}, y0=[0.5e-6, 0, 0, 0, 0, 0], steady=True,
                      rtol=1e-8, decay_amplitude=0.2e-6)
     assert ts.OUTCOME_NAMES[int(ds.outcome[0])] == "decayed"
     # The torsion mode decays slowest (Re = -0.33 /s): its frequency, 646.63 rad/s, is what is left.
@@ -129,7 +129,7 @@ def test_bilateral_seed_decays_to_sliding_from_small_disturbance():
 def test_unstable_sliding_without_unilateral_contact_diverges():
     # mu = 0.35 at the seed load is below its Hopf load (225 N): sliding is unstable (growth
     # 0.88 /s) and the bilateral model has no stable cycle, so the motion escapes.
-    ds = ts.ensemble(ts.SliderModel(), 20.0, {"mu": [0.35]}, steady=True, rtol=1e-8)
+    ds = ts.ensemble(ts.SliderModel(contact="bilateral"), 20.0, {"mu": [0.35]}, steady=True, rtol=1e-8)
     assert ts.OUTCOME_NAMES[int(ds.outcome[0])] == "diverged"
     assert int(ds.status[0]) == 0
     assert float(ds.max_abs_z[0]) >= 1e-3 * (1 - 1e-9)
@@ -142,7 +142,7 @@ def test_unstable_sliding_without_unilateral_contact_diverges():
 def test_batched_path_locates_the_escape_as_the_scalar_path_does():
     # Bilateral, constant mu, Dopri5, end state only: the lane-batched path. mu 0.35 escapes
     # (|z| reaches the 1 mm limit) at about 4.3 s; the batch locates it inside the step.
-    m = ts.SliderModel()
+    m = ts.SliderModel(contact="bilateral")
     mus = np.array([0.2, 0.35, 0.21, 0.36])
     batch = ts.ensemble(m, 20.0, {"mu": mus}, y0=[1e-6, 0, 0, 0, 0, 0], rtol=1e-6, method="dopri5")
     for i, mu in enumerate(mus):

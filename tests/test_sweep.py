@@ -126,14 +126,14 @@ def test_tidf_and_shooting_stages_at_the_seed(seed_values):
     assert int(s.decided_by.values.ravel()[0]) == _codes.DECIDED_BY["shooting"]
     assert abs(float(s.orbit_a1.values.ravel()[0]) / orb["A1"] - 1) < 1e-3
     assert int(s.orbit_stable.values.ravel()[0]) == 0
-    # MODEL.md §6: the describing function is within 3.3 % in A1 of the orbit, below it. seed_values prints
+    # docs/model.md §6: the describing function is within 3.3 % in A1 of the orbit, below it. seed_values prints
     # both amplitudes to five digits; their rounding moves the ratio by at most 0.5/21524 + 0.5/22267 = 4.6e-5.
     assert float(s.tidf_a1_error.values.ravel()[0]) == pytest.approx(ref["A1"] / orb["A1"] - 1, abs=4.6e-5)
     assert int(s.newton_iterations.values.ravel()[0]) > 0
 
 
 def test_auto_finds_the_seed_bistable():
-    # MODEL.md §6: at the seed, stable sliding and a stable bouncing cycle coexist. The census sees
+    # docs/model.md §6: at the seed, stable sliding and a stable bouncing cycle coexist. The census sees
     # both (fractions near 0.7 / 0.3 at K = 32: each is more than 4 standard errors from 0 and 1).
     ds = ts.sweep(normal_load=[84.46], strategy="auto", progress=False)
     assert int(ds.regime.values.ravel()[0]) == REGIME["steady_sliding"]
@@ -163,8 +163,8 @@ def test_linear_stage_at_the_seed(seed_values):
 
 
 def test_linear_eigenvalues_match_the_reference_jacobian_at_several_points():
-    # The vectorised numpy Jacobian against finite differences of an independent RHS (MODEL.md §2).
-    base = ts.SliderModel(mu=0.3, normal_load=40.0)
+    # The vectorised numpy Jacobian against finite differences of an independent RHS (docs/model.md §2).
+    base = ts.SliderModel(contact="bilateral", mu=0.3, normal_load=40.0)
     v = base.values()
     _z_st, k_s = base.static_point()
 
@@ -190,7 +190,7 @@ def test_linear_eigenvalues_match_the_reference_jacobian_at_several_points():
 def test_linear_regime_flips_at_the_hopf_load(mu, hopf):
     ds = ts.sweep(normal_load=[0.97 * hopf, 1.03 * hopf], extra_axes={"mu": [mu]}, **LINEAR)
     r = ds.regime.values.ravel().tolist()
-    # Unstable BELOW the Hopf load in this model (MODEL.md §4).
+    # Unstable BELOW the Hopf load in this model (docs/model.md §4).
     assert r == [REGIME["unstable_undetermined"], REGIME["steady_sliding"]]
     reason = ds.reason.values.ravel()
     assert "not computed" in reason[0] and reason[1] == ""
@@ -206,7 +206,7 @@ def test_extra_axis_dimension_and_attributes():
 
 
 def test_mu_static_follows_a_swept_mu_when_unset():
-    model = ts.SliderModel(friction_law="coulomb")
+    model = ts.SliderModel(contact="bilateral", friction_law="coulomb")
     ds = ts.sweep(model, normal_load=[50.0], extra_axes={"mu": [0.2, 0.25]}, **LINEAR)
     assert ds.regime.shape[-1] == 2
     plan_params = _plan.Plan(model, {"normal_load": np.array([1.0]), "arm_length": np.array([0.072]),
@@ -217,7 +217,7 @@ def test_mu_static_follows_a_swept_mu_when_unset():
 
 def test_arm_length_sets_the_frequencies():
     ds = ts.sweep(arm_length=[0.05, 0.072, 0.127], **LINEAR)
-    seed = ts.SliderModel()
+    seed = ts.SliderModel(contact="bilateral")
     assert ds.omega_normal.sel(arm_length=0.072).item() == seed.omega_normal
     np.testing.assert_allclose(ds.omega_torsion.values, ts.arm_frequencies(ds.arm_length.values)["omega_torsion"])
     assert ds.arm_length_extrapolated.values.tolist() == [0, 0, 0]
@@ -354,7 +354,7 @@ def test_transient_decays_at_a_stable_point_and_is_thread_independent():
 
 def test_compute_chunk_is_pure_and_picklable():
     assert pickle.loads(pickle.dumps(_chunk.compute_chunk)) is _chunk.compute_chunk
-    args = (ts.SliderModel().values(), "unilateral", "constant",
+    args = (ts.SliderModel(contact="bilateral").values(), "unilateral", "constant",
             {"normal_load": np.array([10.0, 50.0]), "mu": np.array([0.2, 0.3])}, "linear",
             {"wear": {"normal_load": 84.46, "sliding_speed": 0.46, "frequency_hz": 229.2}})  # fmt: skip
     a = _chunk.compute_chunk(*pickle.loads(pickle.dumps(args)))
@@ -720,7 +720,7 @@ def test_the_stored_hopf_curve_separates_stable_from_unstable_points(tmp_path):
         assert ds.hopf_normal_load.dims == ("hopf_point",) and ds.hopf_normal_load.attrs["units"] == "N"
         assert "1 Hopf curve(s) in the box" in ds.attrs["hopf_curves"]
         crit = str(ds.hopf_criticality.attrs["flag_meanings"]).split()
-        assert {crit[int(c)] for c in ds.hopf_criticality.values} == {"subcritical"}  # MODEL.md: subcritical
+        assert {crit[int(c)] for c in ds.hopf_criticality.values} == {"subcritical"}  # docs/model.md: subcritical
         order = np.argsort(ds.hopf_arm_length.values)
         arms, loads = ds.hopf_arm_length.values[order], ds.hopf_normal_load.values[order]
         g = ds.growth_rate.isel(sliding_speed=0)

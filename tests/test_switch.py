@@ -26,7 +26,7 @@ from tribosweep import SliderModel, _core
 from tribosweep._frequency import periodic_orbit
 from tribosweep.bench.reference_switch import SwitchReference
 
-STICK_SLIP = dict(friction_law="switch", sliding_speed=0.01, mu_static=0.3, stribeck_velocity=0.02)
+STICK_SLIP = dict(contact="bilateral", friction_law="switch", sliding_speed=0.01, mu_static=0.3, stribeck_velocity=0.02)
 REVERSING = dict(STICK_SLIP, mu_static=0.6, stribeck_velocity=0.005)
 
 
@@ -138,15 +138,15 @@ def test_stick_slip_floquet_multipliers_match_finite_differences(cfg, stable):
 
 
 def test_switch_law_arguments():
-    m = SliderModel(friction_law="switch", mu_static=0.3, stick_band=1e-5)
+    m = SliderModel(contact="bilateral", friction_law="switch", mu_static=0.3, stick_band=1e-5)
     assert m.values()["stick_band"] == 1e-5
     with pytest.raises(ValueError, match=r"mu_static = 0\.2 .*>= mu"):
-        SliderModel(friction_law="switch", mu_static=0.2)
+        SliderModel(contact="bilateral", friction_law="switch", mu_static=0.2)
     with pytest.raises(ValueError, match=r"stick_band = 0\.5 .*below sliding_speed"):
-        SliderModel(friction_law="switch", stick_band=0.5)
+        SliderModel(contact="bilateral", friction_law="switch", stick_band=0.5)
     with pytest.raises(ValueError, match=r"stick_band = -1\.0 .*> 0"):
-        SliderModel(stick_band=-1.0)
+        SliderModel(contact="bilateral", stick_band=-1.0)
     with pytest.raises(ValueError, match=r"friction_law = 'stick' .*'switch'"):
-        SliderModel(friction_law="stick")
+        SliderModel(contact="bilateral", friction_law="stick")
     with pytest.raises(ValueError, match=r"friction_law = \"stick\" .*'switch'"):
-        _core.validate_params(SliderModel().values(), "bilateral", "stick")
+        _core.validate_params(SliderModel(contact="bilateral").values(), "bilateral", "stick")

@@ -42,9 +42,9 @@ def test_bad_categoricals():
     with pytest.raises(ValueError, match="contact.*bilateral"):
         ts.SliderModel(contact="sticky")
     with pytest.raises(ValueError, match="friction_law"):
-        ts.SliderModel(friction_law="viscous")
+        ts.SliderModel(contact="bilateral", friction_law="viscous")
     with pytest.raises(ValueError, match="mu_static"):
-        ts.SliderModel(friction_law="coulomb", mu_static=5.0, mu=0.1, stribeck_velocity=10.0)
+        ts.SliderModel(contact="bilateral", friction_law="coulomb", mu_static=5.0, mu=0.1, stribeck_velocity=10.0)
 
 
 @pytest.mark.parametrize(
@@ -69,7 +69,7 @@ def test_bad_simulate_arguments(kwargs, needle):
     args = {"t_end": 0.01} | kwargs
     t_end = args.pop("t_end")
     with pytest.raises(ValueError, match=needle):
-        ts.simulate(ts.SliderModel(), t_end, **args)
+        ts.simulate(ts.SliderModel(contact="bilateral"), t_end, **args)
 
 
 @pytest.mark.parametrize(
@@ -87,11 +87,11 @@ def test_bad_simulate_arguments(kwargs, needle):
 )
 def test_bad_ensemble_arguments(params, kwargs, needle):
     with pytest.raises(ValueError, match=needle):
-        ts.ensemble(ts.SliderModel(), 0.01, params, **kwargs)
+        ts.ensemble(ts.SliderModel(contact="bilateral"), 0.01, params, **kwargs)
 
 
 def test_model_is_frozen_and_replace_revalidates():
-    m = ts.SliderModel()
+    m = ts.SliderModel(contact="bilateral")
     with pytest.raises(dataclasses.FrozenInstanceError):
         m.mu = 0.3  # type: ignore[misc]
     assert m.replace(mu=0.3).mu == 0.3

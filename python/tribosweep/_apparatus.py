@@ -1,4 +1,4 @@
-"""The apparatus: from (normal load, arm length, sliding speed) to slider parameters (MODEL.md §7).
+"""The apparatus: from (normal load, arm length, sliding speed) to slider parameters (docs/model.md §7).
 
 The report clamped the pin's arm at several lengths: a shorter arm is stiffer. It measured the
 natural frequencies with the pin off the disk (appendix 3 table 1: normal, frictional and
@@ -38,14 +38,14 @@ import numpy as np
 
 from ._model import SliderModel
 
-#: Arm length of the seed configuration [m] (inferred from its normal frequency, MODEL.md §7).
+#: Arm length of the seed configuration [m] (inferred from its normal frequency, docs/model.md §7).
 L_SEED: float = 0.072
 #: Loads [N] of the contact-law identification (report Table 1): outside is extrapolation.
 LOAD_RANGE: tuple[float, float] = (22.0, 93.0)
 #: Arm lengths [m] spanned by the report's frequency tables: outside is extrapolation.
 ARM_RANGE: tuple[float, float] = (0.05, 0.127)
 
-#: The report's arm-length tables (MODEL.md §7): arm length [m] and frequencies [Hz].
+#: The report's arm-length tables (docs/model.md §7): arm length [m] and frequencies [Hz].
 ARM_TABLES: dict[str, dict[str, tuple[float, ...]]] = {
     "appendix3_table1": {
         "arm_length": (0.051, 0.089, 0.127),

@@ -198,7 +198,7 @@ def branch(
     Examples
     --------
     >>> import tribosweep as ts
-    >>> ds = ts.branch(ts.SliderModel(), "normal_load", 84.46, from_hopf=True, bounds=(20.0, 84.46))
+    >>> ds = ts.branch(ts.SliderModel(contact="bilateral"), "normal_load", 84.46, from_hopf=True, bounds=(20.0, 84.46))
     >>> round(float(ds.period[-1]) * 1e3, 6), ts.STATUS_NAMES[int(ds.status)]
     (9.702674, 'success')
     """

@@ -114,14 +114,14 @@ def point_shift(values: Mapping[str, float], friction_law: str) -> np.ndarray:
 
 def _static(v: Mapping[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
     f, k0, ka = v["normal_load"], v["contact_stiffness"], v["contact_quadratic"]
-    z_st = -2.0 * f / (k0 + np.sqrt(k0 * k0 + 4.0 * ka * f))  # cancellation-free, MODEL.md §3
+    z_st = -2.0 * f / (k0 + np.sqrt(k0 * k0 + 4.0 * ka * f))  # cancellation-free, docs/model.md §3
     return z_st, k0 - 2.0 * ka * z_st
 
 
 def mode_shape(v: Mapping[str, np.ndarray], lam: np.ndarray) -> np.ndarray:
     """Eigenvectors ``(n, 6)`` with ``z = 1`` for eigenvalues ``lam`` (n,) of steady sliding, constant friction.
 
-    Closed form of MODEL.md §2 linearised: with ``z = 1`` the torsion equation gives ``phi``,
+    Closed form of docs/model.md §2 linearised: with ``z = 1`` the torsion equation gives ``phi``,
     then the frictional equation ``x``. Only complex arithmetic: no LAPACK, so the shapes do not
     depend on which BLAS kernels a machine picks.
     """
@@ -155,7 +155,7 @@ _LINEAR_FIELDS = (
 
 
 def jacobians(values: Mapping[str, np.ndarray | float], friction_law: str = "constant") -> np.ndarray:
-    """Jacobians of steady sliding ``y = 0`` (in contact), shape ``(n, 6, 6)``, MODEL.md §2.
+    """Jacobians of steady sliding ``y = 0`` (in contact), shape ``(n, 6, 6)``, docs/model.md §2.
 
     Parameters
     ----------
@@ -174,7 +174,7 @@ def jacobians(values: Mapping[str, np.ndarray | float], friction_law: str = "con
     n = int(np.broadcast_shapes(*(a.shape for a in v.values()), (1,))[0])
     v = {k: np.broadcast_to(a, (n,)) for k, a in v.items()}
     f, k0, ka = v["normal_load"], v["contact_stiffness"], v["contact_quadratic"]
-    z_st = -2.0 * f / (k0 + np.sqrt(k0 * k0 + 4.0 * ka * f))  # cancellation-free root, MODEL.md §3
+    z_st = -2.0 * f / (k0 + np.sqrt(k0 * k0 + 4.0 * ka * f))  # cancellation-free root, docs/model.md §3
     k_s = k0 - 2.0 * ka * z_st
     dfz = np.zeros((n, 6))
     dfz[:, 0] = -k_s
@@ -184,7 +184,7 @@ def jacobians(values: Mapping[str, np.ndarray | float], friction_law: str = "con
     if friction_law == "constant":
         dfx = dfz * v["mu"][:, None]
     elif friction_law in ("coulomb", "switch"):
-        # F_x = mu(v_r) N tanh(v_r/eps) - mu(V) F_st, v_r = V - xd - s L phid (MODEL.md §2); the
+        # F_x = mu(v_r) N tanh(v_r/eps) - mu(V) F_st, v_r = V - xd - s L phid (docs/model.md §2); the
         # switch law slips at y = 0 (V > eta) with sign(v_r) = 1 in place of the tanh.
         vel, vs, mus, eps = v["sliding_speed"], v["stribeck_velocity"], v["mu_static"], v["friction_regularization"]
         e = np.exp(-vel / vs)

@@ -31,7 +31,7 @@ def _one(model: SliderModel) -> tuple[list[str], np.ndarray]:
 
 
 def linear_stability(model: SliderModel) -> xr.Dataset:
-    """Eigenvalues of steady sliding (the 6x6 Jacobian at the static point, MODEL.md §4).
+    """Eigenvalues of steady sliding (the 6x6 Jacobian at the static point, docs/model.md §4).
 
     Returns
     -------
@@ -128,7 +128,7 @@ def describing_function(
     variant: str = "consistent",
     n_grid: int = 1000,
 ) -> xr.Dataset:
-    """All roots of the triple-input describing function (MODEL.md §5) in a frequency box.
+    """All roots of the triple-input describing function (docs/model.md §5) in a frequency box.
 
     ``z = A0 + A1 sin(psi) + A2 sin(2 psi + theta)``, ``psi = w t``. The search brackets zeros on a
     grid in ``w`` (with ``A0, A1, A2, theta`` eliminated in closed form), refines them with Newton on

@@ -43,7 +43,7 @@ POINT_TYPE_NAMES: tuple[str, ...] = tuple(_FLAGS["point_type"])
 END_STATUS_NAMES: tuple[str, ...] = tuple(_FLAGS["end_status"])
 _MODE_NAMES: tuple[str, ...] = tuple(_FLAGS["mode"])
 #: Parameters the analysis can move along: every real model field but the discrete torsion sign,
-#: and the apparatus' arm length (which sets the three natural frequencies, MODEL.md §7).
+#: and the apparatus' arm length (which sets the three natural frequencies, docs/model.md §7).
 HOPF_PARAMETERS: tuple[str, ...] = tuple(n for n in PARAM_NAMES if n != "torsion_sign") + ("arm_length",)
 _SCALED_STATE = ("z", "z_dot_over_omega", "x", "x_dot_over_omega", "L_phi", "L_phi_dot_over_omega")
 _NORMALISATION = (

@@ -25,7 +25,7 @@ the flow has exponent 0, so the largest exponent is >= 0: about 0 (within a few 
 for a periodic or quasi-periodic motion, or one still creeping towards a cycle; clearly positive
 for chaos; clearly negative only for a motion still decaying towards an equilibrium.
 
-Why these defaults (seed apparatus, MODEL.md §3). The motion the slider self-excites is the
+Why these defaults (seed apparatus, docs/model.md §3). The motion the slider self-excites is the
 torsion mode at about 98.75 Hz (period 10.1 ms; 640-650 rad/s under load). ``tau = 0.05 s`` is
 about 5 of its periods: long enough that the stretching within one cycle (which swings with the
 phase, by more than the exponent itself on a bouncing cycle) averages out inside a segment, short
@@ -73,7 +73,7 @@ def characteristic_sizes(values: Mapping[str, np.ndarray | float]) -> np.ndarray
     ka = np.asarray(values["contact_quadratic"], dtype=np.float64)
     arm = np.asarray(values["moment_arm"], dtype=np.float64)
     w = np.asarray(values["omega_torsion"], dtype=np.float64)
-    z = np.abs(2.0 * f / (k0 + np.sqrt(k0 * k0 + 4.0 * ka * f)))  # MODEL.md §3, cancellation-free
+    z = np.abs(2.0 * f / (k0 + np.sqrt(k0 * k0 + 4.0 * ka * f)))  # docs/model.md §3, cancellation-free
     z, arm, w = np.broadcast_arrays(np.atleast_1d(z), arm, w)
     phi = np.where(arm > 0, z / np.where(arm > 0, arm, 1.0), z)
     return np.column_stack([z, z * w, z, z * w, phi, phi * w])

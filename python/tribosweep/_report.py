@@ -11,7 +11,7 @@ from ._frequency import describing_function, follow_cycle, hopf_load, linear_sta
 from ._model import SliderModel
 from ._simulate import ensemble
 
-# The report's solution and the experiment (MODEL.md §5), printed values: not computed here.
+# The report's solution and the experiment (docs/model.md §5), printed values: not computed here.
 REPORT_SOLUTION = dict(omega=647.034, A0=0.42e-6, A1=14.460e-6, A2=2.289e-6, theta_deg=253.31, phi1=1.413e-3,
                        phi1_deg=180.21, x=2.864e-6, x_deg=-0.70)
 EXPERIMENT = dict(omega=644.026, A0=float("nan"), A1=14.774e-6, A2=2.248e-6, theta_deg=102.85, phi1=1.540e-3,
@@ -55,7 +55,7 @@ def seed_analysis(model: SliderModel | None = None) -> dict:
                             z_max=float(orb.z_max), fraction_off_disk=float(orb.fraction_off_disk), status=int(orb.status))
     # The unilateral bouncing cycle, followed from mu = 0.30 (where it is the attractor a small
     # disturbance grows into) down to the model's mu by shooting: a property of the model, not of
-    # one trajectory. MODEL.md §6's recipe (22 s at 0.30, then a transient at 0.215) lands near a
+    # one trajectory. docs/model.md §6's recipe (22 s at 0.30, then a transient at 0.215) lands near a
     # basin boundary, and its outcome flips with the last bit of a float. The harmonics are then
     # read by a run started on the orbit (it repeats within two periods).
     um = m.replace(contact="unilateral")
@@ -103,7 +103,7 @@ def write_seed_report(out_dir: str | pathlib.Path) -> str:
     table = comparison_table(a)
     hopf = ", ".join(f"{h:.3f} N" for h in a["hopf_loads"]) or "none in 1-250 N"
     md = (
-        "# Seed configuration (MODEL.md §3-6), computed by tribosweep\n\n"
+        "# Seed configuration (docs/model.md §3-6), computed by tribosweep\n\n"
         f"Linear stability: {'stable' if a['stable'] else 'unstable'} sliding; torsion mode "
         f"{a['eigen_growth_rate']['torsion']:.4f} +- {a['eigen_frequency']['torsion']:.2f}j 1/s. "
         f"Hopf load(s): {hopf} (sliding is unstable BELOW it in this model — the opposite of the "

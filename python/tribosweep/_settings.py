@@ -31,7 +31,7 @@ from . import _checks
 
 #: Time integrators of the core (``tribosweep._core.method_names()``).
 INTEGRATORS: tuple[str, ...] = _checks.METHODS
-#: Initial disturbance of transient runs: ``z = 1 um`` off steady sliding (MODEL.md §5).
+#: Initial disturbance of transient runs: ``z = 1 um`` off steady sliding (docs/model.md §5).
 DEFAULT_Y0: tuple[float, ...] = (1e-6, 0.0, 0.0, 0.0, 0.0, 0.0)
 
 

@@ -1,4 +1,4 @@
-"""Mild-wear model of the report's appendix 4 ("Part 3: Wear Model"), MODEL.md §8.
+"""Mild-wear model of the report's appendix 4 ("Part 3: Wear Model"), docs/model.md §8.
 
 Mild wear is fatigue of load-bearing areas cycled by the normal-force oscillation at frequency
 ``f`` [Hz]. Wear per unit sliding distance (eq. 8)::
@@ -100,7 +100,7 @@ def slide_frequency_hz(sliding_speed):
 
 
 def normal_mode_frequency_hz(model: SliderModel) -> float:
-    """Frequency ``Im(lambda_normal) / 2 pi`` [Hz] of the normal mode of steady sliding (MODEL.md §8).
+    """Frequency ``Im(lambda_normal) / 2 pi`` [Hz] of the normal mode of steady sliding (docs/model.md §8).
 
     The Rust core's linear stability (``rust_core/src/linear.rs``); the mode is identified by the
     energy participation of its eigenvector.
@@ -334,7 +334,7 @@ def appendix3_energy_balance(
     zeta_torsion: float = 0.0058,
     friction_amplitude: float = 78.62,
 ) -> dict[str, float]:
-    """The report's appendix-3 linear energy balance (stiffness K3, 110.3 N), MODEL.md §9.
+    """The report's appendix-3 linear energy balance (stiffness K3, 110.3 N), docs/model.md §9.
 
     An arithmetic check, not a physics test: ``W_s = W_d`` identically because ``phi0`` comes
     from the same resonance equation.

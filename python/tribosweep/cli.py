@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import re
 import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -535,12 +536,48 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+#: A value that starts like a negative number (``-5``, ``-.5``, ``-5:100:3``, ``-1e-6,0``).
+_NEGATIVE = re.compile(r"-\.?\d")
+
+
+def _attach_negative_values(parser: argparse.ArgumentParser, argv: list[str]) -> list[str]:
+    """``--opt -5:100:3`` as ``--opt=-5:100:3``, for every option that takes a value.
+
+    argparse (before Python 3.13) reads a word that starts with ``-`` and is not a plain number as
+    an option, so ``--normal-load -5:100:3`` failed with "expected one argument". No option of ours
+    looks like a number, so such a word after a value-taking option is its value; the range check
+    (a load must be > 0, ...) then says what is wrong with it.
+    """
+    takes_value = set()
+    for action in parser._actions:  # argparse's own list (private, stable since 2.7)
+        if isinstance(action, argparse._SubParsersAction):
+            for sub in action.choices.values():
+                takes_value.update(_value_options(sub))
+    takes_value.update(_value_options(parser))
+    out: list[str] = []
+    i = 0
+    while i < len(argv):
+        word = argv[i]
+        if word in takes_value and i + 1 < len(argv) and _NEGATIVE.match(argv[i + 1]):
+            out.append(f"{word}={argv[i + 1]}")
+            i += 2
+        else:
+            out.append(word)
+            i += 1
+    return out
+
+
+def _value_options(parser: argparse.ArgumentParser) -> set[str]:
+    return {s for a in parser._actions if a.nargs is None and a.option_strings and not
+            isinstance(a, argparse._SubParsersAction) for s in a.option_strings if s.startswith("--")}  # fmt: skip
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit status (0 ok, 1 failure, 2 bad input, 130 interrupted)."""
     argv = list(sys.argv[1:] if argv is None else argv)
     parser = build_parser()
     try:
-        args = parser.parse_args(argv)
+        args = parser.parse_args(_attach_negative_values(parser, argv))
     except SystemExit as e:  # argparse has printed its message (or --help)
         return e.code if isinstance(e.code, int) else 2
     if args.command is None:

@@ -8,6 +8,7 @@ functions. Figures are built without ``pyplot`` (no global state, no GUI backend
 from __future__ import annotations
 
 import os
+import textwrap
 
 import numpy as np
 import xarray as xr
@@ -116,7 +117,7 @@ def _draw_hopf(ax, ds: xr.Dataset, x: str, y: str) -> set[str]:
 
 
 def regime_map(ds: xr.Dataset, *, x: str | None = None, y: str | None = None, facet: str | None = None,
-               max_facets: int = 6):  # fmt: skip
+               ncols: int = 4):  # fmt: skip
     """Regime map of a sweep over two dimensions, one panel per value of a third.
 
     Parameters
@@ -128,8 +129,8 @@ def regime_map(ds: xr.Dataset, *, x: str | None = None, y: str | None = None, fa
         length, sliding speed, extras).
     facet : str, optional
         Dimension with one panel per value (default: the next swept one).
-    max_facets : int
-        Most panels; a longer facet dimension is subsampled evenly.
+    ncols : int
+        Panels per row: a longer facet dimension wraps into rows, and every value gets its panel.
 
     Returns
     -------
@@ -153,11 +154,20 @@ def regime_map(ds: xr.Dataset, *, x: str | None = None, y: str | None = None, fa
     da = ds.regime.isel({d: 0 for d in rest})
     fixed = [f"{d} = {ds[d].values[0]:g} {ds[d].attrs.get('units', '')}".strip() for d in rest]
     fvals = [None] if facet is None else list(range(ds.sizes[facet]))
-    if len(fvals) > max_facets:
-        fvals = sorted(set(np.linspace(0, len(fvals) - 1, max_facets).round().astype(int).tolist()))
     n = len(fvals)
-    fig = Figure(figsize=(3.6 * n + 1.8, 3.6), layout="constrained")
-    axes = fig.subplots(1, n, squeeze=False, sharey=True)[0]
+    nc = max(1, min(int(ncols), n))
+    nr = -(-n // nc)
+    fig = Figure(figsize=(3.6 * nc + 1.8, 3.6 * nr), layout="constrained")
+    grid = fig.subplots(nr, nc, squeeze=False, sharex=True, sharey=True).ravel()
+    for ax in grid[n:]:
+        ax.set_visible(False)
+    axes = grid[:n]
+    for k, ax in enumerate(axes):  # the lowest panel of each column carries the x axis, the first of a row the y
+        if k + nc >= n:
+            ax.xaxis.set_tick_params(labelbottom=True)
+            ax.set_xlabel(_label(ds, x))
+        if k % nc == 0:
+            ax.set_ylabel(_label(ds, y))
     cmap = ListedColormap([REGIME_COLORS[r] for r in REGIME_NAMES])
     norm = BoundaryNorm(np.arange(len(REGIME_NAMES) + 1) - 0.5, cmap.N)
     present = set()
@@ -168,7 +178,7 @@ def regime_map(ds: xr.Dataset, *, x: str | None = None, y: str | None = None, fa
         ax.pcolormesh(_edges(ds[x].values), _edges(ds[y].values), z, cmap=cmap, norm=norm, shading="flat")
         if "bistable" in ds:
             # Stable sliding coexisting with another motion: hatched, since the regime then depends
-            # on the initial disturbance (MODEL.md §6: the seed point is such a case).
+            # on the initial disturbance (docs/model.md §6: the seed point is such a case).
             b = ds.bistable.isel({d: 0 for d in rest})
             b = (b if fi is None else b.isel({facet: fi})).transpose(y, x).values
             xe, ye = _edges(ds[x].values), _edges(ds[y].values)
@@ -192,16 +202,14 @@ def regime_map(ds: xr.Dataset, *, x: str | None = None, y: str | None = None, fa
                 for j, i in zip(*np.nonzero(multi)):
                     ax.text(0.5 * (xe[i] + xe[i + 1]), 0.5 * (ye[j] + ye[j + 1]), f"{int(k[j, i])}T", ha="center",
                             va="center", fontsize=4 if small else 6, color="k")  # fmt: skip
-        ax.set_xlabel(_label(ds, x))
         if fi is not None:
-            ax.set_title(f"{facet} = {ds[facet].values[fi]:g} {ds[facet].attrs.get('units', '')}".strip(), fontsize=9)
+            ax.set_title(f"{facet} = {ds[facet].values[fi]:.4g} {ds[facet].attrs.get('units', '')}".strip(), fontsize=9)
         if "hopf_normal_load" in ds and {x, y} == {"normal_load", "arm_length"}:
             present.update(_draw_hopf(ax, ds, x, y))
         for dim, line in ((x, ax.axvline), (y, ax.axhline)):
             if dim == "normal_load":
                 for bound in (22.0, 93.0):
                     line(bound, color="k", lw=0.6, ls="--")
-    axes[0].set_ylabel(_label(ds, y))
     handles = [Patch(facecolor=REGIME_COLORS[r], edgecolor="k", lw=0.3, label=r.replace("_", " "))
                for i, r in enumerate(REGIME_NAMES) if i in present]  # fmt: skip
     for key, hatch, label in _COEXISTING.values():
@@ -248,7 +256,7 @@ def variable_map(ds: xr.Dataset, var: str, *, x: str | None = None, y: str | Non
     >>> from tribosweep.plot import variable_map
     >>> ds = ts.sweep(normal_load=[10.0, 30.0, 60.0], arm_length=[0.05, 0.1], strategy="linear", progress=False)
     >>> fig = variable_map(ds, "growth_rate")
-    >>> fig.axes[-1].get_ylabel()
+    >>> fig.axes[-1].get_ylabel().replace("\\n", " ")
     'largest real part of the eigenvalues of steady sliding (> 0: unstable) [s-1]'
     """
     Figure, Patch = _matplotlib()
@@ -317,7 +325,9 @@ def variable_map(ds: xr.Dataset, var: str, *, x: str | None = None, y: str | Non
         fig.legend(handles=handles, loc="outside right center", fontsize=8, frameon=False, title=var)
     else:
         bar = fig.colorbar(mesh, ax=axes[:n].tolist(), shrink=0.9)
-        bar.ax.set_ylabel(f"{long} [{unit}]" if unit else long, fontsize=8)
+        # Wrapped to the bar's height (about 42 characters of 8 pt per 3.2-inch row), never cut off.
+        text = f"{long} [{unit}]" if unit else long
+        bar.ax.set_ylabel(textwrap.fill(text, 42 * nr, break_long_words=False), fontsize=8)
     fixed = [f"{d} = {ds[d].values[0]:.4g} {ds[d].attrs.get('units', '')}".strip() for d in rest if ds.sizes[d] > 1]
     blank = "; white: no value there" if np.isnan(values).any() else ""
     fig.suptitle(var + ("; " + ", ".join(fixed) if fixed else "") + blank, fontsize=10)

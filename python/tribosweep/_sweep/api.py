@@ -93,7 +93,7 @@ def sweep(
     ----------
     model : SliderModel, optional
         Everything not swept; its natural frequencies belong to the seed arm length 7.2 cm.
-        Default: the seed with the physical ``contact="unilateral"``.
+        Default: ``SliderModel()``, the seed with its default (physical) ``contact="unilateral"``.
     normal_load : array_like, N, optional
         Strictly increasing loads > 0. Default ``[84.46]`` (a length-1 dimension).
     arm_length : array_like, m, optional
@@ -240,7 +240,7 @@ def sweep(
                       DeprecationWarning, stacklevel=2)  # fmt: skip
         census = bool(check_bistability)
     if model is None:
-        model = SliderModel(contact="unilateral")
+        model = SliderModel()
     if not isinstance(model, SliderModel):
         raise TypeError(f"model = {model!r} must be a tribosweep.SliderModel or None")
     if strategy not in _chunk.STRATEGIES:

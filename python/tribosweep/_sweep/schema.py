@@ -29,7 +29,7 @@ from .._model import PARAM_LONG_NAMES, PARAM_UNITS
 from .plan import AXIS_ATTRS, Plan
 
 HOPF_CAVEAT: str = (
-    "In this model (MODEL.md section 4) steady sliding is linearly unstable BELOW a Hopf load (24.90 N at the "
+    "In this model (docs/model.md section 4) steady sliding is linearly unstable BELOW a Hopf load (24.90 N at the "
     "seed's mu = 0.215, with K_phi, C_zc and mu fixed), so self-excitation appears at low loads: the opposite "
     "of the 1985 report's experiments, where self-excitation starts above a critical load. Stable sliding can "
     "also coexist with a stable bouncing cycle (as at the seed point), so a point's regime can depend on the "
@@ -128,7 +128,7 @@ POINT_VARIABLES: dict[str, tuple[str, str | None, str]] = {
     "growth_rate": ("f8", "s-1", "largest real part of the eigenvalues of steady sliding (> 0: unstable)"),
     "linear_frequency": ("f8", "rad s-1", "angular frequency of the least stable linear mode"),
     "normal_mode_frequency": ("f8", "Hz", "frequency Im(lambda_normal)/2 pi of the linearised normal mode"),
-    "cycle_omega": ("f8", "rad s-1", "angular frequency of the steady cycle (NaN if none)"),
+    "cycle_omega": ("f8", "rad s-1", "angular frequency of the cycle the point's run ended on (NaN if none)"),
     "cycle_period_ratio": ("f8", "1", "period of the cycle in periods of the least stable linear mode: about 1 "
                                       "for the ordinary cycle, about 2 past a period doubling"),
     "z1_amplitude": ("f8", "m", "amplitude of the first harmonic of z on the cycle"),
@@ -155,6 +155,17 @@ POINT_VARIABLES: dict[str, tuple[str, str | None, str]] = {
     "newton_iterations": ("i8", "1", "Newton iterations of the TIDF and shooting stages (0: none run)"),
     **_irregular.IRREGULAR_VARIABLES,
 }
+#: Variables of the cycle a point's own run ended on (a transient that ended periodic, or the
+#: describing function's cycle where sliding is unstable).
+CYCLE_VARIABLES: tuple[str, ...] = ("cycle_omega", "cycle_period_ratio", "z1_amplitude", "z2_amplitude",
+                                    "phi1_amplitude", "fraction_off_disk")  # fmt: skip
+CYCLE_NOTE: str = (
+    "the cycle the point's own run ended on, NaN where it did not end on one: where sliding is linearly "
+    "unstable (growth_rate > 0), the motion that replaces it; where sliding is linearly stable (growth_rate < 0) "
+    "and regime is a cycle, a cycle that COEXISTS with stable sliding, reached because the run started outside "
+    "the saddle cycle (reason says so). A cycle seen only by the attractor census, at a point whose regime is "
+    "steady_sliding, is not here but in the largest_cycle_* variables"
+)
 #: Optional per-point output (present only when configured).
 OPTIONAL_POINT_VARIABLES: dict[str, tuple[str, str | None, str]] = {
     "wear_rate": ("f8", "kg m-1", "mild-wear mass loss per sliding distance (eq. 8, calibrated)"),
@@ -221,6 +232,26 @@ def point_specs(dims: tuple[str, ...], *, wear_rate: bool = False) -> list[VarSp
         "after a period doubling or on subharmonic bouncing) the motion at the mode's frequency is the n-th "
         "harmonic (z2_amplitude for n = 2), and z1_amplitude is small"
     )
+    for name in CYCLE_VARIABLES:
+        note = CYCLE_NOTE if name == "cycle_omega" else (
+            "of the cycle the point's own run ended on (see cycle_omega): where sliding is linearly stable "
+            "(growth_rate < 0) that cycle COEXISTS with stable sliding; a cycle seen only by the census is in "
+            "largest_cycle_*")  # fmt: skip
+        old = by_name[name].attrs.get("comment")
+        by_name[name].attrs["comment"] = f"{old}; {note}" if old else note
+    for name in ("tidf_omega", "tidf_a1"):
+        by_name[name].attrs["comment"] = (
+            "where sliding is linearly stable (growth_rate < 0) the root is the saddle cycle around stable sliding "
+            "(unstable: it bounds sliding's basin, it is not a motion the slider keeps); where sliding is unstable, a "
+            "predicted cycle (within the bilateral law's validity unless tidf_contact_opens)"
+        )
+    for name in ("largest_cycle_omega", "largest_cycle_a1", "largest_cycle_period_ratio",
+                 "largest_cycle_fraction_off_disk"):  # fmt: skip
+        by_name[name].attrs["comment"] = (
+            "a cycle that coexists with stable sliding: the census runs only where sliding is linearly stable and a "
+            "saddle cycle is predicted, and regime there stays steady_sliding (bistable says coexisting when the "
+            "census saw more than one attractor)"
+        )
     by_name["wall_time"].attrs["comment"] = "a measurement: differs between runs"
     by_name["wear_rate_relative"].attrs["comment"] = (
         "the rate while the contact slides steadily (NaN where steady sliding is not what a small disturbance "

@@ -1,4 +1,4 @@
-"""The analysis stages of a sweep chunk, one function each (MODEL.md §4-§6).
+"""The analysis stages of a sweep chunk, one function each (docs/model.md §4-§6).
 
 Every stage reads and writes one :class:`Points` (the chunk's points, their parameters, the
 settings and the output arrays) and decides nothing about which stages run: that policy is the
@@ -7,7 +7,7 @@ reason there and goes on.
 
 ``linear``
     Eigenvalues of steady sliding (the Rust core, every point): growth rate, frequency of the
-    least stable mode, normal-mode frequency (for wear, MODEL.md §8).
+    least stable mode, normal-mode frequency (for wear, docs/model.md §8).
 ``describing_function``
     The triple-input describing function of the bilateral model (all roots in 150-3000 rad/s). At
     a linearly stable point a physical root is the subcritical saddle cycle around stable sliding.
@@ -93,7 +93,7 @@ class Points:
 
 
 def static_penetration(full: Mapping[str, np.ndarray], sel: np.ndarray) -> np.ndarray:
-    """Static penetration z_st [m] of the selected points (MODEL.md §3, cancellation-free form)."""
+    """Static penetration z_st [m] of the selected points (docs/model.md §3, cancellation-free form)."""
     n = max(np.size(v) for v in full.values())
     sub = {k: np.broadcast_to(full[k], (n,))[sel] for k in ("contact_stiffness", "contact_quadratic", "normal_load")}
     return _census._static(sub)[0]
@@ -296,6 +296,9 @@ def classify(summary: dict, stable: np.ndarray, t_max: float) -> tuple[np.ndarra
                 regime[i] = REGIME["contact_loss"]
             else:
                 regime[i] = REGIME["self_excited"]
+            if stable[i]:
+                note = "sliding is linearly stable: this cycle, reached from the run's start, coexists with it"
+                reason[i] = f"{reason[i]}; {note}" if reason[i] else note
     return regime, status, reason.astype(str), decided
 
 

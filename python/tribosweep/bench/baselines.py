@@ -1,6 +1,6 @@
 """Speed baselines for the tribosweep ensemble benchmark, measured in the caller's process.
 
-Two baselines for the bilateral, constant-``mu`` slider (MODEL.md §2) over the seed ensemble:
+Two baselines for the bilateral, constant-``mu`` slider (docs/model.md §2) over the seed ensemble:
 
 * :func:`scipy_seed_batch`: one :func:`scipy.integrate.solve_ivp` call per parameter set
   (DOP853 or RK45), what a user without tribosweep would write;
@@ -29,7 +29,7 @@ from . import reference
 PARAM_ORDER = reference.PARAM_ORDER
 params_to_array = reference.params_to_array
 
-#: Benchmark defaults (MODEL.md §3 seed; 0.5 s of motion from a 1 um normal disturbance).
+#: Benchmark defaults (docs/model.md §3 seed; 0.5 s of motion from a 1 um normal disturbance).
 T_END = 0.5  # s
 Z0 = 1e-6  # m
 MU_RANGE = (0.15, 0.30)

@@ -61,7 +61,7 @@ def tidf_validity_map(normal_load, arm_length, *, mu: float = 0.215, threads: in
 def newton_basin_map(frequency_offset, amplitude_factor, *, model: SliderModel | None = None) -> xr.Dataset:
     """Outcome of warm-started Newton from the seed root's guess offset by ``frequency_offset`` (relative)
     and with amplitudes scaled by ``amplitude_factor``."""
-    m = model or SliderModel()
+    m = model or SliderModel(contact="bilateral")  # the describing function's own law
     df_ = _core.describing_function(m.values(), "bilateral", m.friction_law, ["mu"], np.array([[m.mu]]))
     k = int(np.argmax(df_["physical"][0]))
     root = np.array([df_[v][0, k] for v in ("omega", "A0", "A1", "A2", "theta")])

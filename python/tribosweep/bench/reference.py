@@ -1,7 +1,7 @@
-"""Independent numpy/scipy reference of the pin-on-disk slider (MODEL.md §2-3).
+"""Independent numpy/scipy reference of the pin-on-disk slider (docs/model.md §2-3).
 
 This module is the trusted check the tests hold the Rust core against. It is written from
-MODEL.md, not from the Rust sources, and it deliberately stays small: plain functions on a
+docs/model.md, not from the Rust sources, and it deliberately stays small: plain functions on a
 ``dict`` of parameters, :func:`scipy.integrate.solve_ivp` for time integration and
 finite differences for the Jacobian. It imports nothing from ``tribosweep._core``.
 
@@ -9,7 +9,7 @@ State ``y = [z, zd, x, xd, phi, phid]`` (m, m/s, m, m/s, rad, rad/s): dynamic pa
 from the static equilibrium. ``zc = z_st + z`` is the pin position relative to the disk
 surface (``zc < 0``: penetration). SI units throughout; frequencies in rad/s.
 
-Equations (MODEL.md §2)::
+Equations (docs/model.md §2)::
 
     z''   + 2 zeta_z w_z zd   + w_z^2 z   = F_z / m
     x''   + 2 zeta_x w_x xd   + w_x^2 x   = F_x / m
@@ -84,7 +84,7 @@ _MODES = ("contact", "free")
 
 
 def seed_parameters() -> dict:
-    """Seed configuration of MODEL.md §3 (report chapter IV).
+    """Seed configuration of docs/model.md §3 (report chapter IV).
 
     Returns
     -------
@@ -134,7 +134,7 @@ def params_to_array(params_list) -> np.ndarray:
 
 
 def static_point(params: dict) -> tuple[float, float]:
-    """Static penetration and dynamic contact stiffness (MODEL.md §3).
+    """Static penetration and dynamic contact stiffness (docs/model.md §3).
 
     ``z_st < 0`` solves ``F_st = -K_s0 z_st + K_a z_st^2``; ``K_s = K_s0 - 2 K_a z_st``.
 
@@ -281,7 +281,7 @@ def _make_rhs(params: dict, contact: str = "bilateral", mode: str | None = None)
 
 
 def rhs(t: float, y, params: dict, contact: str = "bilateral", mode: str | None = None) -> np.ndarray:
-    """Right-hand side ``dy/dt`` of MODEL.md §2 with constant ``mu``.
+    """Right-hand side ``dy/dt`` of docs/model.md §2 with constant ``mu``.
 
     Parameters
     ----------
@@ -620,7 +620,7 @@ def linear_jacobian(params: dict) -> np.ndarray:
 
 
 def linear_eigenvalues(params: dict) -> np.ndarray:
-    """Eigenvalues of the linearisation at steady sliding (MODEL.md §4), 1/s.
+    """Eigenvalues of the linearisation at steady sliding (docs/model.md §4), 1/s.
 
     Parameters
     ----------
