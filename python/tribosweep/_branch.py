@@ -293,21 +293,24 @@ def _dataset(out: dict, dim: str, parameter: str, attrs: dict) -> xr.Dataset:
     return xr.Dataset(data, coords=coords, attrs=attrs)
 
 
-def _axis(model: SliderModel, axis, arg: str) -> tuple[str, float, float]:
+def _axis(model: SliderModel, axis, arg: str, arm: bool = False) -> tuple[str, float, float]:
     try:
         name, lo, hi = axis
     except (TypeError, ValueError):
         raise ValueError(f"{arg} = {axis!r} must be (parameter name, low, high)") from None
-    name = _parameter(name, f"{arg}[0]")
+    if not (arm and name == "arm_length"):
+        name = _parameter(name, f"{arg}[0]")
     lo, hi = _finite(f"{arg}[1]", lo), _finite(f"{arg}[2]", hi)
     if not lo < hi:
         raise ValueError(f"{arg} = {axis!r}: must have low < high")
+    if name == "arm_length" and not lo > 0:
+        raise ValueError(f"{arg} = {axis!r}: arm lengths must be > 0 [m]")
     return name, lo, hi
 
 
 def _curve(kind: str, model, x, y, n, orbit, from_hopf, start, direction, options) -> xr.Dataset:
     model = _model(model)
-    (xn, x_lo, x_hi), (yn, y_lo, y_hi) = _axis(model, x, "x"), _axis(model, y, "y")
+    (xn, x_lo, x_hi), (yn, y_lo, y_hi) = _axis(model, x, "x"), _axis(model, y, "y", arm=True)
     if xn == yn:
         raise ValueError(f"x and y are both {xn!r}: must be two different parameters")
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not 2 <= n <= 10_000:
@@ -315,6 +318,8 @@ def _curve(kind: str, model, x, y, n, orbit, from_hopf, start, direction, option
     if (from_hopf is None) == (orbit is None):
         raise ValueError("give exactly one of from_hopf and orbit")
     opts = _options(options)
+    if yn == "arm_length":
+        return _arm_curve(kind, model, (xn, x_lo, x_hi), (y_lo, y_hi), n, orbit, from_hopf, start, opts)
     y_model = float(getattr(model, yn))
     if not y_lo <= y_model <= y_hi:
         raise ValueError(f"y = {y!r}: the model's {yn} = {y_model} (where the start orbit is) must lie within it")
@@ -358,6 +363,100 @@ def _curve(kind: str, model, x, y, n, orbit, from_hopf, start, direction, option
     ds = _dataset(merged, "curve_point", xn, attrs)
     ds = ds.rename({"parameter": xn})
     ds[yn] = (("curve_point",), merged["y"], {"units": PARAM_UNITS[yn], "long_name": f"{yn}: {PARAM_LONG_NAMES[yn]}"})
+    return ds
+
+
+#: Per-point arrays of a raw branch (``_core.branch``) and their trailing shapes.
+_RAW_KEYS: dict[str, tuple[tuple[int, ...], str]] = {
+    **{k: ((), "f8") for k in ("parameter", "period", "trivial_error", "a0", "a1", "z_max", "z_min", "min_gap",
+                                "min_law_force", "fraction_off_disk", "dp_ds", "arclength", "residual")},
+    **{k: ((), "u1") for k in ("n_unstable", "point_type", "contact", "flags", "trivial")},
+    "stable": ((), "?"), "n_switches": ((), "u4"), "newton_iterations": ((), "u4"),
+    **{k: ((6,), "f8") for k in ("state0", "multipliers_re", "multipliers_im")},
+}  # fmt: skip
+
+
+def _arm_curve(kind: str, model: SliderModel, xspec, yspan, n: int, orbit, from_hopf, start, opts) -> xr.Dataset:
+    """:func:`fold_curve` / :func:`grazing_curve` over the arm length: each slice from its own Hopf point.
+
+    The arm length moves the three natural frequencies at once (``arm_frequencies``, the model's
+    own at ``L_SEED``), so no orbit is carried between slices: at each of ``n`` arm lengths the
+    Hopf points of ``x`` in its window are found (:func:`sliding_branch`), the one nearest the
+    previous slice's is taken (the first: nearest ``from_hopf``'s value, or ``start``, or the low
+    end of ``x``), and the branch from it runs to its first ``kind`` point, as ``branch(...,
+    from_hopf=value, stop_at=kind)`` does. A slice with no Hopf point in the window, or whose
+    branch leaves the window first, has no point: the curve has left the box there.
+    """
+    from . import _apparatus
+    from ._hopf import sliding_branch
+
+    xn, x_lo, x_hi = xspec
+    if orbit is not None:
+        raise ValueError("orbit: with y = 'arm_length' every slice starts at its own Hopf point (the arm length "
+                         "moves three natural frequencies at once, so no orbit is carried): give from_hopf instead")  # fmt: skip
+    if xn in _apparatus.MODE_FIELDS.values():
+        raise ValueError(f"x = {xn!r} is set by arm_length through the apparatus model: it cannot be the other parameter")
+    if isinstance(from_hopf, Mapping):
+        target = _finite(f"from_hopf[{xn!r}]", from_hopf.get(xn))
+    elif from_hopf is True:
+        target = x_lo if start is None else _finite("start", start)
+    else:
+        target = _finite("from_hopf", from_hopf)
+    ys = np.linspace(*yspan, n)
+    models = []
+    for yv in ys:
+        try:
+            models.append(model.replace(**_apparatus.arm_frequencies(float(yv), model)))
+        except ValueError as e:
+            raise ValueError(f"y = ('arm_length', {yspan[0]}, {yspan[1]}): arm_length = {yv:.6g} gives no valid "
+                             f"model ({e})") from None  # fmt: skip
+    contact = "bilateral" if kind == "grazing" else model.contact
+    turns = 1 << BRANCH_FLAG_NAMES.index("parameter_turns")
+    found: list[dict] = []
+    gaps: list[str] = []
+    status, flows, rhs = 0, 0, 0
+    for yv, m in zip(ys, models):
+        sb = sliding_branch(m, (xn, x_lo, x_hi))
+        ok = (sb.is_hopf.values == 1) & (sb.hopf_status.values == 0)
+        values, omegas = sb[f"hopf_{xn}"].values[ok], sb.hopf_frequency.values[ok]
+        if values.size == 0:
+            gaps.append(f"{yv:.6g} (no Hopf point)")
+            continue
+        i = int(np.argmin(np.abs(values - target)))
+        target = float(values[i])
+        out = _core.branch(m.replace(**{xn: target}).values(), contact, m.friction_law, xn, target, x_lo, x_hi,
+                           hopf_omega=float(omegas[i]), options=opts, stop_at=kind)  # fmt: skip
+        flows, rhs = flows + int(out["n_flows"]), rhs + int(out["n_rhs"])
+        last = int(out["point_type"][-1]) if len(out["point_type"]) else -1
+        hit = last == POINT_TYPE_NAMES.index(kind) or (
+            kind == "fold" and last == POINT_TYPE_NAMES.index("grazing") and int(out["flags"][-1]) & turns)
+        if not hit:
+            status = max(status, int(out["status"]))
+            gaps.append(f"{yv:.6g} ({out['reason']})")
+            continue
+        found.append({k: out[k][-1] for k in _RAW_KEYS} | {"y": yv, "hopf": target})
+    merged = {k: np.array([f[k] for f in found], dtype=d).reshape((len(found),) + shape)
+              for k, (shape, d) in _RAW_KEYS.items()}  # fmt: skip
+    merged["status"] = status
+    reason = f"{len(found)} of {n} arm lengths located their {kind} point"
+    if gaps:
+        reason += "; none at arm_length = " + ", ".join(gaps)
+    attrs = {"kind": kind, "x": xn, "y": "arm_length", "x_units": PARAM_UNITS[xn], "y_units": "m",
+             "x_bounds_low": x_lo, "x_bounds_high": x_hi, "y_low": float(ys[0]), "y_high": float(ys[-1]), "n": int(n),
+             "method": "slice by slice over the arm length (natural frequencies by the apparatus power laws, the "
+                       "model's own at 0.072 m): at each, the branch from the Hopf point of x nearest the previous "
+                       "slice's, to its first special point",
+             "reason": reason, "contact": contact if kind == "grazing" else model.contact,
+             "friction_law": model.friction_law, "n_flows": flows, "n_rhs": rhs}  # fmt: skip
+    if kind == "grazing":
+        attrs["comment"] = ("the contact side's grazing (the pin first leaves the disk), followed with the bilateral law, "
+                            "on which that orbit is the same")  # fmt: skip
+    attrs |= {f"continuation_{k}": (int(v) if k in _INT_OPTIONS else v) for k, v in (DEFAULTS | opts).items()}
+    ds = _dataset(merged, "curve_point", xn, attrs).rename({"parameter": xn})
+    ds["arm_length"] = (("curve_point",), np.array([f["y"] for f in found], dtype=np.float64),
+                        {"units": "m", "long_name": "arm_length: clamped arm length l"})  # fmt: skip
+    ds[f"hopf_{xn}"] = (("curve_point",), np.array([f["hopf"] for f in found], dtype=np.float64),
+                        {"units": PARAM_UNITS[xn], "long_name": f"the Hopf point of {xn} the slice's branch starts at"})  # fmt: skip
     return ds
 
 

@@ -115,6 +115,50 @@ def _draw_hopf(ax, ds: xr.Dataset, x: str, y: str) -> set[str]:
     return keys
 
 
+#: How the fold and grazing curves of the cycles born at a Hopf curve are drawn, in drawing order:
+#: line keywords and legend label. The fold's markers are the arm lengths where its points were located.
+#: The grazing curve is a white band edged in black and the fold a black dashed line, so that a
+#: fold lying on the grazing curve (a grazing where the branch turns back) shows as both.
+_CURVE_STYLE: dict[str, tuple[dict, str]] = {
+    "grazing": ({"color": "white", "lw": 2.4},
+                "grazing: the saddle cycle\nfirst leaves the disk"),
+    "fold": ({"color": "k", "lw": 1.1, "ls": (0, (3, 2)), "marker": "s", "ms": 2.5},
+             "fold of cycles: the\nsaddle cycle ends"),
+}  # fmt: skip
+
+
+def _curve_line(kind: str) -> dict:
+    from matplotlib import patheffects
+
+    style = dict(_CURVE_STYLE[kind][0])
+    if kind == "grazing":
+        style["path_effects"] = [patheffects.Stroke(linewidth=4.0, foreground="k"), patheffects.Normal()]
+    return style
+
+
+def _draw_curves(ax, ds: xr.Dataset, x: str, y: str) -> set[str]:
+    """Draw the stored fold and grazing curves (one polyline per Hopf curve they start from); return legend keys."""
+    keys = set()
+    for kind in _CURVE_STYLE:
+        if f"{kind}_{x}" not in ds or f"{kind}_{y}" not in ds:
+            continue
+        idx = np.asarray(ds[f"{kind}_curve_index"].values)
+        px, py = ds[f"{kind}_{x}"].values, ds[f"{kind}_{y}"].values
+        for c in np.unique(idx):
+            on = idx == c
+            ax.plot(px[on], py[on], zorder=2.5, **_curve_line(kind))
+            keys.add(kind)
+    return keys
+
+
+def _curve_handles(present: set[str]) -> list:
+    """Legend entries of the fold and grazing curves drawn."""
+    from matplotlib.lines import Line2D
+
+    return [Line2D([], [], label=label, **_curve_line(kind))
+            for kind, (_, label) in _CURVE_STYLE.items() if kind in present]  # fmt: skip
+
+
 def regime_map(ds: xr.Dataset, *, x: str | None = None, y: str | None = None, facet: str | None = None,
                max_facets: int = 6):  # fmt: skip
     """Regime map of a sweep over two dimensions, one panel per value of a third.
@@ -197,6 +241,7 @@ def regime_map(ds: xr.Dataset, *, x: str | None = None, y: str | None = None, fa
             ax.set_title(f"{facet} = {ds[facet].values[fi]:g} {ds[facet].attrs.get('units', '')}".strip(), fontsize=9)
         if "hopf_normal_load" in ds and {x, y} == {"normal_load", "arm_length"}:
             present.update(_draw_hopf(ax, ds, x, y))
+        present.update(_draw_curves(ax, ds, x, y))
         for dim, line in ((x, ax.axvline), (y, ax.axhline)):
             if dim == "normal_load":
                 for bound in (22.0, 93.0):
@@ -216,6 +261,7 @@ def regime_map(ds: xr.Dataset, *, x: str | None = None, y: str | None = None, fa
             from matplotlib.lines import Line2D
 
             handles.append(Line2D([], [], color="k", lw=1.4, ls=style, label=label))
+    handles += _curve_handles(present)
     if "multi_period" in present:
         handles.append(Patch(facecolor="none", edgecolor="none", label="nT: a cycle of n mode periods\n(period doubling, subharmonic)"))
     fig.legend(handles=handles, loc="outside right center", fontsize=8, frameon=False)
