@@ -42,6 +42,16 @@ _OPTION_RANGES = {
 }
 _INT_OPTIONS = {"max_points": 2, "max_newton": 2, "n_samples": 16}
 _STATE = ["z", "z_dot", "x", "x_dot", "phi", "phi_dot"]
+#: What each letter of a bifurcation diagram stands for (its legend).
+_LEGEND = {
+    "H": "Hopf point (the branch\nleaves steady sliding)",
+    "F": "fold of cycles",
+    "G": "grazing: the orbit first\ntouches contact loss",
+    "G/F": "grazing where the branch\nturns back (non-smooth fold)",
+    "PD": "period doubling",
+    "NS": "Neimark-Sacker (torus)",
+    "BP": "branch point",
+}
 _LABELS = {"fold": "F", "period_doubling": "PD", "neimark_sacker": "NS", "grazing": "G", "hopf": "H",
            "branch_point": "BP", "end": ""}  # fmt: skip
 
@@ -289,7 +299,10 @@ def _dataset(out: dict, dim: str, parameter: str, attrs: dict) -> xr.Dataset:
         "status": ((), np.uint8(out["status"]), flag_attrs(STATUS_NAMES, "how the computation ended (see attribute reason)")),
     }  # fmt: skip
     data["state0"][2].pop("units")
-    coords = {dim: np.arange(n), "multiplier": np.arange(6), "state": _STATE}
+    coords = {dim: (dim, np.arange(n), {"long_name": f"index of the point along the {dim.split('_')[0]}"}),
+              "multiplier": ("multiplier", np.arange(6), {"long_name": "index of the Floquet multiplier (by modulus "
+                                                                      "descending)"}),
+              "state": _STATE}  # fmt: skip
     return xr.Dataset(data, coords=coords, attrs=attrs)
 
 
@@ -366,6 +379,8 @@ def _curve(kind: str, model, x, y, n, orbit, from_hopf, start, direction, option
     return ds
 
 
+#: Bisections of the arm length where a curve leaves the window between two slices (see :func:`_arm_curve`).
+_ARM_END_BISECTIONS: int = 4
 #: Per-point arrays of a raw branch (``_core.branch``) and their trailing shapes.
 _RAW_KEYS: dict[str, tuple[tuple[int, ...], str]] = {
     **{k: ((), "f8") for k in ("parameter", "period", "trivial_error", "a0", "a1", "z_max", "z_min", "min_gap",
@@ -385,7 +400,9 @@ def _arm_curve(kind: str, model: SliderModel, xspec, yspan, n: int, orbit, from_
     previous slice's is taken (the first: nearest ``from_hopf``'s value, or ``start``, or the low
     end of ``x``), and the branch from it runs to its first ``kind`` point, as ``branch(...,
     from_hopf=value, stop_at=kind)`` does. A slice with no Hopf point in the window, or whose
-    branch leaves the window first, has no point: the curve has left the box there.
+    branch leaves the window first, has no point: the curve has left the box there, and between
+    such a slice and its neighbour with a point the arm length is bisected ``_ARM_END_BISECTIONS``
+    times, so that the curve reaches to 1/16 of a slice spacing from where it leaves the window.
     """
     from . import _apparatus
     from ._hopf import sliding_branch
@@ -403,42 +420,72 @@ def _arm_curve(kind: str, model: SliderModel, xspec, yspan, n: int, orbit, from_
     else:
         target = _finite("from_hopf", from_hopf)
     ys = np.linspace(*yspan, n)
-    models = []
-    for yv in ys:
+
+    def at(yv: float):
         try:
-            models.append(model.replace(**_apparatus.arm_frequencies(float(yv), model)))
+            return model.replace(**_apparatus.arm_frequencies(float(yv), model))
         except ValueError as e:
             raise ValueError(f"y = ('arm_length', {yspan[0]}, {yspan[1]}): arm_length = {yv:.6g} gives no valid "
                              f"model ({e})") from None  # fmt: skip
+
+    for yv in ys:  # every slice's model is valid before any work
+        at(yv)
     contact = "bilateral" if kind == "grazing" else model.contact
     turns = 1 << BRANCH_FLAG_NAMES.index("parameter_turns")
-    found: list[dict] = []
-    gaps: list[str] = []
-    status, flows, rhs = 0, 0, 0
-    for yv, m in zip(ys, models):
+    work = {"status": 0, "n_flows": 0, "n_rhs": 0}
+
+    def slice_at(yv: float, near: float) -> tuple[dict | None, str]:
+        """The ``kind`` point at arm length ``yv`` from the Hopf point nearest ``near``, or None and why not."""
+        m = at(yv)
         sb = sliding_branch(m, (xn, x_lo, x_hi))
         ok = (sb.is_hopf.values == 1) & (sb.hopf_status.values == 0)
         values, omegas = sb[f"hopf_{xn}"].values[ok], sb.hopf_frequency.values[ok]
         if values.size == 0:
-            gaps.append(f"{yv:.6g} (no Hopf point)")
-            continue
-        i = int(np.argmin(np.abs(values - target)))
-        target = float(values[i])
-        out = _core.branch(m.replace(**{xn: target}).values(), contact, m.friction_law, xn, target, x_lo, x_hi,
+            return None, "no Hopf point"
+        i = int(np.argmin(np.abs(values - near)))
+        h = float(values[i])
+        out = _core.branch(m.replace(**{xn: h}).values(), contact, m.friction_law, xn, h, x_lo, x_hi,
                            hopf_omega=float(omegas[i]), options=opts, stop_at=kind)  # fmt: skip
-        flows, rhs = flows + int(out["n_flows"]), rhs + int(out["n_rhs"])
+        work["n_flows"] += int(out["n_flows"])
+        work["n_rhs"] += int(out["n_rhs"])
         last = int(out["point_type"][-1]) if len(out["point_type"]) else -1
         hit = last == POINT_TYPE_NAMES.index(kind) or (
             kind == "fold" and last == POINT_TYPE_NAMES.index("grazing") and int(out["flags"][-1]) & turns)
         if not hit:
-            status = max(status, int(out["status"]))
-            gaps.append(f"{yv:.6g} ({out['reason']})")
+            work["status"] = max(work["status"], int(out["status"]))
+            return None, str(out["reason"])
+        return {k: out[k][-1] for k in _RAW_KEYS} | {"y": float(yv), "hopf": h}, ""
+
+    slices: list[tuple[float, dict | None, str]] = []
+    for yv in ys:
+        pt, why = slice_at(yv, target)
+        if pt is not None:
+            target = pt["hopf"]
+        slices.append((float(yv), pt, why))
+    # Where the curve leaves the window between two slices (a slice without a point next to one
+    # with), bisect the arm length ENDS times: the curve reaches to 1/2^ENDS of a slice from its end.
+    ends = []
+    for (ya, pa, _), (yb, pb, _) in zip(slices[:-1], slices[1:]):
+        if (pa is None) == (pb is None):
             continue
-        found.append({k: out[k][-1] for k in _RAW_KEYS} | {"y": yv, "hopf": target})
+        (y_in, p_in), y_out = ((ya, pa), yb) if pa is not None else ((yb, pb), ya)
+        for _ in range(_ARM_END_BISECTIONS):
+            ym = 0.5 * (y_in + y_out)
+            pm, _ = slice_at(ym, p_in["hopf"])
+            if pm is None:
+                y_out = ym
+            else:
+                y_in, p_in = ym, pm
+                ends.append(pm)
+    found = sorted([pt for _, pt, _ in slices if pt is not None] + ends, key=lambda f: f["y"])
+    gaps = [f"{yv:.6g} ({why})" for yv, pt, why in slices if pt is None]
+    status, flows, rhs = work["status"], work["n_flows"], work["n_rhs"]
     merged = {k: np.array([f[k] for f in found], dtype=d).reshape((len(found),) + shape)
               for k, (shape, d) in _RAW_KEYS.items()}  # fmt: skip
     merged["status"] = status
-    reason = f"{len(found)} of {n} arm lengths located their {kind} point"
+    reason = f"{n - len(gaps)} of {n} arm lengths located their {kind} point"
+    if ends:
+        reason += f" ({len(ends)} more where the curve leaves the window, by bisection)"
     if gaps:
         reason += "; none at arm_length = " + ", ".join(gaps)
     attrs = {"kind": kind, "x": xn, "y": "arm_length", "x_units": PARAM_UNITS[xn], "y_units": "m",
@@ -478,9 +525,14 @@ def fold_curve(model: SliderModel, x, y, *, n: int = 11, orbit=None, from_hopf=N
     model : SliderModel
         The start orbit's model; its ``y`` value must lie in the ``y`` range.
     x, y : (str, float, float)
-        The continuation parameter with its window, and the sliced parameter with its range.
+        The continuation parameter with its window, and the sliced parameter with its range. ``y``
+        may be ``"arm_length"`` [m] (the apparatus model, the model's own frequencies at 0.072 m):
+        then every slice starts at its own Hopf point (``from_hopf`` only: ``True``, a Hopf item or
+        an ``x`` value, the first slice's Hopf point nearest it), and where the curve leaves the
+        ``x`` window between two slices its end is located by bisection in the arm length.
     n : int
-        Values of ``y`` (evenly spaced over its range; the model's own value is added).
+        Values of ``y`` (evenly spaced over its range; the model's own value is added, except
+        for the arm length).
     orbit, from_hopf, start, direction
         Where the first slice's branch starts, as in :func:`branch`.
     **options
@@ -520,6 +572,8 @@ def bifurcation_diagram(ds: xr.Dataset, *, amplitude: str = "A1", ax=None):
     Returns
     -------
     matplotlib.figure.Figure
+        The legend, right of the axes, names only what is drawn: the stable and unstable lines
+        present and each letter marking a special point (H, F, G, G/F, PD, NS, BP).
     """
     if not isinstance(ds, xr.Dataset) or "branch_point" not in ds.dims:
         raise ValueError("ds must be a tribosweep.branch Dataset (dim branch_point)")
@@ -531,38 +585,47 @@ def bifurcation_diagram(ds: xr.Dataset, *, amplitude: str = "A1", ax=None):
     except ImportError as e:  # pragma: no cover - exercised only without matplotlib
         raise ImportError("bifurcation_diagram needs matplotlib: pip install 'tribosweep[plot]'") from e
     if ax is None:
-        fig = Figure(figsize=(7, 4.5))
+        fig = Figure(figsize=(7.5, 4.5), layout="constrained")
         ax = fig.add_subplot()
     else:
         fig = ax.figure
     p = ds.parameter.values
     a = ds[amplitude].values
-    scale, unit = (1e6, "um") if ds[amplitude].attrs.get("units") == "m" else (1.0, ds[amplitude].attrs.get("units", ""))
+    units = ds[amplitude].attrs.get("units", "")
+    scale, unit = (1e6, "\u00b5m") if units == "m" else (1.0, units)
     stable = ds.stable.values.astype(bool)
     # A segment is stable when both its ends are; runs of equal segments are drawn as one line
     # (so that the dashes show on a dense branch).
     seg = stable[:-1] & stable[1:]
+    drawn = set()
     start = 0
     for i in range(1, len(seg) + 1):
         if i == len(seg) or seg[i] != seg[start]:
             solid = bool(seg[start])
             ax.plot(p[start:i + 1], a[start:i + 1] * scale, color="C0" if solid else "C3", ls="-" if solid else "--",
                     lw=1.4)  # fmt: skip
+            drawn.add("stable" if solid else "unstable")
             start = i
-    types = ds.point_type.values
-    for i, t in enumerate(types):
+    turns = 1 << BRANCH_FLAG_NAMES.index("parameter_turns")
+    for i, t in enumerate(ds.point_type.values):
         name = POINT_TYPE_NAMES[int(t)]
         if name in ("regular", "end"):
             continue
         label = _LABELS[name]
-        if name == "grazing" and int(ds.flags.values[i]) & (1 << BRANCH_FLAG_NAMES.index("parameter_turns")):
+        if name == "grazing" and int(ds.flags.values[i]) & turns:
             label = "G/F"
         ax.plot(p[i], a[i] * scale, "ko", ms=4)
         ax.annotate(label, (p[i], a[i] * scale), textcoords="offset points", xytext=(4, 4), fontsize=8)
+        drawn.add(label)
     name = ds.attrs.get("parameter", "parameter")
-    ax.set_xlabel(f"{name} [{ds.attrs.get('parameter_units', '')}]")
-    ax.set_ylabel(f"{amplitude} [{unit}]")
-    ax.set_title(f"branch of periodic orbits ({ds.attrs.get('contact', '')} contact)")
-    handles = [Line2D([], [], color="C0", ls="-", label="stable"), Line2D([], [], color="C3", ls="--", label="unstable")]
-    ax.legend(handles=handles, loc="best", fontsize=8)
+    long = PARAM_LONG_NAMES.get(name, name)
+    ax.set_xlabel(f"{long} [{ds.attrs.get('parameter_units', '')}]")
+    what = ds[amplitude].attrs.get("long_name", amplitude)
+    ax.set_ylabel(f"{amplitude}: {what} [{unit}]" if len(what) <= 40 else f"{amplitude} [{unit}]")
+    ax.set_title(f"branch of periodic orbits ({ds.attrs.get('contact', '')} contact)", fontsize=10)
+    lines = {"stable": ("C0", "-", "stable orbit"), "unstable": ("C3", "--", "unstable orbit")}
+    handles = [Line2D([], [], color=c, ls=ls, lw=1.4, label=text) for key, (c, ls, text) in lines.items() if key in drawn]
+    handles += [Line2D([], [], color="k", marker="o", ms=4, ls="none", label=f"{letter}: {text}")
+                for letter, text in _LEGEND.items() if letter in drawn]  # fmt: skip
+    ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
     return fig
