@@ -265,10 +265,10 @@ def run_branch(args: argparse.Namespace) -> int:
     fig = _branch.bifurcation_diagram(ds, amplitude=amplitude)
     os.makedirs(os.path.dirname(os.path.abspath(png)), exist_ok=True)
     fig.savefig(png, dpi=120)
-    units = ds.attrs["parameter_units"]
+    units = "" if ds.attrs["parameter_units"] == "1" else " " + ds.attrs["parameter_units"]
     print(output)
-    print(f"{parameter} from the Hopf point at {hopf:.6g} {units} ({crit}), {model.contact} contact: "
-          f"{ds.sizes['branch_point']} points in [{lo:g}, {hi:g}] {units}")  # fmt: skip
+    print(f"{parameter} from the Hopf point at {hopf:.6g}{units} ({crit}), {model.contact} contact: "
+          f"{ds.sizes['branch_point']} points in [{lo:g}, {hi:g}]{units}")  # fmt: skip
     print(f"status: {STATUS_NAMES[int(ds.status)]} ({ds.attrs['reason']})")
     names = [_branch.POINT_TYPE_NAMES[int(t)] for t in ds.point_type.values]
     turns = 1 << _branch.BRANCH_FLAG_NAMES.index("parameter_turns")
