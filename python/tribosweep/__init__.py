@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from . import _core
 from ._apparatus import ARM_EXPONENTS, apparatus_model, arm_frequencies
+from ._boundary import boundary_curves
 from ._branch import BRANCH_FLAG_NAMES, bifurcation_diagram, branch, fold_curve, grazing_curve
 from ._branch import POINT_TYPE_NAMES as BRANCH_POINT_TYPE_NAMES
 from ._census import census
@@ -69,6 +70,7 @@ __all__ = [
     "apparatus_model",
     "arm_frequencies",
     "bifurcation_diagram",
+    "boundary_curves",
     "branch",
     "census",
     "describing_function",

@@ -42,6 +42,16 @@ _OPTION_RANGES = {
 }
 _INT_OPTIONS = {"max_points": 2, "max_newton": 2, "n_samples": 16}
 _STATE = ["z", "z_dot", "x", "x_dot", "phi", "phi_dot"]
+#: What each letter of a bifurcation diagram stands for (its legend).
+_LEGEND = {
+    "H": "Hopf point (the branch\nleaves steady sliding)",
+    "F": "fold of cycles",
+    "G": "grazing: the orbit first\ntouches contact loss",
+    "G/F": "grazing where the branch\nturns back (non-smooth fold)",
+    "PD": "period doubling",
+    "NS": "Neimark-Sacker (torus)",
+    "BP": "branch point",
+}
 _LABELS = {"fold": "F", "period_doubling": "PD", "neimark_sacker": "NS", "grazing": "G", "hopf": "H",
            "branch_point": "BP", "end": ""}  # fmt: skip
 
@@ -289,25 +299,31 @@ def _dataset(out: dict, dim: str, parameter: str, attrs: dict) -> xr.Dataset:
         "status": ((), np.uint8(out["status"]), flag_attrs(STATUS_NAMES, "how the computation ended (see attribute reason)")),
     }  # fmt: skip
     data["state0"][2].pop("units")
-    coords = {dim: np.arange(n), "multiplier": np.arange(6), "state": _STATE}
+    coords = {dim: (dim, np.arange(n), {"long_name": f"index of the point along the {dim.split('_')[0]}"}),
+              "multiplier": ("multiplier", np.arange(6), {"long_name": "index of the Floquet multiplier (by modulus "
+                                                                      "descending)"}),
+              "state": _STATE}  # fmt: skip
     return xr.Dataset(data, coords=coords, attrs=attrs)
 
 
-def _axis(model: SliderModel, axis, arg: str) -> tuple[str, float, float]:
+def _axis(model: SliderModel, axis, arg: str, arm: bool = False) -> tuple[str, float, float]:
     try:
         name, lo, hi = axis
     except (TypeError, ValueError):
         raise ValueError(f"{arg} = {axis!r} must be (parameter name, low, high)") from None
-    name = _parameter(name, f"{arg}[0]")
+    if not (arm and name == "arm_length"):
+        name = _parameter(name, f"{arg}[0]")
     lo, hi = _finite(f"{arg}[1]", lo), _finite(f"{arg}[2]", hi)
     if not lo < hi:
         raise ValueError(f"{arg} = {axis!r}: must have low < high")
+    if name == "arm_length" and not lo > 0:
+        raise ValueError(f"{arg} = {axis!r}: arm lengths must be > 0 [m]")
     return name, lo, hi
 
 
 def _curve(kind: str, model, x, y, n, orbit, from_hopf, start, direction, options) -> xr.Dataset:
     model = _model(model)
-    (xn, x_lo, x_hi), (yn, y_lo, y_hi) = _axis(model, x, "x"), _axis(model, y, "y")
+    (xn, x_lo, x_hi), (yn, y_lo, y_hi) = _axis(model, x, "x"), _axis(model, y, "y", arm=True)
     if xn == yn:
         raise ValueError(f"x and y are both {xn!r}: must be two different parameters")
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not 2 <= n <= 10_000:
@@ -315,6 +331,8 @@ def _curve(kind: str, model, x, y, n, orbit, from_hopf, start, direction, option
     if (from_hopf is None) == (orbit is None):
         raise ValueError("give exactly one of from_hopf and orbit")
     opts = _options(options)
+    if yn == "arm_length":
+        return _arm_curve(kind, model, (xn, x_lo, x_hi), (y_lo, y_hi), n, orbit, from_hopf, start, opts)
     y_model = float(getattr(model, yn))
     if not y_lo <= y_model <= y_hi:
         raise ValueError(f"y = {y!r}: the model's {yn} = {y_model} (where the start orbit is) must lie within it")
@@ -361,6 +379,134 @@ def _curve(kind: str, model, x, y, n, orbit, from_hopf, start, direction, option
     return ds
 
 
+#: Bisections of the arm length where a curve leaves the window between two slices (see :func:`_arm_curve`).
+_ARM_END_BISECTIONS: int = 4
+#: Per-point arrays of a raw branch (``_core.branch``) and their trailing shapes.
+_RAW_KEYS: dict[str, tuple[tuple[int, ...], str]] = {
+    **{k: ((), "f8") for k in ("parameter", "period", "trivial_error", "a0", "a1", "z_max", "z_min", "min_gap",
+                                "min_law_force", "fraction_off_disk", "dp_ds", "arclength", "residual")},
+    **{k: ((), "u1") for k in ("n_unstable", "point_type", "contact", "flags", "trivial")},
+    "stable": ((), "?"), "n_switches": ((), "u4"), "newton_iterations": ((), "u4"),
+    **{k: ((6,), "f8") for k in ("state0", "multipliers_re", "multipliers_im")},
+}  # fmt: skip
+
+
+def _arm_curve(kind: str, model: SliderModel, xspec, yspan, n: int, orbit, from_hopf, start, opts) -> xr.Dataset:
+    """:func:`fold_curve` / :func:`grazing_curve` over the arm length: each slice from its own Hopf point.
+
+    The arm length moves the three natural frequencies at once (``arm_frequencies``, the model's
+    own at ``L_SEED``), so no orbit is carried between slices: at each of ``n`` arm lengths the
+    Hopf points of ``x`` in its window are found (:func:`sliding_branch`), the one nearest the
+    previous slice's is taken (the first: nearest ``from_hopf``'s value, or ``start``, or the low
+    end of ``x``), and the branch from it runs to its first ``kind`` point, as ``branch(...,
+    from_hopf=value, stop_at=kind)`` does. A slice with no Hopf point in the window, or whose
+    branch leaves the window first, has no point: the curve has left the box there, and between
+    such a slice and its neighbour with a point the arm length is bisected ``_ARM_END_BISECTIONS``
+    times, so that the curve reaches to 1/16 of a slice spacing from where it leaves the window.
+    """
+    from . import _apparatus
+    from ._hopf import sliding_branch
+
+    xn, x_lo, x_hi = xspec
+    if orbit is not None:
+        raise ValueError("orbit: with y = 'arm_length' every slice starts at its own Hopf point (the arm length "
+                         "moves three natural frequencies at once, so no orbit is carried): give from_hopf instead")  # fmt: skip
+    if xn in _apparatus.MODE_FIELDS.values():
+        raise ValueError(f"x = {xn!r} is set by arm_length through the apparatus model: it cannot be the other parameter")
+    if isinstance(from_hopf, Mapping):
+        target = _finite(f"from_hopf[{xn!r}]", from_hopf.get(xn))
+    elif from_hopf is True:
+        target = x_lo if start is None else _finite("start", start)
+    else:
+        target = _finite("from_hopf", from_hopf)
+    ys = np.linspace(*yspan, n)
+
+    def at(yv: float):
+        try:
+            return model.replace(**_apparatus.arm_frequencies(float(yv), model))
+        except ValueError as e:
+            raise ValueError(f"y = ('arm_length', {yspan[0]}, {yspan[1]}): arm_length = {yv:.6g} gives no valid "
+                             f"model ({e})") from None  # fmt: skip
+
+    for yv in ys:  # every slice's model is valid before any work
+        at(yv)
+    contact = "bilateral" if kind == "grazing" else model.contact
+    turns = 1 << BRANCH_FLAG_NAMES.index("parameter_turns")
+    work = {"status": 0, "n_flows": 0, "n_rhs": 0}
+
+    def slice_at(yv: float, near: float) -> tuple[dict | None, str]:
+        """The ``kind`` point at arm length ``yv`` from the Hopf point nearest ``near``, or None and why not."""
+        m = at(yv)
+        sb = sliding_branch(m, (xn, x_lo, x_hi))
+        ok = (sb.is_hopf.values == 1) & (sb.hopf_status.values == 0)
+        values, omegas = sb[f"hopf_{xn}"].values[ok], sb.hopf_frequency.values[ok]
+        if values.size == 0:
+            return None, "no Hopf point"
+        i = int(np.argmin(np.abs(values - near)))
+        h = float(values[i])
+        out = _core.branch(m.replace(**{xn: h}).values(), contact, m.friction_law, xn, h, x_lo, x_hi,
+                           hopf_omega=float(omegas[i]), options=opts, stop_at=kind)  # fmt: skip
+        work["n_flows"] += int(out["n_flows"])
+        work["n_rhs"] += int(out["n_rhs"])
+        last = int(out["point_type"][-1]) if len(out["point_type"]) else -1
+        hit = last == POINT_TYPE_NAMES.index(kind) or (
+            kind == "fold" and last == POINT_TYPE_NAMES.index("grazing") and int(out["flags"][-1]) & turns)
+        if not hit:
+            work["status"] = max(work["status"], int(out["status"]))
+            return None, str(out["reason"])
+        return {k: out[k][-1] for k in _RAW_KEYS} | {"y": float(yv), "hopf": h}, ""
+
+    slices: list[tuple[float, dict | None, str]] = []
+    for yv in ys:
+        pt, why = slice_at(yv, target)
+        if pt is not None:
+            target = pt["hopf"]
+        slices.append((float(yv), pt, why))
+    # Where the curve leaves the window between two slices (a slice without a point next to one
+    # with), bisect the arm length ENDS times: the curve reaches to 1/2^ENDS of a slice from its end.
+    ends = []
+    for (ya, pa, _), (yb, pb, _) in zip(slices[:-1], slices[1:]):
+        if (pa is None) == (pb is None):
+            continue
+        (y_in, p_in), y_out = ((ya, pa), yb) if pa is not None else ((yb, pb), ya)
+        for _ in range(_ARM_END_BISECTIONS):
+            ym = 0.5 * (y_in + y_out)
+            pm, _ = slice_at(ym, p_in["hopf"])
+            if pm is None:
+                y_out = ym
+            else:
+                y_in, p_in = ym, pm
+                ends.append(pm)
+    found = sorted([pt for _, pt, _ in slices if pt is not None] + ends, key=lambda f: f["y"])
+    gaps = [f"{yv:.6g} ({why})" for yv, pt, why in slices if pt is None]
+    status, flows, rhs = work["status"], work["n_flows"], work["n_rhs"]
+    merged = {k: np.array([f[k] for f in found], dtype=d).reshape((len(found),) + shape)
+              for k, (shape, d) in _RAW_KEYS.items()}  # fmt: skip
+    merged["status"] = status
+    reason = f"{n - len(gaps)} of {n} arm lengths located their {kind} point"
+    if ends:
+        reason += f" ({len(ends)} more where the curve leaves the window, by bisection)"
+    if gaps:
+        reason += "; none at arm_length = " + ", ".join(gaps)
+    attrs = {"kind": kind, "x": xn, "y": "arm_length", "x_units": PARAM_UNITS[xn], "y_units": "m",
+             "x_bounds_low": x_lo, "x_bounds_high": x_hi, "y_low": float(ys[0]), "y_high": float(ys[-1]), "n": int(n),
+             "method": "slice by slice over the arm length (natural frequencies by the apparatus power laws, the "
+                       "model's own at 0.072 m): at each, the branch from the Hopf point of x nearest the previous "
+                       "slice's, to its first special point",
+             "reason": reason, "contact": contact if kind == "grazing" else model.contact,
+             "friction_law": model.friction_law, "n_flows": flows, "n_rhs": rhs}  # fmt: skip
+    if kind == "grazing":
+        attrs["comment"] = ("the contact side's grazing (the pin first leaves the disk), followed with the bilateral law, "
+                            "on which that orbit is the same")  # fmt: skip
+    attrs |= {f"continuation_{k}": (int(v) if k in _INT_OPTIONS else v) for k, v in (DEFAULTS | opts).items()}
+    ds = _dataset(merged, "curve_point", xn, attrs).rename({"parameter": xn})
+    ds["arm_length"] = (("curve_point",), np.array([f["y"] for f in found], dtype=np.float64),
+                        {"units": "m", "long_name": "arm_length: clamped arm length l"})  # fmt: skip
+    ds[f"hopf_{xn}"] = (("curve_point",), np.array([f["hopf"] for f in found], dtype=np.float64),
+                        {"units": PARAM_UNITS[xn], "long_name": f"the Hopf point of {xn} the slice's branch starts at"})  # fmt: skip
+    return ds
+
+
 def fold_curve(model: SliderModel, x, y, *, n: int = 11, orbit=None, from_hopf=None, start=None, direction=None,
                **options) -> xr.Dataset:  # fmt: skip
     """The curve of a fold of cycles in two parameters: the edge of a region where a family of cycles exists.
@@ -379,9 +525,14 @@ def fold_curve(model: SliderModel, x, y, *, n: int = 11, orbit=None, from_hopf=N
     model : SliderModel
         The start orbit's model; its ``y`` value must lie in the ``y`` range.
     x, y : (str, float, float)
-        The continuation parameter with its window, and the sliced parameter with its range.
+        The continuation parameter with its window, and the sliced parameter with its range. ``y``
+        may be ``"arm_length"`` [m] (the apparatus model, the model's own frequencies at 0.072 m):
+        then every slice starts at its own Hopf point (``from_hopf`` only: ``True``, a Hopf item or
+        an ``x`` value, the first slice's Hopf point nearest it), and where the curve leaves the
+        ``x`` window between two slices its end is located by bisection in the arm length.
     n : int
-        Values of ``y`` (evenly spaced over its range; the model's own value is added).
+        Values of ``y`` (evenly spaced over its range; the model's own value is added, except
+        for the arm length).
     orbit, from_hopf, start, direction
         Where the first slice's branch starts, as in :func:`branch`.
     **options
@@ -421,6 +572,8 @@ def bifurcation_diagram(ds: xr.Dataset, *, amplitude: str = "A1", ax=None):
     Returns
     -------
     matplotlib.figure.Figure
+        The legend, right of the axes, names only what is drawn: the stable and unstable lines
+        present and each letter marking a special point (H, F, G, G/F, PD, NS, BP).
     """
     if not isinstance(ds, xr.Dataset) or "branch_point" not in ds.dims:
         raise ValueError("ds must be a tribosweep.branch Dataset (dim branch_point)")
@@ -432,38 +585,47 @@ def bifurcation_diagram(ds: xr.Dataset, *, amplitude: str = "A1", ax=None):
     except ImportError as e:  # pragma: no cover - exercised only without matplotlib
         raise ImportError("bifurcation_diagram needs matplotlib: pip install 'tribosweep[plot]'") from e
     if ax is None:
-        fig = Figure(figsize=(7, 4.5))
+        fig = Figure(figsize=(7.5, 4.5), layout="constrained")
         ax = fig.add_subplot()
     else:
         fig = ax.figure
     p = ds.parameter.values
     a = ds[amplitude].values
-    scale, unit = (1e6, "um") if ds[amplitude].attrs.get("units") == "m" else (1.0, ds[amplitude].attrs.get("units", ""))
+    units = ds[amplitude].attrs.get("units", "")
+    scale, unit = (1e6, "\u00b5m") if units == "m" else (1.0, units)
     stable = ds.stable.values.astype(bool)
     # A segment is stable when both its ends are; runs of equal segments are drawn as one line
     # (so that the dashes show on a dense branch).
     seg = stable[:-1] & stable[1:]
+    drawn = set()
     start = 0
     for i in range(1, len(seg) + 1):
         if i == len(seg) or seg[i] != seg[start]:
             solid = bool(seg[start])
             ax.plot(p[start:i + 1], a[start:i + 1] * scale, color="C0" if solid else "C3", ls="-" if solid else "--",
                     lw=1.4)  # fmt: skip
+            drawn.add("stable" if solid else "unstable")
             start = i
-    types = ds.point_type.values
-    for i, t in enumerate(types):
+    turns = 1 << BRANCH_FLAG_NAMES.index("parameter_turns")
+    for i, t in enumerate(ds.point_type.values):
         name = POINT_TYPE_NAMES[int(t)]
         if name in ("regular", "end"):
             continue
         label = _LABELS[name]
-        if name == "grazing" and int(ds.flags.values[i]) & (1 << BRANCH_FLAG_NAMES.index("parameter_turns")):
+        if name == "grazing" and int(ds.flags.values[i]) & turns:
             label = "G/F"
         ax.plot(p[i], a[i] * scale, "ko", ms=4)
         ax.annotate(label, (p[i], a[i] * scale), textcoords="offset points", xytext=(4, 4), fontsize=8)
+        drawn.add(label)
     name = ds.attrs.get("parameter", "parameter")
-    ax.set_xlabel(f"{name} [{ds.attrs.get('parameter_units', '')}]")
-    ax.set_ylabel(f"{amplitude} [{unit}]")
-    ax.set_title(f"branch of periodic orbits ({ds.attrs.get('contact', '')} contact)")
-    handles = [Line2D([], [], color="C0", ls="-", label="stable"), Line2D([], [], color="C3", ls="--", label="unstable")]
-    ax.legend(handles=handles, loc="best", fontsize=8)
+    long = PARAM_LONG_NAMES.get(name, name)
+    ax.set_xlabel(f"{long} [{ds.attrs.get('parameter_units', '')}]")
+    what = ds[amplitude].attrs.get("long_name", amplitude)
+    ax.set_ylabel(f"{amplitude}: {what} [{unit}]" if len(what) <= 40 else f"{amplitude} [{unit}]")
+    ax.set_title(f"branch of periodic orbits ({ds.attrs.get('contact', '')} contact)", fontsize=10)
+    lines = {"stable": ("C0", "-", "stable orbit"), "unstable": ("C3", "--", "unstable orbit")}
+    handles = [Line2D([], [], color=c, ls=ls, lw=1.4, label=text) for key, (c, ls, text) in lines.items() if key in drawn]
+    handles += [Line2D([], [], color="k", marker="o", ms=4, ls="none", label=f"{letter}: {text}")
+                for letter, text in _LEGEND.items() if letter in drawn]  # fmt: skip
+    ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
     return fig

@@ -16,6 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import _cli_curves
+
 #: The default sweep around the seed (used when no axis is given on the command line or in a config).
 DEFAULT_AXES: dict[str, str] = {"normal_load": "10:150:15", "arm_length": "0.05:0.127:4", "sliding_speed": "0.46"}
 _PHYSICS = ("normal_load", "arm_length", "sliding_speed")
@@ -511,6 +513,10 @@ COMMANDS: dict[str, Command] = {
     "sweep": Command("map the regime over normal load x arm length x sliding speed", _add_sweep_arguments, _run_sweep),
     "info": Command("summarise a sweep file", _add_info_arguments, _run_info),
     "plot": Command("draw a sweep file's regime map", _add_plot_arguments, _run_plot),
+    "branch": Command("follow a branch of periodic orbits in one parameter from a Hopf point: netCDF and a "
+                      "bifurcation diagram", _cli_curves.add_branch_arguments, _cli_curves.run_branch),
+    "boundary": Command("the Hopf, fold and grazing curves over a normal load x arm length box: netCDF and a map",
+                        _cli_curves.add_boundary_arguments, _cli_curves.run_boundary),
     "bench": Command(
         "work-precision charts and failure maps of the integrators against scipy/numba baselines",
         _add_bench_arguments,

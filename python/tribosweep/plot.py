@@ -116,6 +116,50 @@ def _draw_hopf(ax, ds: xr.Dataset, x: str, y: str) -> set[str]:
     return keys
 
 
+#: How the fold and grazing curves of the cycles born at a Hopf curve are drawn, in drawing order:
+#: line keywords and legend label. The fold's markers are the arm lengths where its points were located.
+#: The grazing curve is a white band edged in black and the fold a black dashed line, so that a
+#: fold lying on the grazing curve (a grazing where the branch turns back) shows as both.
+_CURVE_STYLE: dict[str, tuple[dict, str]] = {
+    "grazing": ({"color": "white", "lw": 2.4},
+                "grazing: the saddle cycle\nfirst leaves the disk"),
+    "fold": ({"color": "k", "lw": 1.1, "ls": (0, (3, 2)), "marker": "s", "ms": 2.5},
+             "fold of cycles: the\nsaddle cycle ends"),
+}  # fmt: skip
+
+
+def _curve_line(kind: str) -> dict:
+    from matplotlib import patheffects
+
+    style = dict(_CURVE_STYLE[kind][0])
+    if kind == "grazing":
+        style["path_effects"] = [patheffects.Stroke(linewidth=4.0, foreground="k"), patheffects.Normal()]
+    return style
+
+
+def _draw_curves(ax, ds: xr.Dataset, x: str, y: str) -> set[str]:
+    """Draw the stored fold and grazing curves (one polyline per Hopf curve they start from); return legend keys."""
+    keys = set()
+    for kind in _CURVE_STYLE:
+        if f"{kind}_{x}" not in ds or f"{kind}_{y}" not in ds:
+            continue
+        idx = np.asarray(ds[f"{kind}_curve_index"].values)
+        px, py = ds[f"{kind}_{x}"].values, ds[f"{kind}_{y}"].values
+        for c in np.unique(idx):
+            on = idx == c
+            ax.plot(px[on], py[on], zorder=2.5, **_curve_line(kind))
+            keys.add(kind)
+    return keys
+
+
+def _curve_handles(present: set[str]) -> list:
+    """Legend entries of the fold and grazing curves drawn."""
+    from matplotlib.lines import Line2D
+
+    return [Line2D([], [], label=label, **_curve_line(kind))
+            for kind, (_, label) in _CURVE_STYLE.items() if kind in present]  # fmt: skip
+
+
 def regime_map(ds: xr.Dataset, *, x: str | None = None, y: str | None = None, facet: str | None = None,
                ncols: int = 4):  # fmt: skip
     """Regime map of a sweep over two dimensions, one panel per value of a third.
@@ -206,6 +250,7 @@ def regime_map(ds: xr.Dataset, *, x: str | None = None, y: str | None = None, fa
             ax.set_title(f"{facet} = {ds[facet].values[fi]:.4g} {ds[facet].attrs.get('units', '')}".strip(), fontsize=9)
         if "hopf_normal_load" in ds and {x, y} == {"normal_load", "arm_length"}:
             present.update(_draw_hopf(ax, ds, x, y))
+        present.update(_draw_curves(ax, ds, x, y))
         for dim, line in ((x, ax.axvline), (y, ax.axhline)):
             if dim == "normal_load":
                 for bound in (22.0, 93.0):
@@ -224,6 +269,7 @@ def regime_map(ds: xr.Dataset, *, x: str | None = None, y: str | None = None, fa
             from matplotlib.lines import Line2D
 
             handles.append(Line2D([], [], color="k", lw=1.4, ls=style, label=label))
+    handles += _curve_handles(present)
     if "multi_period" in present:
         handles.append(Patch(facecolor="none", edgecolor="none", label="nT: a cycle of n mode periods\n(period doubling, subharmonic)"))
     fig.legend(handles=handles, loc="outside right center", fontsize=8, frameon=False)
@@ -359,3 +405,60 @@ def save_regime_map(ds_or_path, path: str | os.PathLike, **kwargs) -> None:
             fig = draw(ds)
     os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
     fig.savefig(path, dpi=120)
+
+
+def boundary_map(ds: xr.Dataset, *, growth: xr.DataArray | None = None, title: str | None = None):
+    """The stability boundaries of a normal load x arm length box, as :func:`tribosweep.boundary_curves` returns them.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A :func:`tribosweep.boundary_curves` Dataset (or a sweep holding its variables).
+    growth : xarray.DataArray, optional
+        Largest growth rate of steady sliding on dims ``normal_load`` and ``arm_length``: shaded
+        stable or unstable under the curves.
+    title : str, optional
+        The axes' title (default: the contact law).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The Hopf curves (by criticality), the fold and grazing curves, the contact law's
+        identified load range, and a legend of what is drawn.
+    """
+    Figure, Patch = _matplotlib()
+    from matplotlib.colors import ListedColormap
+    from matplotlib.lines import Line2D
+
+    x, y = "normal_load", "arm_length"
+    fig = Figure(figsize=(6.6, 3.8), layout="constrained")
+    ax = fig.add_subplot()
+    handles = []
+    if growth is not None:
+        g = growth.transpose(y, x)
+        unstable = (g.values > 0).astype(float)
+        cmap = ListedColormap([REGIME_COLORS["steady_sliding"], REGIME_COLORS["self_excited"]])
+        ax.pcolormesh(_edges(g[x].values), _edges(g[y].values), unstable, cmap=cmap, vmin=0, vmax=1, alpha=0.35,
+                      shading="flat", linewidth=0, rasterized=True)  # fmt: skip
+        for code, text in ((0, "steady sliding stable\n(linear)"), (1, "steady sliding unstable\n(growth rate > 0)")):
+            if (unstable == code).any():
+                handles.append(Patch(facecolor=cmap(code), alpha=0.35, edgecolor="k", lw=0.3, label=text))
+    present = set()
+    if "hopf_normal_load" in ds:
+        present |= _draw_hopf(ax, ds, x, y)
+    present |= _draw_curves(ax, ds, x, y)
+    lo, hi = ds.attrs.get("boundary_normal_load_low"), ds.attrs.get("boundary_normal_load_high")
+    if lo is not None:
+        ax.set_xlim(lo, hi)
+        ax.set_ylim(ds.attrs["boundary_arm_length_low"], ds.attrs["boundary_arm_length_high"])
+    for bound in (22.0, 93.0):
+        ax.axvline(bound, color="k", lw=0.6, ls="--")
+    handles.append(Line2D([], [], color="k", lw=0.6, ls="--", label="contact law identified\n(22-93 N)"))
+    handles += [Line2D([], [], color="k", lw=1.4, ls=style, label=label)
+                for key, (style, label) in _HOPF_STYLE.items() if key in present]  # fmt: skip
+    handles += _curve_handles(present)
+    ax.set_xlabel("normal load F_st [N]")
+    ax.set_ylabel("clamped arm length l [m]")
+    ax.set_title(title or f"stability boundaries ({ds.attrs.get('boundary_contact', '?')} contact)", fontsize=10)
+    fig.legend(handles=handles, loc="outside right center", fontsize=8, frameon=False)
+    return fig

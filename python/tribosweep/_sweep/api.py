@@ -192,9 +192,11 @@ def sweep(
         Largest sweep accepted (10^7 points by default): a typo such as ``10:20:100000000`` is refused
         before any work, naming the shape.
     boundaries : bool
-        Store the Hopf curves that cross a normal load x arm length box (``hopf_*`` variables on
-        the dimension ``hopf_point``, from :func:`tribosweep.hopf_curve`); ``tribosweep plot`` draws
-        them over the map.
+        Store the stability boundaries that cross a normal load x arm length box, from
+        :func:`tribosweep.boundary_curves`: the Hopf curves (``hopf_*`` on ``hopf_point``), and for
+        unilateral contact and a strategy other than ``linear`` the fold and grazing curves of the
+        cycles born there (``fold_*`` on ``fold_point``, ``grazing_*`` on ``grazing_point``; about
+        3 s on the default box); ``tribosweep plot`` draws them over the map.
     method : str, optional
         Deprecated name of ``strategy`` (``method`` is the time integrator everywhere else).
     command : str, optional

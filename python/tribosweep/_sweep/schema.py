@@ -310,48 +310,45 @@ def empty_result(n: int, *, wear_rate: bool = False) -> dict[str, np.ndarray]:
     return out
 
 
-#: Variables of a Hopf curve stored in a sweep (on the dimension ``hopf_point``), from
-#: :func:`tribosweep.hopf_curve`'s Dataset: its name -> the stored name.
-HOPF_VARS: dict[str, str] = {
-    "curve": "hopf_curve_index", "normal_load": "hopf_normal_load", "arm_length": "hopf_arm_length",
-    "frequency": "hopf_frequency", "l1": "hopf_l1", "criticality": "hopf_criticality", "point_type": "hopf_point_type",
-    "status": "hopf_status",
-}  # fmt: skip
-
-
 def boundary_vars(plan: Plan) -> tuple[dict, dict]:
-    """The Hopf curves that cross a normal load x arm length sweep's box, as static variables.
+    """The stability boundaries that cross a normal load x arm length sweep's box, as static variables.
 
     Stored when both are swept (two values or more) and every other axis holds one value (the
-    curves are then those of the sweep's own model at that value). Steady sliding loses stability
-    across these curves, so they are the sharp form of the map's linear boundary. Returns the
-    variables on ``hopf_point`` and attributes (the continuation's tolerances, or why no curve is
-    stored); a failure is recorded, never raised.
+    curves are then those of the sweep's own model at that value), from
+    :func:`tribosweep.boundary_curves`: the Hopf curves (``hopf_*`` on ``hopf_point``), across which
+    steady sliding loses stability, so the sharp form of the map's linear boundary; and, for the
+    unilateral contact law and a strategy that computes cycles (not ``linear``, which maps
+    eigenvalues only), the fold and grazing curves of the cycles born there (``fold_*`` on
+    ``fold_point``, ``grazing_*`` on ``grazing_point``). Returns the variables and attributes (what
+    was found, the continuation's tolerances, the calls that reproduce each curve, or why no curve
+    is stored); a failure is recorded, never raised.
     """
     axes = plan.axes
     if not (axes["normal_load"].size >= 2 and axes["arm_length"].size >= 2):
         return {}, {}
     if any(a.size > 1 for d, a in axes.items() if d not in ("normal_load", "arm_length")):
         return {}, {"hopf_curves": "not stored: a third axis is swept (curves are drawn per normal load x arm length box)"}
-    from .. import _hopf
+    from .. import _boundary
 
     fixed = {d: float(a[0]) for d, a in axes.items() if d not in ("normal_load", "arm_length")}
     model = plan.model.replace(**fixed)
-    x = ("normal_load", float(axes["normal_load"][0]), float(axes["normal_load"][-1]))
-    y = ("arm_length", float(axes["arm_length"][0]), float(axes["arm_length"][-1]))
+    curves = ["hopf"]
+    skipped = None
+    if plan.strategy == "linear":
+        skipped = "not computed: strategy linear maps eigenvalues only (tribosweep boundary computes them)"
+    elif model.contact != "unilateral":
+        skipped = ("not computed for bilateral contact (without contact switches the search for a fold runs each "
+                   "slice's branch to the edge of the box; tribosweep boundary computes them)")  # fmt: skip
+    else:
+        curves += ["fold", "grazing"]
+    box = {"normal_load": (float(axes["normal_load"][0]), float(axes["normal_load"][-1])),
+           "arm_length": (float(axes["arm_length"][0]), float(axes["arm_length"][-1]))}  # fmt: skip
     try:
-        ds = _hopf.hopf_curve(model, x=x, y=y)
+        ds = _boundary.boundary_curves(model, **box, curves=curves)
     except Exception as e:  # noqa: BLE001 - a failed boundary must not stop the sweep
         return {}, {"hopf_curves": f"not stored: the continuation failed ({type(e).__name__}: {e})"}
-    out = {}
-    for src, name in HOPF_VARS.items():
-        da = ds[src]
-        attrs = {k: v for k, v in da.attrs.items() if k in ("units", "long_name", "flag_values", "flag_meanings")}
-        attrs["long_name"] = "Hopf curve: " + str(attrs.get("long_name", src))
-        out[name] = (("hopf_point",), da.values, attrs)
-    attrs = {"hopf_curves": f"{int(ds.sizes.get('hopf_curve', 0))} Hopf curve(s) in the box, {ds.sizes['curve_point']} "
-             "points (tribosweep.hopf_curve): steady sliding gains or loses stability across them"}  # fmt: skip
-    for k in ("tol", "chord_tol", "step", "step_min", "step_max"):
-        if k in ds.attrs:
-            attrs[f"hopf_curve_{k}"] = ds.attrs[k]
+    out = {name: (da.dims, da.values, dict(da.attrs)) for name, da in ds.data_vars.items()}
+    attrs = dict(ds.attrs)
+    if skipped:
+        attrs |= {"fold_curves": skipped, "grazing_curves": skipped}
     return out, attrs

@@ -1,0 +1,177 @@
+"""Stability boundaries over a normal load x arm length box, as curves: Hopf, fold of cycles, grazing.
+
+One Dataset with each kind of curve on its own dimension, the form a sweep stores them in and
+``tribosweep boundary`` writes:
+
+- ``hopf_*`` on ``hopf_point``: :func:`tribosweep.hopf_curve`, where steady sliding gains or loses
+  stability;
+- ``fold_*`` on ``fold_point``: :func:`tribosweep.fold_curve` from each Hopf curve, the first fold
+  of the cycles born there (smooth, or a grazing where the branch turns back): where the saddle
+  cycle around stable sliding ends;
+- ``grazing_*`` on ``grazing_point``: :func:`tribosweep.grazing_curve` from each Hopf curve, where
+  those cycles first touch contact loss (the pin first leaves the disk).
+
+The fold and grazing curves are computed slice by slice over the arm lengths that the Hopf curve
+spans in the box (``slices`` values), each slice from its own Hopf point; a curve whose point
+leaves the load window between two slices ends at the last slice inside.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import xarray as xr
+
+from . import _branch, _hopf
+from ._model import SliderModel
+
+#: Variables of a Hopf curve stored on ``hopf_point``: :func:`hopf_curve`'s name -> the stored name.
+HOPF_VARS: dict[str, str] = {
+    "curve": "hopf_curve_index", "normal_load": "hopf_normal_load", "arm_length": "hopf_arm_length",
+    "frequency": "hopf_frequency", "l1": "hopf_l1", "criticality": "hopf_criticality", "point_type": "hopf_point_type",
+    "status": "hopf_status",
+}  # fmt: skip
+#: Variables of a fold or grazing curve stored on ``<kind>_point`` as ``<kind>_<name>``.
+CURVE_VARS: tuple[str, ...] = ("normal_load", "arm_length", "hopf_normal_load", "period", "A1", "min_gap",
+                               "stable", "point_type", "flags")  # fmt: skip
+#: The kinds of curve, in drawing order.
+CURVE_KINDS: tuple[str, ...] = ("hopf", "fold", "grazing")
+_KEEP = ("units", "long_name", "flag_values", "flag_meanings", "flag_masks")
+_WHAT = {
+    "fold": "first fold of the cycles born at the Hopf curve (smooth, or a grazing where the branch turns back): "
+            "the saddle cycle around stable sliding ends there",
+    "grazing": "first grazing of the cycles born at the Hopf curve: the orbit first touches contact loss (the pin "
+               "first leaves the disk)",
+}  # fmt: skip
+
+
+def _check_box(name: str, box) -> tuple[float, float]:
+    try:
+        lo, hi = (float(v) for v in box)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} = {box!r} must be a (low, high) pair of numbers") from None
+    if not (math.isfinite(lo) and math.isfinite(hi) and 0 < lo < hi):
+        raise ValueError(f"{name} = {box!r} is out of range: must be finite with 0 < low < high")
+    return lo, hi
+
+
+def _curve_kinds(curves) -> tuple[str, ...]:
+    if isinstance(curves, str):
+        curves = (curves,)
+    try:
+        kinds = tuple(curves)
+    except TypeError:
+        raise ValueError(f"curves = {curves!r} must be a sequence of names from {CURVE_KINDS}") from None
+    bad = [k for k in kinds if k not in CURVE_KINDS]
+    if bad or not kinds:
+        raise ValueError(f"curves = {curves!r} is not valid: must be a non-empty subset of {CURVE_KINDS}")
+    return tuple(k for k in CURVE_KINDS if k in kinds)
+
+
+def _stored(ds: xr.Dataset, src: str, dim: str, prefix: str) -> xr.DataArray:
+    da = ds[src]
+    attrs = {k: v for k, v in da.attrs.items() if k in _KEEP}
+    attrs["long_name"] = f"{prefix}: " + str(attrs.get("long_name", src))
+    return xr.DataArray(da.values, dims=(dim,), attrs=attrs)
+
+
+def boundary_curves(
+    model: SliderModel,
+    normal_load: tuple[float, float] = (10.0, 150.0),
+    arm_length: tuple[float, float] = (0.05, 0.127),
+    *,
+    curves=CURVE_KINDS,
+    slices: int = 12,
+) -> xr.Dataset:
+    """The Hopf, fold-of-cycles and grazing curves crossing a normal load x arm length box.
+
+    Parameters
+    ----------
+    model : SliderModel
+        Everything but the load and the arm length; its natural frequencies are those at the seed
+        arm length 0.072 m (as in :func:`apparatus_model` and :func:`sweep`). The contact law
+        matters for the fold (a unilateral branch turns back at grazing); the grazing curve is
+        followed with the bilateral law, on which the grazing orbit is the same.
+    normal_load, arm_length : (float, float)
+        The box [N], [m]: ``0 < low < high``.
+    curves : sequence of str
+        Which curves: any of ``"hopf"``, ``"fold"``, ``"grazing"`` (the fold and grazing curves are
+        started from the Hopf curves, which are computed in any case).
+    slices : int
+        Arm lengths per Hopf curve at which the fold and grazing points are located (>= 2), evenly
+        over the arm lengths the Hopf curve spans in the box.
+
+    Returns
+    -------
+    xarray.Dataset
+        ``hopf_*`` on ``hopf_point`` (``HOPF_VARS``); ``fold_*`` on ``fold_point`` and
+        ``grazing_*`` on ``grazing_point`` (``CURVE_VARS``, with ``<kind>_curve_index``: the Hopf
+        curve it starts from). A curve kind with no point in the box has no variables. Attributes
+        ``hopf_curves``, ``fold_curves``, ``grazing_curves`` say what was found (or why not), and
+        ``<kind>_curve_call`` the exact call that reproduces each fold and grazing curve.
+
+    Raises
+    ------
+    ValueError
+        A bad box, ``curves`` or ``slices``, before any work. A continuation that ends early is
+        recorded in the attributes, never raised.
+
+    Examples
+    --------
+    >>> import tribosweep as ts
+    >>> ds = ts.boundary_curves(ts.SliderModel(contact="unilateral"), curves=("hopf", "grazing"), slices=3)
+    >>> ds.sizes["grazing_point"], round(float(ds.grazing_normal_load[-1]), 3)
+    (4, 10.948)
+    """
+    if not isinstance(model, SliderModel):
+        raise ValueError(f"model = {model!r} must be a tribosweep.SliderModel")
+    x_lo, x_hi = _check_box("normal_load", normal_load)
+    y_lo, y_hi = _check_box("arm_length", arm_length)
+    kinds = _curve_kinds(curves)
+    if isinstance(slices, bool) or not isinstance(slices, (int, np.integer)) or not 2 <= slices <= 1000:
+        raise ValueError(f"slices = {slices!r} is out of range: must be an integer in [2, 1000]")
+    hopf = _hopf.hopf_curve(model, x=("normal_load", x_lo, x_hi), y=("arm_length", y_lo, y_hi))
+    out = xr.Dataset()
+    if "hopf" in kinds:
+        for src, name in HOPF_VARS.items():
+            out[name] = _stored(hopf, src, "hopf_point", "Hopf curve")
+    n_curves = int(hopf.sizes.get("hopf_curve", 0))
+    out.attrs["hopf_curves"] = (f"{n_curves} Hopf curve(s) in the box, {hopf.sizes['curve_point']} points "
+                                "(tribosweep.hopf_curve): steady sliding gains or loses stability across them")  # fmt: skip
+    for k in ("continuation_tolerance", "polyline_tolerance", "continuation_step_min", "continuation_step_max"):
+        out.attrs[f"hopf_curve_{k}"] = hopf.attrs[k]
+    for kind in kinds[1:] if kinds[0] == "hopf" else kinds:
+        parts, notes, calls = [], [], []
+        func = _branch.fold_curve if kind == "fold" else _branch.grazing_curve
+        for c in range(n_curves):
+            on = hopf.curve.values == c
+            arms, loads = hopf.arm_length.values[on], hopf.normal_load.values[on]
+            a, b = float(arms.min()), float(arms.max())
+            if not b - a > 1e-9 * (y_hi - y_lo):
+                notes.append(f"Hopf curve {c}: spans no arm lengths")
+                continue
+            start = float(loads[np.argmin(arms)])
+            calls.append(f"tribosweep.{func.__name__}(model, x=('normal_load', {x_lo!r}, {x_hi!r}), "
+                         f"y=('arm_length', {a!r}, {b!r}), n={int(slices)}, from_hopf={start!r})")  # fmt: skip
+            ds = func(model, x=("normal_load", x_lo, x_hi), y=("arm_length", a, b), n=int(slices), from_hopf=start)
+            notes.append(f"from Hopf curve {c}: {ds.attrs['reason']}")
+            sub = xr.Dataset({f"{kind}_{v}": _stored(ds, v, f"{kind}_point", f"{kind} curve") for v in CURVE_VARS})
+            sub[f"{kind}_curve_index"] = xr.DataArray(
+                np.full(ds.sizes["curve_point"], c, dtype=np.int32), dims=(f"{kind}_point",),
+                attrs={"long_name": f"{kind} curve: index of the Hopf curve it starts from"})  # fmt: skip
+            parts.append(sub)
+            out.attrs[f"{kind}_curve_contact"] = ds.attrs["contact"]
+            for key in ("continuation_tol", "continuation_locate_tol", "continuation_rtol"):
+                out.attrs[f"{kind}_curve_{key}"] = ds.attrs[key]
+        n_pts = sum(p.sizes[f"{kind}_point"] for p in parts)
+        if n_pts:
+            out = xr.merge([out, xr.concat([p for p in parts if p.sizes[f"{kind}_point"]], dim=f"{kind}_point")],
+                           combine_attrs="override")  # fmt: skip
+        summary = f"{n_pts} {kind} point(s) in the box ({_WHAT[kind]})"
+        out.attrs[f"{kind}_curves"] = summary + ("; " + "; ".join(notes) if notes else "; no Hopf curve to start from")
+        out.attrs[f"{kind}_curve_call"] = " | ".join(calls) if calls else "none"
+    out.attrs |= {"boundary_normal_load_low": x_lo, "boundary_normal_load_high": x_hi,
+                  "boundary_arm_length_low": y_lo, "boundary_arm_length_high": y_hi,
+                  "boundary_slices": int(slices), "boundary_contact": model.contact}  # fmt: skip
+    return out
