@@ -1,6 +1,6 @@
 """Issue 12 in the product: ``tribosweep branch`` / ``tribosweep boundary``, the fold and grazing curves
 a sweep stores and draws, and the bifurcation diagram's legend. Numbers are checked against the API's
-one-parameter tools (``hopf_load``, ``branch``), MODEL.md and plain shooting."""
+one-parameter tools (``hopf_load``, ``branch``), docs/model.md and plain shooting."""
 
 from __future__ import annotations
 
@@ -52,7 +52,7 @@ def test_branch_command_finds_the_grazing_and_the_fold_the_api_finds(tmp_path, c
         assert names(ds)[0] == "hopf" and names(ds)[-1] == "grazing"
         assert ds.attrs["Conventions"] == "CF-1.11" and "tribosweep branch --contact bilateral" in ds.attrs["history"]
         assert abs(float(ds.parameter[-1]) - float(api.parameter[-1])) < LOCATED_N
-        # The Hopf point: MODEL.md's 24.904 N (3 decimals) and hopf_load's Brent search (the
+        # The Hopf point: docs/model.md's 24.904 N (3 decimals) and hopf_load's Brent search (the
         # start is located to 1e-13 of the window by sliding_branch; 1e-9 relative is both's accuracy).
         assert abs(float(ds.parameter[0]) / ts.hopf_load(SEED)[0]["normal_load"] - 1) < 1e-9
         assert abs(float(ds.parameter[0]) - 24.904) < 5e-4
@@ -88,7 +88,7 @@ def test_branch_command_reads_a_config(tmp_path, capsys, seed_values):
     with xr.open_dataset(tmp_path / "c.nc") as ds:
         assert ds.attrs["model_mu"] == 0.25 and ds.attrs["contact"] == "bilateral"
         assert ds.attrs["continuation_max_points"] == 400 and ds.attrs["continuation_ds_max"] == 0.08  # the flag wins
-        # MODEL.md's Hopf load at mu = 0.25, printed to 3 decimals.
+        # docs/model.md's Hopf load at mu = 0.25, printed to 3 decimals.
         assert abs(float(ds.parameter[0]) - seed_values["hopf_load_N"]["0.25"]) < 5e-4
     assert (tmp_path / "c.png").exists()
 

@@ -215,7 +215,7 @@ def _add_sweep_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--plot", metavar="PNG", help="also write the regime map to this image")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--no-boundaries", dest="boundaries", action="store_false",
-                   help="do not store the Hopf curves crossing a normal load x arm length box")
+                   help="do not store the Hopf, fold and grazing curves crossing a normal load x arm length box")
     groups = {
         "integration": p.add_argument_group("integration (also keys of the [solver] table of --config)"),
         "irregular": p.add_argument_group(
