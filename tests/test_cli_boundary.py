@@ -17,7 +17,7 @@ import xarray as xr
 import tribosweep as ts
 from tribosweep import cli
 
-SEED = ts.SliderModel()
+SEED = ts.SliderModel(contact="bilateral")
 SEED_U = ts.SliderModel(contact="unilateral")
 #: Where a special point may lie from another location of it: each branch locates it to
 #: locate_tol = 1e-8 in scaled arclength, in which the load is scaled by its starting magnitude
