@@ -321,14 +321,15 @@ def sweep(
             "resume=True (--resume) to finish\n"
         )
         raise
-    writer = netcdf.NetCDFWriter(output, *layout)
+    widths = {s.name: max(parts.text_width(k, s.name) for k in range(plan.n_chunks)) for s in layout[2] if s.dtype == "str"}
+    writer = netcdf.NetCDFWriter(output, *layout, parts_dir=parts.dir, text_widths=widths)
     try:
         for k in range(plan.n_chunks):
             writer.write(*plan.chunk_range(k), parts.load(k))
     except BaseException:
         writer.abort()
         raise
-    writer.close()
+    writer.close()  # removes its temporary file itself on an error
     parts.remove()
     return xr.open_dataset(output, engine="netcdf4")
 

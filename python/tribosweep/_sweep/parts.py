@@ -14,6 +14,7 @@ import logging
 import os
 import shutil
 import tempfile
+import zipfile
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -104,7 +105,10 @@ class Parts:
 
     def save(self, k: int, arrays: Mapping[str, np.ndarray]) -> None:
         start, stop = self.plan.chunk_range(k)
-        meta = {"__hash__": np.array(self.plan.hash), "__range__": np.array([start, stop])}
+        text = [name for name, a in arrays.items() if np.asarray(a).dtype.kind == "U"]
+        meta = {"__hash__": np.array(self.plan.hash), "__range__": np.array([start, stop]), "__text__": np.array(text)}
+        # Text is stored as UTF-8 bytes: a quarter of numpy's fixed-width unicode.
+        arrays = {name: np.char.encode(a, "utf-8") if name in text else a for name, a in arrays.items()}
         buf = io.BytesIO()
         np.savez(buf, **meta, **arrays)
         data = buf.getvalue()
@@ -128,7 +132,17 @@ class Parts:
 
     def load(self, k: int) -> dict[str, np.ndarray]:
         with np.load(self.path(k), allow_pickle=False) as z:
-            return {name: z[name] for name in z.files if not name.startswith("__")}
+            text = set(z["__text__"].tolist())
+            return {name: np.char.decode(z[name], "utf-8") if name in text else z[name]
+                    for name in z.files if not name.startswith("__")}  # fmt: skip
+
+    def text_width(self, k: int, name: str) -> int:
+        """The longest UTF-8 value (bytes) of text variable ``name`` in part ``k``, read from its header only."""
+        with zipfile.ZipFile(self.path(k)) as z, z.open(name + ".npy") as f:
+            version = np.lib.format.read_magic(f)
+            read = np.lib.format.read_array_header_1_0 if version == (1, 0) else np.lib.format.read_array_header_2_0
+            _shape, _fortran, dtype = read(f)
+        return int(dtype.itemsize)
 
     def is_done(self, k: int, checksums: Mapping[int, str] | None = None) -> bool:
         """True for a part whose bytes match its checksum in the ledger and that holds this

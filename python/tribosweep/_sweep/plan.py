@@ -19,7 +19,8 @@ from .._model import PARAM_NAMES, PARAM_UNITS, SliderModel
 from .._settings import SweepSettings
 
 #: Version of the parts-directory layout (the resume manifest).
-PARTS_FORMAT: int = 3  # 2: the attractor census; 3: typed settings, "strategy" (was "method"), shooting settings
+PARTS_FORMAT: int = 4  # 2: the attractor census; 3: typed settings, "strategy" (was "method"), shooting settings;
+# 4: text as UTF-8 bytes, the hash without the code identity (checked on its own), crashed points
 
 #: The three physics dimensions, always present (length 1 at the seed value when not swept).
 PHYSICS_DIMS: tuple[str, ...] = ("normal_load", "arm_length", "sliding_speed")
