@@ -16,9 +16,9 @@ import tribosweep as ts
 from tribosweep import _census, _codes
 from tribosweep._codes import REGIME
 from tribosweep._settings import SweepSettings
-from tribosweep._sweep import api as _api
 from tribosweep._sweep import chunk as _chunk
 from tribosweep._sweep import plan as _plan
+from tribosweep._sweep import runner as _runner
 from tribosweep._sweep import schema as _schema
 from tribosweep._sweep import stages as _stages
 
@@ -392,7 +392,7 @@ class _FutureExecutor:
 
 
 def test_executor_returning_futures_fed_in_windows(monkeypatch):
-    monkeypatch.setattr(_api, "EXECUTOR_WINDOW", 2)
+    monkeypatch.setattr(_runner, "EXECUTOR_WINDOW", 2)
     kw = {"normal_load": [10.0, 30.0, 60.0], "arm_length": [0.05, 0.1], "chunk_size": 1, **LINEAR}
     xr.testing.assert_identical(strip(ts.sweep(**kw)), strip(ts.sweep(executor=_FutureExecutor(), **kw)))
 

@@ -20,13 +20,15 @@ from pathlib import Path
 
 import numpy as np
 
-from .plan import Plan
+from . import disk
+from .plan import CODE_IDENTITY, Plan
 
 _log = logging.getLogger("tribosweep")
 
 
-def compare_configs(saved: dict, now: dict, where: str) -> None:
-    """Raise ValueError naming the first difference between a saved and the current configuration."""
+def compare_configs(saved: dict, now: dict, where: str, *, ignore: tuple[str, ...] = ()) -> None:
+    """Raise ValueError naming the first difference between a saved and the current configuration
+    (keys in ``ignore`` are not compared)."""
 
     missing = object()
 
@@ -38,7 +40,7 @@ def compare_configs(saved: dict, now: dict, where: str) -> None:
 
     for key in sorted(set(saved) | set(now)):
         a, b = saved.get(key, missing), now.get(key, missing)
-        if a == b:
+        if a == b or key in ignore:
             continue
         if isinstance(a, dict) and isinstance(b, dict):
             for sub in sorted(set(a) | set(b)):
@@ -48,6 +50,12 @@ def compare_configs(saved: dict, now: dict, where: str) -> None:
                         f"{show(b.get(sub, missing))}); use the saved configuration, or delete the directory to "
                         "start over"
                     )
+        if key in CODE_IDENTITY:
+            raise ValueError(
+                f"cannot resume {where}: {key} differs (saved {show(a)}, now {show(b)}): its parts were computed by "
+                "other code, whose numbers may differ; resume with that code, delete the directory to start over, "
+                "or pass force_resume=True (--force-resume) to mix them (the file then records both)"
+            )
         raise ValueError(
             f"cannot resume {where}: {key} differs (saved {show(a)}, now {show(b)}); use the saved "
             "configuration, or delete the directory to start over"
@@ -57,9 +65,11 @@ def compare_configs(saved: dict, now: dict, where: str) -> None:
 class Parts:
     """The sidecar directory of finished chunks: ``manifest.json`` and ``chunk_NNNNNN.npz``."""
 
-    def __init__(self, output: Path, plan: Plan, resume: bool):
+    def __init__(self, output: Path, plan: Plan, resume: bool, *, force: bool = False):
         self.dir = Path(str(output) + ".parts")
         self.plan = plan
+        #: The saved code identity when a forced resume accepted another (else None).
+        self.forced_from: dict | None = None
         manifest = self.dir / "manifest.json"
         if self.dir.exists():
             if not resume:
@@ -71,10 +81,63 @@ class Parts:
                 saved = json.loads(manifest.read_text())
             except (OSError, ValueError) as e:
                 raise ValueError(f"cannot resume {self.dir}: its manifest is unreadable ({e})") from None
-            compare_configs(saved.get("config", {}), plan.config, str(self.dir))
+            config = saved.get("config", {})
+            compare_configs(config, plan.config, str(self.dir), ignore=CODE_IDENTITY if force else ())
+            if any(config.get(k) != plan.config[k] for k in CODE_IDENTITY):
+                self.forced_from = {k: config.get(k) for k in CODE_IDENTITY}
+                _log.warning("resuming %s across code identities (saved %s, now %s): forced", self.dir,
+                             self.forced_from, {k: plan.config[k] for k in CODE_IDENTITY})  # fmt: skip
+            self._mend_ledger()
         else:
             self.dir.mkdir()
-            self._atomic_write(manifest, lambda f: f.write(self._manifest_text().encode()))
+            try:
+                self._atomic_write(manifest, lambda f: f.write(self._manifest_text().encode()))
+            except OSError as e:
+                if not disk.is_full(e):
+                    raise
+                shutil.rmtree(self.dir, ignore_errors=True)
+                raise disk.DiskFullError(f"no space left on device writing {manifest}: nothing was computed; free "
+                                         "space and run the sweep again") from None  # fmt: skip
+
+    @property
+    def running(self) -> Path:
+        """``running/``: a marker per chunk being computed; one left by a dead process names a suspect."""
+        path = self.dir / "running"
+        path.mkdir(exist_ok=True)
+        return path
+
+    def suspects(self) -> list[int]:
+        """Chunks that were being computed when an earlier run's process died (their markers remain)."""
+        out = set()
+        for p in (self.dir / "running").glob("*_*_*"):
+            fields = p.name.split("_")
+            if len(fields) != 3 or not all(f.isdigit() for f in fields):
+                continue
+            k, start, stop = (int(f) for f in fields)
+            if k < self.plan.n_chunks and (start, stop) == self.plan.chunk_range(k):
+                out.add(k)
+        return sorted(out)
+
+    def _mend_ledger(self) -> None:
+        """End a ledger torn by a crash or a full disk with a newline, so the next entry starts a line."""
+        try:
+            with open(self.ledger, "rb+") as f:
+                f.seek(0, os.SEEK_END)
+                if f.tell():
+                    f.seek(-1, os.SEEK_END)
+                    if f.read(1) != b"\n":
+                        f.write(b"\n")
+        except FileNotFoundError:
+            pass
+
+    @staticmethod
+    def saved_chunk_size(output) -> int | None:
+        """The chunk size of the unfinished sweep in ``<output>.parts/`` (None if there is none)."""
+        try:
+            size = json.loads((Path(str(output) + ".parts") / "manifest.json").read_text())["config"]["chunk_size"]
+        except (OSError, ValueError, KeyError, TypeError):
+            return None
+        return size if isinstance(size, int) and size >= 1 else None
 
     def _manifest_text(self) -> str:
         p = self.plan
@@ -112,11 +175,19 @@ class Parts:
         buf = io.BytesIO()
         np.savez(buf, **meta, **arrays)
         data = buf.getvalue()
-        self._atomic_write(self.path(k), lambda f: f.write(data))
-        with open(self.ledger, "a") as f:
-            f.write(f"{k} {hashlib.sha256(data).hexdigest()}\n")
-            f.flush()
-            os.fsync(f.fileno())
+        try:
+            self._atomic_write(self.path(k), lambda f: f.write(data))
+            with open(self.ledger, "a") as f:
+                f.write(f"{k} {hashlib.sha256(data).hexdigest()}\n")
+                f.flush()
+                os.fsync(f.fileno())
+        except OSError as e:
+            if not disk.is_full(e):
+                raise
+            saved = sum(1 for _ in self.dir.glob("chunk_*.npz"))
+            need = int(len(data) / (stop - start) * self.plan.chunk_size * (self.plan.n_chunks - saved))
+            raise disk.parts_full(self.path(k), saved, self.plan.n_chunks, self.dir, need,
+                                  disk.free_bytes(self.dir)) from None  # fmt: skip
 
     def checksums(self) -> dict[int, str]:
         out: dict[int, str] = {}
