@@ -49,10 +49,10 @@ def strip(ds: xr.Dataset) -> xr.Dataset:
     return ds
 
 
-def crash_hook(monkeypatch, **spec) -> None:
+def crash_hook(monkeypatch, *specs: dict) -> None:
     """Arm the runner's test hook for every process started from now on (see runner._test_crash_hook)."""
-    monkeypatch.setenv(TEST_CRASH_ENV, json.dumps({k: str(v) if isinstance(v, os.PathLike) else v
-                                                   for k, v in spec.items()}))  # fmt: skip
+    specs = [{k: str(v) if isinstance(v, os.PathLike) else v for k, v in spec.items()} for spec in specs]
+    monkeypatch.setenv(TEST_CRASH_ENV, json.dumps(specs))
 
 
 def spawn_pool(n: int = 2) -> concurrent.futures.ProcessPoolExecutor:
@@ -64,7 +64,7 @@ def spawn_pool(n: int = 2) -> concurrent.futures.ProcessPoolExecutor:
 
 def test_a_point_that_aborts_its_process_is_quarantined_and_every_other_point_completes(tmp_path, monkeypatch, caplog):
     reference = strip(ts.sweep(chunk_size=4, **ROW))
-    crash_hook(monkeypatch, normal_load=30.0, action="abort")  # SIGABRT on every attempt
+    crash_hook(monkeypatch, {"normal_load": 30.0, "action": "abort"})  # SIGABRT on every attempt
     with caplog.at_level("WARNING", logger="tribosweep"), spawn_pool() as ex:
         ds = ts.sweep(executor=ex, output=tmp_path / "q.nc", chunk_size=4, **ROW)
     got = strip(ds)
@@ -85,7 +85,7 @@ def test_a_dead_pool_worker_costs_only_its_own_chunk(tmp_path, monkeypatch):
     kw = {**ROW, "normal_load": np.linspace(10.0, 160.0, 16), "chunk_size": 2}  # 8 chunks
     reference = strip(ts.sweep(**kw))
     calls, once = tmp_path / "calls.log", tmp_path / "died"
-    crash_hook(monkeypatch, normal_load=70.0, action="exit", once=once, log=calls)  # dies on the first attempt
+    crash_hook(monkeypatch, {"normal_load": 70.0, "action": "exit", "once": once, "log": calls})  # first attempt dies
     with spawn_pool() as ex:
         ds = ts.sweep(executor=ex, output=tmp_path / "p.nc", **kw)
     assert once.exists()  # a worker really died
@@ -124,17 +124,28 @@ def test_a_crash_in_process_is_survived_on_resume(tmp_path):
 # --- dask ---------------------------------------------------------------------------------------------
 
 
-def test_a_local_cluster_sweep_equals_the_in_process_sweep_and_a_dead_client_resumes(tmp_path, monkeypatch):
+def test_a_local_cluster_sweep_equals_the_in_process_sweep_also_with_a_worker_killed_and_a_dead_client(
+        tmp_path, monkeypatch):  # fmt: skip
     pytest.importorskip("distributed", reason="dask.distributed is not installed (pip install '.[dask]')")
     from tribosweep._sweep import parts as _parts
 
     reference = strip(ts.sweep(**TRANSIENT))
+    # The workers' hook kills the worker computing 40 N on the first attempt, armed by removing `once`.
+    once = tmp_path / "died"
+    once.touch()
+    crash_hook(monkeypatch, {"normal_load": 40.0, "action": "exit", "once": once})
     with _cluster.connect("local:2") as client:
         assert len(client.nthreads()) == 2  # two worker processes
         # Each task takes its worker's share of the cores (one slot per worker), never more.
         assert set(client.run(_cluster.worker_threads).values()) == {max(1, (os.cpu_count() or 1) // 2)}
         ds = ts.sweep(executor=client, output=tmp_path / "d.nc", **TRANSIENT)
         assert ds.attrs["dask_workers"] == 2 and ds.attrs["dask_version"]
+        xr.testing.assert_identical(strip(ds), reference)
+        ds.close()
+
+        once.unlink()  # now a worker dies inside the chunk of 40 N; dask runs it again elsewhere
+        ds = ts.sweep(executor=client, output=tmp_path / "k.nc", **TRANSIENT)
+        assert once.exists()  # a worker really died
         xr.testing.assert_identical(strip(ds), reference)
         ds.close()
 
@@ -156,14 +167,22 @@ def test_a_local_cluster_sweep_equals_the_in_process_sweep_and_a_dead_client_res
     resumed.close()
 
 
-def test_a_dask_worker_killed_mid_chunk_is_retried_and_the_sweep_is_identical(tmp_path, monkeypatch):
+def test_a_point_that_kills_every_dask_worker_is_quarantined(tmp_path, monkeypatch):
     pytest.importorskip("distributed", reason="dask.distributed is not installed (pip install '.[dask]')")
-    reference = strip(ts.sweep(**TRANSIENT))
-    once = tmp_path / "died"
-    crash_hook(monkeypatch, normal_load=40.0, action="exit", once=once)  # the worker dies on the first attempt
-    ds = ts.sweep(scheduler="local:2", output=tmp_path / "k.nc", **TRANSIENT)
-    assert once.exists()  # a worker really died inside a chunk
-    xr.testing.assert_identical(strip(ds), reference)
+    import dask
+
+    kw = {**TRANSIENT, "arm_length": [0.072], "chunk_size": 2}  # chunks (10, 20 N) and (40, 80 N)
+    reference = strip(ts.sweep(**kw))
+    crash_hook(monkeypatch, {"normal_load": 80.0, "action": "abort"})
+    # Once dask gives up on a task whose workers died (KilledWorker; here after the first death, to
+    # keep the test short), the chunk is split: 40 N completes, 80 N alone is quarantined.
+    with dask.config.set({"distributed.scheduler.allowed-failures": 0}):  # the scheduler of local:N runs here
+        ds = ts.sweep(scheduler="local:2", output=tmp_path / "q.nc", **kw)
+    got = strip(ds)
+    point = got.sel(normal_load=80.0).squeeze()
+    assert int(point.regime) == REGIME["crashed"] and int(point.status) == STATUS_CRASHED
+    assert "dask workers died" in str(point.reason.values)
+    xr.testing.assert_identical(got.drop_sel(normal_load=80.0), reference.drop_sel(normal_load=80.0))
     ds.close()
 
 

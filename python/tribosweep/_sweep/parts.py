@@ -163,7 +163,7 @@ class Parts:
 
     @property
     def ledger(self) -> Path:
-        """``checksums.txt``: one line ``k sha256`` per saved part, appended and fsynced after its rename."""
+        """``checksums.txt``: one line ``k sha256`` per saved part, appended after its rename."""
         return self.dir / "checksums.txt"
 
     def save(self, k: int, arrays: Mapping[str, np.ndarray]) -> None:
@@ -177,10 +177,10 @@ class Parts:
         data = buf.getvalue()
         try:
             self._atomic_write(self.path(k), lambda f: f.write(data))
+            # Not fsynced: a ledger line lost in a power cut only makes its part count as unverified,
+            # and it is recomputed (the part itself is fsynced before its rename).
             with open(self.ledger, "a") as f:
                 f.write(f"{k} {hashlib.sha256(data).hexdigest()}\n")
-                f.flush()
-                os.fsync(f.fileno())
         except OSError as e:
             if not disk.is_full(e):
                 raise

@@ -86,28 +86,30 @@ def run_marked(task: tuple, marker: str) -> dict[str, np.ndarray]:
 
 
 def _test_crash_hook(task: tuple) -> None:
-    """TEST HOOK ONLY: crash this process when the task holds the chosen point.
+    """TEST HOOK ONLY: crash this process when the task holds a chosen point.
 
-    ``TRIBOSWEEP_TEST_CRASH`` is a JSON object: ``normal_load`` (the point's load, compared
-    exactly), ``action`` (``"abort"``: ``os.abort()``, SIGABRT; ``"exit"``: ``os._exit(70)``),
-    optional ``once`` (a file: crash only if it can be created, i.e. on the first attempt) and
-    optional ``log`` (a file that gets one line per call: the task's first load and its size).
+    ``TRIBOSWEEP_TEST_CRASH`` is a JSON object, or a list of them: ``normal_load`` (the point's
+    load, compared exactly), ``action`` (``"abort"``: ``os.abort()``, SIGABRT; ``"exit"``:
+    ``os._exit(70)``), optional ``once`` (a file: crash only if it can be created, i.e. on the
+    first attempt) and optional ``log`` (a file that gets one line per call: the task's first load
+    and its size).
     """
-    spec = json.loads(os.environ[TEST_CRASH_ENV])
+    specs = json.loads(os.environ[TEST_CRASH_ENV])
     loads = np.asarray(task[3]["normal_load"])
-    if spec.get("log"):
-        with open(spec["log"], "a") as f:
-            f.write(f"{float(loads[0])!r} {loads.size}\n")
-    if float(spec["normal_load"]) not in loads:
-        return
-    if spec.get("once"):
-        try:
-            os.close(os.open(spec["once"], os.O_CREAT | os.O_EXCL | os.O_WRONLY))
-        except FileExistsError:
-            return
-    if spec.get("action") == "exit":
-        os._exit(70)
-    os.abort()
+    for spec in specs if isinstance(specs, list) else [specs]:
+        if spec.get("log"):
+            with open(spec["log"], "a") as f:
+                f.write(f"{float(loads[0])!r} {loads.size}\n")
+        if float(spec["normal_load"]) not in loads:
+            continue
+        if spec.get("once"):
+            try:
+                os.close(os.open(spec["once"], os.O_CREAT | os.O_EXCL | os.O_WRONLY))
+            except FileExistsError:
+                continue
+        if spec.get("action") == "exit":
+            os._exit(70)
+        os.abort()
 
 
 # --- running one piece alone in a fresh process ---------------------------------------------------
