@@ -355,3 +355,32 @@ def test_every_file_records_the_code_the_software_and_the_whole_configuration(tm
     config = json.loads(a["tribosweep_config"])
     assert config["model"]["mu"] == 0.25 and config["contact"] == "unilateral" and config["strategy"] == "linear"
     assert config["options"]["rtol"] == 1e-7 and config["core_build"] == _plan.core_build()
+
+
+def test_a_second_writer_of_the_same_output_is_refused_while_the_first_holds_it(tmp_path, monkeypatch):
+    import fcntl
+
+    out = tmp_path / "s.nc"
+    real, calls = _chunk.compute_chunk, []
+
+    def stop_after_one(*a):
+        calls.append(1)
+        if len(calls) > 1:
+            raise KeyboardInterrupt
+        return real(*a)
+
+    monkeypatch.setattr(_chunk, "compute_chunk", stop_after_one)
+    with pytest.raises(KeyboardInterrupt):
+        ts.sweep(output=out, chunk_size=2, **ROW)
+    monkeypatch.undo()
+    # Another writer (here this test, through its own open file) holds the sweep's lock.
+    fd = os.open(tmp_path / "s.nc.parts" / "lock", os.O_RDWR)
+    fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    try:
+        with pytest.raises(FileExistsError, match=r"another sweep \(process \d+\) is writing .*s.nc now"):
+            ts.sweep(output=out, resume=True, chunk_size=2, **ROW)
+    finally:
+        os.close(fd)  # the other writer is gone (a crash drops its lock the same way)
+    ds = ts.sweep(output=out, resume=True, chunk_size=2, **ROW)
+    xr.testing.assert_identical(strip(ds), strip(ts.sweep(chunk_size=2, **ROW)))
+    ds.close()

@@ -362,6 +362,14 @@ def _to_file(plan: Plan, output: Path, layout, resume: bool, force: bool, thread
     """Compute what the parts lack, then assemble the file (the parts stay until it is complete)."""
     output.parent.mkdir(parents=True, exist_ok=True)
     parts = Parts(output, plan, resume, force=force)
+    try:
+        return _compute_and_assemble(plan, output, parts, layout, resume, threads, executor, progress)
+    finally:
+        parts.release()
+
+
+def _compute_and_assemble(plan: Plan, output: Path, parts: Parts, layout, resume: bool, threads, executor,
+                          progress) -> xr.Dataset:  # fmt: skip
     if parts.forced_from is not None:
         layout[3]["tribosweep_resumed_from"] = (
             f"force_resume: some parts were computed by tribosweep {parts.forced_from['tribosweep_version']} core "

@@ -70,9 +70,20 @@ class Parts:
         self.plan = plan
         #: The saved code identity when a forced resume accepted another (else None).
         self.forced_from: dict | None = None
+        self._lock_fd: int | None = None
+        try:
+            self._open(output, resume, force)
+        except BaseException:
+            self.release()
+            raise
+
+    def _open(self, output, resume: bool, force: bool) -> None:
+        plan = self.plan
         manifest = self.dir / "manifest.json"
         if self.dir.exists():
+            self._lock(output)
             if not resume:
+                self.release()
                 raise FileExistsError(
                     f"{self.dir} holds chunks of an unfinished sweep: pass resume=True (--resume) to finish it, "
                     "or delete the directory to start over"
@@ -90,14 +101,44 @@ class Parts:
             self._mend_ledger()
         else:
             self.dir.mkdir()
+            self._lock(output)
             try:
                 self._atomic_write(manifest, lambda f: f.write(self._manifest_text().encode()))
             except OSError as e:
                 if not disk.is_full(e):
                     raise
+                self.release()
                 shutil.rmtree(self.dir, ignore_errors=True)
                 raise disk.DiskFullError(f"no space left on device writing {manifest}: nothing was computed; free "
                                          "space and run the sweep again") from None  # fmt: skip
+
+    def _lock(self, output) -> None:
+        """Hold ``lock`` (an exclusive ``flock``) while this sweep writes: a second writer of the same
+        output is refused. The system drops it when the process ends, so a crash leaves no stale lock."""
+        try:
+            import fcntl
+        except ImportError:  # not POSIX: no lock
+            return
+        fd = os.open(self.dir / "lock", os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            other = os.pread(fd, 32, 0).decode(errors="replace").strip() or "?"
+            os.close(fd)
+            raise FileExistsError(f"another sweep (process {other}) is writing {output} now: wait for it to finish, "
+                                  "or choose another output") from None  # fmt: skip
+        try:
+            os.ftruncate(fd, 0)
+            os.pwrite(fd, str(os.getpid()).encode(), 0)
+        except OSError:  # a full disk: the lock holds all the same
+            pass
+        self._lock_fd = fd
+
+    def release(self) -> None:
+        """Let go of the lock (at the end of the sweep, whatever its outcome)."""
+        if self._lock_fd is not None:
+            os.close(self._lock_fd)
+            self._lock_fd = None
 
     @property
     def running(self) -> Path:
@@ -240,6 +281,7 @@ class Parts:
         return not why
 
     def remove(self) -> None:
+        self.release()
         shutil.rmtree(self.dir)
 
 

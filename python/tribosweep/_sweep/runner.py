@@ -129,7 +129,10 @@ def _isolated_main(task: tuple, conn, test_hook: str | None) -> None:
     try:
         conn.send((True, run_task(task)))
     except BaseException as e:  # noqa: BLE001 - a Python error is sent back and raised there
-        conn.send((False, e))
+        try:
+            conn.send((False, e))
+        except Exception:  # noqa: BLE001 - an exception that does not pickle goes back as text
+            conn.send((False, RuntimeError(f"{type(e).__name__}: {e}")))
     finally:
         conn.close()
 
