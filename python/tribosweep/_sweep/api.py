@@ -123,8 +123,9 @@ def sweep(
         netCDF file to write (through ``<output>.tmp``); finished chunks are kept in
         ``<output>.parts/`` until it is complete. Without it the Dataset is built in memory.
     chunk_size : int, optional
-        Points per chunk (default 4096 for ``linear``, 64 otherwise). Part of the configuration
-        a resumed sweep must match.
+        Points per chunk (default 4096 for ``linear``, 64 otherwise; on a dask cluster at most
+        that, and small enough for 4 chunks per worker thread). Results do not depend on it. Part
+        of the configuration a resumed sweep must match; without it a resumed sweep keeps its own.
     threads : int, optional
         Rust worker threads inside a chunk (default ``TRIBOSWEEP_THREADS`` or all cores).
         Results do not depend on it.
