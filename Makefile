@@ -26,7 +26,7 @@ install-test: $(BIN)/python
 # The main job: a default sweep around the seed configuration -> netCDF + regime map + report.
 run: install
 	$(BIN)/tribosweep seed --out out
-	$(BIN)/tribosweep sweep -o out/seed_sweep.nc --plot out/seed_sweep.png
+	$(BIN)/tribosweep sweep -o out/seed_sweep.nc --overwrite --plot out/seed_sweep.png
 	$(BIN)/tribosweep info out/seed_sweep.nc
 
 test-rust:

@@ -296,11 +296,12 @@ def test_every_sweep_argument_is_a_cli_flag_and_a_config_key():
         "command": "the command line itself",
         "method": "deprecated name of --strategy",
         "check_bistability": "deprecated name of census",
+        "config_text": "the text of the --config file",
     }
     missing = sorted(p for p in params - set(other) if p not in dests)
     assert missing == []
     settings = params - set(other) - {"normal_load", "arm_length", "sliding_speed", "strategy", "output", "chunk_size", "max_points", "boundaries",
-                                      "threads", "resume"}  # fmt: skip
+                                      "threads", "resume", "force_resume", "overwrite", "scheduler"}  # fmt: skip
     assert settings <= cli._SOLVER_KEYS
     # The help states the API's default for each (one source of defaults).
     for name in ("t_max", "rtol", "samples", "census_t_max", "ftle_tau", "shooting_rtol"):

@@ -19,6 +19,12 @@ from . import _core
 STATUS_NAMES: tuple[str, ...] = tuple(_core.status_names())
 #: Status code by name.
 STATUS: dict[str, int] = {name: i for i, name in enumerate(STATUS_NAMES)}
+#: Status of a sweep point whose computation killed its process (quarantined by the sweep's
+#: supervisor, ``tribosweep._sweep.runner``). A sweep's own code, far from the core's, which count up from 0.
+STATUS_CRASHED: int = 255
+#: The codes and names of a sweep's ``status`` variable: the core's, then ``crashed``.
+SWEEP_STATUS_VALUES: tuple[int, ...] = (*range(len(STATUS_NAMES)), STATUS_CRASHED)
+SWEEP_STATUS_NAMES: tuple[str, ...] = (*STATUS_NAMES, "crashed")
 #: Outcome names of a run to steady state, in code order.
 OUTCOME_NAMES: tuple[str, ...] = tuple(_core.steady_outcome_names())
 #: How a periodic orbit is unstable (its largest non-trivial Floquet multiplier), in code order.
@@ -53,6 +59,7 @@ REGIME_NAMES: tuple[str, ...] = (
     "failed",
     "unstable_undetermined",
     "irregular",
+    "crashed",
 )
 #: One-line meaning of every regime, for documentation and the ``regime`` variable's ``comment``.
 REGIME_DOC: dict[str, str] = {
@@ -66,11 +73,13 @@ REGIME_DOC: dict[str, str] = {
     "choice), or the run was bounded but its measurement failed numerically (see status and reason)",
     "irregular": "sustained irregular motion: bounded, neither periodic nor decayed by t_max (quasi-periodic: "
     "irregular_ftle about 0; chaotic: irregular_ftle > 0; see irregular_*)",
+    "crashed": "computing the point killed its process again and again (an abort or a crash in native code): it was "
+    "quarantined so that the rest of the sweep could finish (see reason)",
 }
 REGIME: dict[str, int] = {name: i for i, name in enumerate(REGIME_NAMES)}
 
 #: Which stage decided a point's regime, in code order.
-DECIDED_BY_NAMES: tuple[str, ...] = ("linear", "tidf", "shooting", "transient")
+DECIDED_BY_NAMES: tuple[str, ...] = ("linear", "tidf", "shooting", "transient", "quarantine")
 DECIDED_BY: dict[str, int] = {name: i for i, name in enumerate(DECIDED_BY_NAMES)}
 
 #: Coexistence at a point (int8), derived from the attractor census (``tribosweep._census``):

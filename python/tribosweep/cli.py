@@ -130,7 +130,9 @@ _SETTINGS: dict[str, tuple[str, object, str, str]] = {
 }
 _CONFIG_KEYS = {"normal_load", "arm_length", "sliding_speed", "strategy", "method", "output", "chunk_size", "threads",
                 "max_points", "boundaries",
-                "plot", "axes", "model", "solver", "census", "wear_reference"}  # fmt: skip
+                "plot", "axes", "model", "solver", "census", "wear_reference", "dask"}  # fmt: skip
+#: Keys of the [dask] table.
+_DASK_KEYS = {"scheduler"}
 _SOLVER_KEYS = set(_SETTINGS) | {"census"}
 #: [census] keys -> sweep() arguments.
 _CENSUS_KEYS = {"enabled": "census", "samples": "samples", "t_max": "census_t_max",
@@ -153,7 +155,8 @@ def _floats(text: str) -> float | list[float]:
     return vals[0] if len(vals) == 1 else vals
 
 
-def _load_config(path: str) -> dict:
+def _load_config(path: str) -> tuple[dict, str]:
+    """The config file as a dict (checked) and its text (recorded in the output file)."""
     try:
         import tomllib
     except ImportError:  # Python 3.10
@@ -163,15 +166,18 @@ def _load_config(path: str) -> dict:
             raise UsageError("--config needs Python >= 3.11 (tomllib) or the tomli package") from None
     try:
         with open(path, "rb") as f:
-            cfg = tomllib.load(f)
+            text = f.read().decode("utf-8")
+        cfg = tomllib.loads(text)
     except OSError as e:
         raise UsageError(f"--config {path}: {e.strerror or e}") from None
+    except UnicodeDecodeError as e:
+        raise UsageError(f"--config {path}: not UTF-8 text ({e})") from None
     except tomllib.TOMLDecodeError as e:
         raise UsageError(f"--config {path}: not valid TOML ({e})") from None
     unknown = set(cfg) - _CONFIG_KEYS
     if unknown:
         raise UsageError(f"--config {path}: unknown keys {sorted(unknown)}; valid keys are {sorted(_CONFIG_KEYS)}")
-    for table in ("axes", "model", "solver", "census", "wear_reference"):
+    for table in ("axes", "model", "solver", "census", "wear_reference", "dask"):
         if table in cfg and not isinstance(cfg[table], dict):
             raise UsageError(f"--config {path}: [{table}] must be a table")
     unknown = set(cfg.get("solver", {})) - _SOLVER_KEYS
@@ -180,7 +186,10 @@ def _load_config(path: str) -> dict:
     unknown = set(cfg.get("census", {})) - set(_CENSUS_KEYS)
     if unknown:
         raise UsageError(f"--config {path}: unknown [census] keys {sorted(unknown)}; valid: {sorted(_CENSUS_KEYS)}")
-    return cfg
+    unknown = set(cfg.get("dask", {})) - _DASK_KEYS
+    if unknown:
+        raise UsageError(f"--config {path}: unknown [dask] keys {sorted(unknown)}; valid: {sorted(_DASK_KEYS)}")
+    return cfg, text
 
 
 def _add_sweep_arguments(p: argparse.ArgumentParser) -> None:
@@ -205,10 +214,20 @@ def _add_sweep_arguments(p: argparse.ArgumentParser) -> None:
                    help=argparse.SUPPRESS)  # deprecated name of --strategy
     p.add_argument("--threads", type=_positive_int, metavar="N", help="worker threads (default: all cores)")
     p.add_argument("--resume", action="store_true", help="finish an interrupted sweep from FILE.parts/")
+    p.add_argument("--force-resume", action="store_true",
+                   help="resume even though the parts were computed by other code (another version or core build); "
+                   "the file records it")  # fmt: skip
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace an existing output file (once the new one is complete); without it an existing file "
+                   "is refused before any work")  # fmt: skip
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help="run the chunks on a dask cluster: a scheduler address (tcp://host:8786), or local:N to start "
+                   "N worker processes here (needs tribosweep[dask]; also [dask] scheduler in --config)")  # fmt: skip
     p.add_argument("--config", metavar="FILE.toml",
                    help="TOML with keys normal_load, arm_length, sliding_speed, strategy, output, chunk_size, "
                    "threads, plot and tables [axes], [model] (SliderModel fields), [solver] (every setting below, "
-                   "with its flag's name in snake_case), [census], [wear_reference]; command-line options win")  # fmt: skip
+                   "with its flag's name in snake_case), [census], [wear_reference], [dask] (scheduler); command-line "
+                   "options win; its text is recorded in the output file")  # fmt: skip
     p.add_argument("--chunk-size", type=_positive_int, metavar="N", help="points per saved chunk")
     p.add_argument("--max-points", type=_positive_int, metavar="N",
                    help="largest sweep accepted (default 10000000): a bigger one is refused before any work")
@@ -255,7 +274,7 @@ def _run_sweep(args: argparse.Namespace) -> int:
     from ._sweep import sweep
     from ._wear import WearReference
 
-    cfg = _load_config(args.config) if args.config else {}
+    cfg, config_text = _load_config(args.config) if args.config else ({}, None)
     axes = {}
     for name in _PHYSICS:
         cli = getattr(args, name)
@@ -301,6 +320,10 @@ def _run_sweep(args: argparse.Namespace) -> int:
         boundaries=args.boundaries and cfg.get("boundaries", True),
         threads=args.threads or cfg.get("threads"),
         resume=args.resume,
+        force_resume=args.force_resume,
+        overwrite=args.overwrite,
+        scheduler=args.scheduler or cfg.get("dask", {}).get("scheduler"),
+        config_text=config_text,
         progress=not args.no_progress,
         wear_reference=wear_reference,
         command=command,
@@ -525,11 +548,18 @@ COMMANDS: dict[str, Command] = {
 }
 
 
+class _Parser(argparse.ArgumentParser):
+    """An argument parser whose errors are one line (the usage is for ``--help``)."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with every registered sub-command."""
     from . import __version__
 
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="tribosweep",
         description="Friction-induced vibration of the 1985 pin-on-disk slider: regime maps over load, arm length "
         "and sliding speed. SI units: N, m, m/s.",

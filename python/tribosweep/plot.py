@@ -25,6 +25,7 @@ REGIME_COLORS: dict[str, str] = {
     "failed": "#999999",
     "unstable_undetermined": "#F0E442",
     "irregular": "#009E73",
+    "crashed": "#882255",
 }
 _PREFERRED = ("normal_load", "arm_length", "sliding_speed")
 

@@ -2,15 +2,18 @@
 
 A sweep is an ensemble: the grid's points, numbered in C order, are cut into chunks, and each
 chunk is one call of the pure function :func:`tribosweep._sweep.chunk.compute_chunk`. The loop runs
-in-process or through any executor with a ``map`` method (``concurrent.futures``, dask). With an
-output file, every finished chunk is saved at once to ``<output>.parts/chunk_NNNNNN.npz``
-(atomically) next to a manifest of the configuration, so an interrupted sweep keeps its work and
-``resume=True`` finishes it with results identical to an uninterrupted run. The final netCDF file
-is assembled chunk by chunk (memory does not grow with the sweep) through ``<output>.tmp``.
+in-process, on any executor (``concurrent.futures``, a dask ``Client``) or on a dask cluster named by
+``scheduler`` (``tribosweep._sweep.runner``, ``tribosweep._sweep.cluster``). With an output file,
+every finished chunk is saved at once to ``<output>.parts/chunk_NNNNNN.npz`` (atomically, with a
+checksum) next to a manifest of the configuration and the code identity, so an interrupted sweep
+keeps its work and ``resume=True`` finishes it with results identical to an uninterrupted run. The
+final netCDF file is assembled chunk by chunk through ``<output>.tmp`` in bounded memory (see
+``tribosweep._sweep.netcdf``); a full disk is an error that names what is needed (``disk``).
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
 import sys
 import warnings
@@ -24,7 +27,8 @@ from .. import _checks, _settings, _wear
 from .._model import SliderModel
 from .._settings import DEFAULTS, SweepSettings
 from . import chunk as _chunk
-from . import netcdf, schema
+from . import cluster as _cluster
+from . import disk, netcdf, runner, schema
 from .parts import Parts
 from .plan import (
     AXIS_ATTRS,
@@ -52,7 +56,10 @@ def sweep(
     chunk_size: int | None = None,
     threads: int | None = None,
     executor=None,
+    scheduler: str | None = None,
     resume: bool = False,
+    force_resume: bool = False,
+    overwrite: bool = False,
     progress: bool = True,
     disturbance: float | Sequence[float] | None = None,
     wear_reference: _wear.WearReference | None = None,
@@ -82,6 +89,7 @@ def sweep(
     method: str | None = None,
     check_bistability: bool | None = None,
     command: str | None = None,
+    config_text: str | None = None,
 ) -> xr.Dataset:
     """Map the slider's regime over normal load x arm length x sliding speed (x extra axes).
 
@@ -115,17 +123,33 @@ def sweep(
         netCDF file to write (through ``<output>.tmp``); finished chunks are kept in
         ``<output>.parts/`` until it is complete. Without it the Dataset is built in memory.
     chunk_size : int, optional
-        Points per chunk (default 4096 for ``linear``, 64 otherwise). Part of the configuration
-        a resumed sweep must match.
+        Points per chunk (default 4096 for ``linear``, 64 otherwise; on a dask cluster at most
+        that, and small enough for 4 chunks per worker thread). Results do not depend on it. Part
+        of the configuration a resumed sweep must match; without it a resumed sweep keeps its own.
     threads : int, optional
         Rust worker threads inside a chunk (default ``TRIBOSWEEP_THREADS`` or all cores).
         Results do not depend on it.
-    executor : object with ``map``, optional
-        Runs the chunks, e.g. a ``concurrent.futures`` executor or a dask ``Client`` (results
-        that are futures are waited for). Default: an in-process loop.
+    executor : object with ``submit`` or ``map``, optional
+        Runs the chunks: a ``concurrent.futures`` executor or a dask ``Client`` (chunks are
+        submitted and saved as they finish; a worker process that dies costs only its chunk, and a
+        point that keeps killing its process is quarantined as ``crashed``: see
+        ``tribosweep._sweep.runner``), or any object with ``map``. Default: an in-process loop.
+    scheduler : str, optional
+        Run the chunks on a dask cluster: a scheduler's address (``"tcp://host:8786"``), or
+        ``"local:N"`` to start ``N`` worker processes on this machine for the sweep. Needs
+        ``dask.distributed`` (extra ``[dask]``). Each task uses its worker's thread budget (see
+        ``tribosweep._sweep.cluster``); without ``chunk_size`` the chunks are sized for the
+        cluster. Not together with ``executor``.
     resume : bool
         Finish the sweep whose chunks are in ``<output>.parts/`` (the configuration must match,
-        else ``ValueError`` names the difference).
+        else ``ValueError`` names the difference; it keeps the chunk size it started with).
+    force_resume : bool
+        Resume (implies ``resume``) even though the parts were computed by other code (another version or build of
+        the core, whose numbers may differ): refused otherwise. The file records it
+        (``tribosweep_resumed_from``).
+    overwrite : bool
+        Replace an existing ``output`` file (only once the new one is complete); without it an
+        existing file is refused before any work.
     progress : bool
         Progress bar on stderr (tqdm if installed, else a plain line).
     disturbance : float or array_like (6,), optional
@@ -201,6 +225,9 @@ def sweep(
         Deprecated name of ``strategy`` (``method`` is the time integrator everywhere else).
     command : str, optional
         Command recorded in the ``history`` attribute (the CLI passes its command line).
+    config_text : str, optional
+        Text of the configuration file the sweep came from, recorded in the ``config_toml``
+        attribute (the CLI passes its ``--config`` file).
 
     Returns
     -------
@@ -221,6 +248,10 @@ def sweep(
         ``model``, ``extra_axes``, ``wear_reference`` or ``wear_calibration`` of the wrong type.
     FileExistsError
         ``<output>.parts/`` exists and ``resume`` is false.
+    DiskFullError (an OSError)
+        The disk is full: before any work when the parts alone cannot fit, or while writing a part
+        or the file (the message names the path and the space needed; the parts are kept: free
+        space and resume).
     KeyboardInterrupt
         Re-raised after an interruption; finished chunks stay in ``<output>.parts/``.
 
@@ -253,9 +284,8 @@ def sweep(
         axes[name] = check_axis(name, values, units=AXIS_ATTRS[name]["units"])
         warn_units(name, axes[name])
     axes.update(check_extra_axes(model, extra_axes))
-    if chunk_size is None:
-        chunk_size = DEFAULT_CHUNK_SIZE.get(strategy, DEFAULT_CHUNK_SIZE_OTHER)
-    if isinstance(chunk_size, bool) or not isinstance(chunk_size, (int, np.integer)) or chunk_size < 1:
+    if chunk_size is not None and (isinstance(chunk_size, bool) or not isinstance(chunk_size, (int, np.integer))
+                                   or chunk_size < 1):  # fmt: skip
         raise ValueError(f"chunk_size = {chunk_size!r} is out of range: must be an integer >= 1")
     threads = _checks.threads(threads)
     wear_reference = _wear.WearReference() if wear_reference is None else wear_reference
@@ -263,10 +293,17 @@ def sweep(
         raise TypeError(f"wear_reference = {wear_reference!r} must be a tribosweep.WearReference or None")
     if wear_calibration is not None and not isinstance(wear_calibration, _wear.WearCalibration):
         raise TypeError(f"wear_calibration = {wear_calibration!r} must be a tribosweep.WearCalibration or None")
+    resume = bool(resume or force_resume)
     if resume and output is None:
         raise ValueError("resume=True needs output: the finished chunks are kept next to the output file")
     if output is not None:
-        output = _check_output(output)
+        output = _check_output(output, overwrite=overwrite)
+    if scheduler is not None:
+        if executor is not None:
+            raise ValueError(f"scheduler = {scheduler!r} and executor = {executor!r}: give one of them, not both")
+        scheduler = _cluster.check_scheduler(scheduler)
+    if config_text is not None and not isinstance(config_text, str):
+        raise TypeError(f"config_text = {config_text!r} must be a str (the text of a TOML file) or None")
     n_points = int(np.prod([a.size for a in axes.values()]))
     if n_points > max_points:
         raise ValueError(f"the sweep has {n_points} points (shape {tuple(a.size for a in axes.values())}), more than "
@@ -287,35 +324,69 @@ def sweep(
         "frequency_hz": f_ref,
         "calibration": None if wear_calibration is None else wear_calibration.as_dict(),
     })  # fmt: skip
-    plan = Plan(model, axes, strategy, settings, int(chunk_size), wear_reference, wear_calibration)
-    if command is None:
-        command = f"tribosweep.sweep(shape={plan.shape}, dims={plan.dims}, strategy={strategy!r})"
-    curves, curve_attrs = schema.boundary_vars(plan) if boundaries else ({}, {})
-    layout = (
-        schema.coords(plan),
-        schema.static_vars(plan) | curves,
-        schema.point_specs(plan.dims, wear_rate=wear_calibration is not None),
-        schema.global_attrs(plan, command, f_ref) | curve_attrs,
-    )
+    specs = schema.point_specs(tuple(axes), wear_rate=wear_calibration is not None)
+    if output is not None and not resume:
+        disk.check_room(output, n_points, disk.fixed_point_bytes(specs, schema.TRAILING_DIMS))
 
-    if output is None:
-        writer = netcdf.MemoryWriter(*layout)
-        _compute(plan, range(plan.n_chunks), threads, executor, progress, 0, writer.write)
-        return writer.to_dataset()
+    connection = _cluster.connect(scheduler) if scheduler is not None else contextlib.nullcontext(executor)
+    with connection as executor:
+        extra = {} if config_text is None else {"config_toml": config_text}
+        if runner.is_dask(executor):
+            _cluster.check_workers(executor)
+            extra |= _cluster.provenance(executor)
+        if chunk_size is None:
+            chunk_size = (Parts.saved_chunk_size(output) if resume else None) or DEFAULT_CHUNK_SIZE.get(
+                strategy, DEFAULT_CHUNK_SIZE_OTHER)  # fmt: skip
+            if runner.is_dask(executor) and not resume:
+                chunk_size = _cluster.chunk_size(n_points, chunk_size, _cluster.total_threads(executor))
+        plan = Plan(model, axes, strategy, settings, int(chunk_size), wear_reference, wear_calibration)
+        if command is None:
+            command = f"tribosweep.sweep(shape={plan.shape}, dims={plan.dims}, strategy={strategy!r})"
+        curves, curve_attrs = schema.boundary_vars(plan) if boundaries else ({}, {})
+        layout = (
+            schema.coords(plan),
+            schema.static_vars(plan) | curves,
+            specs,
+            schema.global_attrs(plan, command, f_ref) | curve_attrs | extra,
+        )
+        if output is None:
+            writer = netcdf.MemoryWriter(*layout)
+            bar = Progress(progress, plan.n_points, 0)
+            try:
+                runner.run(plan, range(plan.n_chunks), threads, executor,
+                           lambda k, arrays: writer.write(*plan.chunk_range(k), arrays), bar)  # fmt: skip
+            finally:
+                bar.close()
+            return writer.to_dataset()
+        return _to_file(plan, Path(output), layout, resume, force_resume, threads, executor, progress)
 
-    output = Path(output)
+
+def _to_file(plan: Plan, output: Path, layout, resume: bool, force: bool, threads, executor, progress) -> xr.Dataset:
+    """Compute what the parts lack, then assemble the file (the parts stay until it is complete)."""
     output.parent.mkdir(parents=True, exist_ok=True)
-    parts = Parts(output, plan, resume)
+    parts = Parts(output, plan, resume, force=force)
+    try:
+        return _compute_and_assemble(plan, output, parts, layout, resume, threads, executor, progress)
+    finally:
+        parts.release()
+
+
+def _compute_and_assemble(plan: Plan, output: Path, parts: Parts, layout, resume: bool, threads, executor,
+                          progress) -> xr.Dataset:  # fmt: skip
+    if parts.forced_from is not None:
+        layout[3]["tribosweep_resumed_from"] = (
+            f"force_resume: some parts were computed by tribosweep {parts.forced_from['tribosweep_version']} core "
+            f"{parts.forced_from['core_build']}, the rest by this code"
+        )
     sums = parts.checksums()
     done = [k for k in range(plan.n_chunks) if parts.is_done(k, sums)]
-    todo = [k for k in range(plan.n_chunks) if k not in set(done)]
+    todo = sorted(set(range(plan.n_chunks)) - set(done))
     n_done = sum(plan.chunk_range(k)[1] - plan.chunk_range(k)[0] for k in done)
-
-    def save(start, stop, arrays):
-        parts.save(start // plan.chunk_size, arrays)
-
+    if resume:
+        disk.check_room(output, plan.n_points - n_done, disk.fixed_point_bytes(layout[2], schema.TRAILING_DIMS))
+    bar = Progress(progress, plan.n_points, n_done)
     try:
-        _compute(plan, todo, threads, executor, progress, n_done, save)
+        runner.run(plan, todo, threads, executor, parts.save, bar, markers=parts.running, suspects=parts.suspects())
     except KeyboardInterrupt:
         saved = sum(1 for k in range(plan.n_chunks) if parts.path(k).exists())
         sys.stderr.write(
@@ -323,63 +394,34 @@ def sweep(
             "resume=True (--resume) to finish\n"
         )
         raise
-    writer = netcdf.NetCDFWriter(output, *layout)
+    finally:
+        bar.close()
+    widths = {s.name: max(parts.text_width(k, s.name) for k in range(plan.n_chunks)) for s in layout[2] if s.dtype == "str"}
+    writer = netcdf.NetCDFWriter(output, *layout, parts_dir=parts.dir, text_widths=widths)
     try:
         for k in range(plan.n_chunks):
             writer.write(*plan.chunk_range(k), parts.load(k))
     except BaseException:
         writer.abort()
         raise
-    writer.close()
+    writer.close()  # removes its temporary file itself on an error
     parts.remove()
     return xr.open_dataset(output, engine="netcdf4")
 
 
-#: Chunks handed to an executor at a time: executors submit everything they are given at once, so
-#: the tasks (each with its points' parameters) are fed in windows to keep memory bounded.
-EXECUTOR_WINDOW: int = 256
-
-
-def _windowed_map(executor, plan: Plan, chunks: list[int], threads):
-    for i in range(0, len(chunks), EXECUTOR_WINDOW):
-        window = chunks[i : i + EXECUTOR_WINDOW]
-        yield from executor.map(_run_task, [plan.task(k, threads) for k in window])
-
-
-def _compute(plan: Plan, chunks, threads, executor, progress: bool, n_done: int, sink) -> None:
-    """Run ``chunks`` and hand each result to ``sink(start, stop, arrays)`` in order."""
-    chunks = list(chunks)
-    bar = Progress(progress, plan.n_points, n_done)
-    try:
-        if executor is None:
-            # Looked up at call time (not bound at import) so that tests can patch it.
-            results = (_chunk.compute_chunk(*plan.task(k, threads)) for k in chunks)
-        else:
-            results = _windowed_map(executor, plan, chunks, threads)
-        for k, res in zip(chunks, results):
-            if hasattr(res, "result"):  # dask futures
-                res = res.result()
-            start, stop = plan.chunk_range(k)
-            sink(start, stop, res)
-            bar.update(stop - start)
-    finally:
-        bar.close()
-
-
-def _run_task(task: tuple) -> dict[str, np.ndarray]:
-    """Module-level (picklable) wrapper for executors."""
-    return _chunk.compute_chunk(*task)
-
-
-def _check_output(output) -> Path:
-    """The output path, refused before any work if it cannot be written: empty, a directory, or in a
-    directory that does not exist and cannot be made, or one without write permission."""
+def _check_output(output, *, overwrite: bool = False) -> Path:
+    """The output path, refused before any work if it cannot be written: empty, a directory, an existing
+    file (without ``overwrite``), or in a directory that does not exist and cannot be made, or one without
+    write permission."""
     if str(output).strip() == "":
         raise ValueError("output = '' is not a file name: give a path such as sweep.nc, or None for no file")
     path = Path(output)
     if path.is_dir():
         raise ValueError(f"output = {str(output)!r} is a directory: give a file name inside it, e.g. "
                          f"{str(path / 'sweep.nc')!r}")  # fmt: skip
+    if path.exists() and not overwrite:
+        raise ValueError(f"output = {str(output)!r} exists: pass overwrite=True (--overwrite) to replace it (only "
+                         "once the new file is complete), or choose another name")  # fmt: skip
     parent = path.parent if str(path.parent) else Path(".")
     try:
         parent.mkdir(parents=True, exist_ok=True)

@@ -16,7 +16,15 @@ from collections.abc import Iterator, Mapping
 import numpy as np
 import xarray as xr
 
+from . import disk
 from .schema import TRAILING_DIMS, VarSpec
+
+#: Target size of one HDF5 chunk of a per-point variable (bytes). Each variable's chunk cache holds
+#: two chunks, so the writer's memory is bounded by about ``2 x CHUNK_BYTES x variables`` (about
+#: 60 MB for the 55 variables of a sweep), whatever the sweep's size.
+CHUNK_BYTES: int = 512 << 10
+#: Width (UTF-8 bytes) of a text variable whose longest value the writer is not told.
+DEFAULT_TEXT_WIDTH: int = 256
 
 
 def flat_slabs(start: int, stop: int, shape: tuple[int, ...]) -> Iterator[tuple[tuple[slice, ...], slice]]:
@@ -89,8 +97,42 @@ class _Schema:
         return tuple(len(self.trailing[d][0]) for d in spec.dims[len(self.dims) :])
 
 
+def chunk_shape(shape: tuple[int, ...], itemsize: int, target: int = CHUNK_BYTES) -> tuple[int, ...]:
+    """HDF5 chunk of a variable of ``shape``: contiguous in C order (the trailing dimensions whole,
+    then as many rows of the next one as fit in ``target`` bytes, the leading ones 1), so that a
+    sweep's chunks, which are ranges of the C-order numbering, fill HDF5 chunks one after another.
+
+    Examples
+    --------
+    >>> chunk_shape((1000, 1000, 1), 8)
+    (65, 1000, 1)
+    >>> chunk_shape((3, 2), 8)
+    (3, 2)
+    """
+    room = max(1, target // itemsize)
+    out = [1] * len(shape)
+    for i in range(len(shape) - 1, -1, -1):
+        n = max(1, int(shape[i]))
+        if n <= room:
+            out[i], room = n, room // n
+        else:
+            out[i] = max(1, room)
+            break
+    return tuple(out)
+
+
 class NetCDFWriter:
     """Write a sweep's netCDF file chunk by chunk (netCDF4, ``<path>.tmp`` then ``os.replace``).
+
+    Memory is bounded whatever the sweep's size: per-point variables are stored in HDF5 chunks of
+    about ``CHUNK_BYTES`` that follow the C-order numbering, each with a cache of two chunks.
+
+    A full disk is an error, never a crash: before each slab is handed to the HDF5 library (which
+    can crash the process when a write meets a full disk) the free space is checked against the
+    slab's uncompressed size plus what the library may still hold unwritten; when that is short,
+    the library's buffers are flushed first (``sync``) and the check repeated, and if it still does
+    not fit :class:`tribosweep._sweep.disk.DiskFullError` is raised before the write. Any error of
+    the library (its return codes) is raised as ``OSError`` naming the file.
 
     Parameters
     ----------
@@ -104,15 +146,39 @@ class NetCDFWriter:
         Per-point variables over all dimensions, written by :meth:`write`.
     attrs : dict
         Global attributes.
+    parts_dir : path-like, optional
+        Where the sweep's parts are kept (named in the error of a full disk).
+    text_widths : dict of str to int, optional
+        Longest UTF-8 value (bytes) of each text variable (default ``DEFAULT_TEXT_WIDTH``); text is
+        stored as a character array of that width.
     """
 
-    def __init__(self, path, coords, static_vars, points, attrs):
+    def __init__(self, path, coords, static_vars, points, attrs, *, parts_dir=None, text_widths=None):
         import netCDF4
 
         self.schema = _Schema(coords, static_vars, points, attrs)
+        self.text_widths = dict(text_widths or {})
         self.path = os.fspath(path)
         self.tmp = self.path + ".tmp"
-        self.nc = netCDF4.Dataset(self.tmp, "w", format="NETCDF4")
+        self.parts_dir = parts_dir
+        self.unsynced = 0  # bytes handed to the library since its buffers were last flushed (upper bound)
+        self.written = self.slack = 0
+        n = int(np.prod(self.schema.shape))
+        self.total = n * disk.fixed_point_bytes(points, self.schema.trailing)
+        self.total += n * sum(int(self.text_widths.get(p.name, DEFAULT_TEXT_WIDTH)) for p in points if p.dtype == "str")
+        self._reserve(disk.MARGIN)
+        try:
+            self.nc = netCDF4.Dataset(self.tmp, "w", format="NETCDF4")
+            self._define()
+        except (RuntimeError, OSError) as e:
+            err = self._library_error(e)
+            self.abort()
+            raise err from e
+        except BaseException:
+            self.abort()
+            raise
+
+    def _define(self) -> None:
         nc = self.nc
         for dim, (values, a) in self.schema.coords.items():
             nc.createDimension(dim, len(values))
@@ -134,41 +200,126 @@ class NetCDFWriter:
             var.setncatts(clean_attrs(a))
             var[...] = values
         self.vars = {}
+        self.slack = 0  # one HDF5 chunk of every variable: what a flush of half-written chunks costs again
         for spec in self.schema.points:
             if spec.dtype == "str":
-                var = nc.createVariable(spec.name, str, spec.dims)
-            elif spec.dtype == "f8":
-                var = nc.createVariable(spec.name, "f8", spec.dims, fill_value=np.nan, zlib=True, complevel=1)
+                # Text as a CF character array (UTF-8, padded to the longest value): read lazily by
+                # xarray, where a variable-length string variable is decoded whole on opening.
+                width = max(1, int(self.text_widths.get(spec.name, DEFAULT_TEXT_WIDTH)))
+                dim = f"{spec.name}_length"
+                nc.createDimension(dim, width)
+                shape = self.schema.shape + (width,)
+                chunks = chunk_shape(shape, 1)
+                var = nc.createVariable(spec.name, "S1", spec.dims + (dim,), zlib=True, complevel=1, chunksizes=chunks,
+                                        chunk_cache=2 * int(np.prod(chunks)) + (64 << 10))  # fmt: skip
+                var.setncattr("_Encoding", "utf-8")
+                var.set_auto_chartostring(False)  # written as characters (stringtochar), read back as text
+                self.slack += int(np.prod(chunks))
             else:
-                var = nc.createVariable(spec.name, spec.dtype, spec.dims, zlib=True, complevel=1)
+                size = np.dtype(spec.dtype).itemsize
+                chunks = chunk_shape(self.schema.shape + self.schema.tail(spec), size)
+                cache = 2 * size * int(np.prod(chunks)) + (64 << 10)
+                fill = {"fill_value": np.nan} if spec.dtype == "f8" else {}
+                var = nc.createVariable(spec.name, spec.dtype, spec.dims, zlib=True, complevel=1, chunksizes=chunks,
+                                        chunk_cache=cache, **fill)  # fmt: skip
+                self.slack += size * int(np.prod(chunks))
             var.set_auto_maskandscale(False)
             var.setncatts(clean_attrs(spec.attrs))
             self.vars[spec.name] = (spec, var)
         nc.setncatts(self.schema.attrs)
 
+    def _reserve(self, nbytes: int) -> None:
+        """Make sure ``nbytes`` more (uncompressed) can be handed to the library without a full disk."""
+        free = disk.free_bytes(self.tmp)
+        if free >= self.unsynced + nbytes + disk.MARGIN:
+            return
+        if self.unsynced > self.slack and free >= self.unsynced + disk.MARGIN:
+            self.nc.sync()  # the library's buffers go to disk now, while they still fit
+            # A chunk flushed half-written is written again, whole, when it is finished.
+            self.unsynced = self.slack
+            free = disk.free_bytes(self.tmp)
+            if free >= self.unsynced + nbytes + disk.MARGIN:
+                return
+        raise disk.file_full(self.path, max(nbytes, self.total - self.written) + disk.MARGIN, free, self.parts_dir)
+
+    def _library_error(self, e: Exception) -> OSError:
+        free = disk.free_bytes(self.tmp)
+        if disk.is_full(e) or free < self.unsynced + disk.MARGIN:
+            return disk.file_full(self.path, self.total - self.written + disk.MARGIN, free, self.parts_dir)
+        return OSError(f"writing {self.tmp} failed: {e}")
+
     def write(self, start: int, stop: int, arrays: Mapping[str, np.ndarray]) -> None:
-        """Write the points ``[start, stop)`` (C-order flat indices) of every per-point variable."""
-        for idx, part in flat_slabs(start, stop, self.schema.shape):
-            shape = _slab_shape(idx)
-            for name, (spec, var) in self.vars.items():
-                tail = self.schema.tail(spec)
-                data = np.asarray(arrays[name])[part].reshape(shape + tail)
-                if spec.dtype == "str":
-                    data = data.astype(object)
-                var[idx + (slice(None),) * len(tail)] = data
+        """Write the points ``[start, stop)`` (C-order flat indices) of every per-point variable.
+
+        Raises
+        ------
+        DiskFullError
+            The slab would not fit on the disk (checked before anything is written).
+        OSError
+            The netCDF library reported an error.
+        """
+        import netCDF4
+
+        arrays = dict(arrays)
+        nbytes = 0
+        for spec, var in self.vars.values():
+            a = np.asarray(arrays[spec.name])
+            if spec.dtype == "str":
+                width = var.shape[-1]
+                raw = np.char.encode(a.astype(str), "utf-8")
+                if raw.dtype.itemsize > width:
+                    raise ValueError(f"{spec.name}: a value of {raw.dtype.itemsize} bytes is longer than the file's "
+                                     f"{width} (text_widths)")  # fmt: skip
+                arrays[spec.name] = netCDF4.stringtochar(raw.astype(f"S{width}"))
+                nbytes += a.size * width
+            else:
+                nbytes += a.size * np.dtype(spec.dtype).itemsize
+        self._reserve(nbytes)
+        try:
+            for idx, part in flat_slabs(start, stop, self.schema.shape):
+                shape = _slab_shape(idx)
+                for name, (spec, var) in self.vars.items():
+                    tail = (var.shape[-1],) if spec.dtype == "str" else self.schema.tail(spec)
+                    data = np.asarray(arrays[name])[part].reshape(shape + tail)
+                    var[idx + (slice(None),) * len(tail)] = data
+        except (RuntimeError, OSError) as e:
+            raise self._library_error(e) from e
+        self.unsynced += nbytes
+        self.written += nbytes
 
     def close(self) -> None:
-        """Close the file and move it to its final path (atomic on one file system)."""
-        self.nc.close()
-        os.replace(self.tmp, self.path)
+        """Close the file and move it to its final path (atomic on one file system); on an error
+        the temporary file is removed and the error raised (``DiskFullError`` for a full disk)."""
+        try:
+            self._reserve(0)
+            try:
+                self.nc.close()
+            except (RuntimeError, OSError) as e:
+                raise self._library_error(e) from e
+            os.replace(self.tmp, self.path)
+        except BaseException:
+            self.abort()
+            raise
 
     def abort(self) -> None:
-        """Close and delete the temporary file."""
+        """Delete the temporary file, closing it without risk on a full disk (this runs on error paths).
+
+        The file is truncated first, which frees its space, so that what the library flushes on
+        closing always fits; errors of the close are ignored (the original error is what matters).
+        """
+        nc = getattr(self, "nc", None)
         try:
-            self.nc.close()
-        finally:
             if os.path.exists(self.tmp):
-                os.remove(self.tmp)
+                os.truncate(self.tmp, 0)
+        except OSError:
+            pass
+        try:
+            if nc is not None and nc.isopen():
+                nc.close()
+        except Exception:  # noqa: BLE001 - the file is deleted anyway
+            pass
+        finally:
+            disk.remove_quietly(self.tmp)
 
 
 class MemoryWriter:

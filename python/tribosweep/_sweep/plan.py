@@ -19,8 +19,9 @@ from .._model import PARAM_NAMES, PARAM_UNITS, SliderModel
 from .._settings import SweepSettings
 
 #: Version of the parts-directory layout (the resume manifest).
-PARTS_FORMAT: int = 4  # 2: the attractor census; 3: typed settings, "strategy" (was "method"), shooting settings;
-# 4: mild_wear_fraction (wear from the census fractions)
+PARTS_FORMAT: int = 5  # 2: the attractor census; 3: typed settings, "strategy" (was "method"), shooting settings;
+# 4: text as UTF-8 bytes, the hash without the code identity (checked on its own), crashed points;
+# 5: mild_wear_fraction (wear from the census fractions)
 
 #: The three physics dimensions, always present (length 1 at the seed value when not swept).
 PHYSICS_DIMS: tuple[str, ...] = ("normal_load", "arm_length", "sliding_speed")
@@ -115,6 +116,10 @@ def check_extra_axes(model: SliderModel, extra_axes) -> dict[str, np.ndarray]:
     return out
 
 
+#: Keys of the configuration that identify the code (a resume with other code is refused unless forced).
+CODE_IDENTITY: tuple[str, ...] = ("tribosweep_version", "core_build")
+
+
 @functools.cache
 def core_build() -> str:
     """Identity of the compiled core: the SHA-256 (first 16 hex digits) of the extension's file.
@@ -161,7 +166,9 @@ class Plan:
             "options": self.options,
             "chunk_size": chunk_size,
         }
-        text = json.dumps(self.config, sort_keys=True, allow_nan=False)
+        # The hash marks every part; the code identity is checked on its own (a forced resume accepts another).
+        fixed = {k: v for k, v in self.config.items() if k not in CODE_IDENTITY}
+        text = json.dumps(fixed, sort_keys=True, allow_nan=False)
         self.hash = hashlib.sha256(text.encode()).hexdigest()
 
     def chunk_range(self, k: int) -> tuple[int, int]:
@@ -179,8 +186,15 @@ class Plan:
             params["mu_static"] = params["mu"]  # "no Stribeck effect" follows the swept mu
         return params
 
+    def point_values(self, i: int) -> tuple[float, ...]:
+        """The axis values of point ``i`` (C-order flat index), in dimension order."""
+        return tuple(float(self.axes[d][j]) for d, j in zip(self.dims, np.unravel_index(i, self.shape)))
+
     def task(self, k: int, threads: int | None) -> tuple:
-        start, stop = self.chunk_range(k)
+        return self.task_range(*self.chunk_range(k), threads)
+
+    def task_range(self, start: int, stop: int, threads: int | None) -> tuple:
+        """The arguments of :func:`tribosweep._sweep.chunk.compute_chunk` for the points ``[start, stop)``."""
         options = dict(self.options, threads=threads)
         return (self.model_values, self.model.contact, self.model.friction_law, self.point_params(start, stop),
                 self.strategy, options)  # fmt: skip

@@ -8,6 +8,7 @@ global attributes. The writers (:mod:`tribosweep._sweep.netcdf`) only write what
 from __future__ import annotations
 
 import datetime
+import json
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -21,7 +22,8 @@ from .._codes import (
     DECIDED_BY_NAMES,
     REGIME_DOC,
     REGIME_NAMES,
-    STATUS_NAMES,
+    SWEEP_STATUS_NAMES,
+    SWEEP_STATUS_VALUES,
     WEAR_APPLICABILITY_NAMES,
     flag_attrs,
 )
@@ -74,6 +76,23 @@ def static_vars(plan: Plan) -> dict:
     return out
 
 
+def software_versions() -> dict[str, str]:
+    """Versions of the software that computed and wrote a sweep (global attributes)."""
+    import platform
+
+    import netCDF4
+    import xarray
+
+    return {
+        "numpy_version": np.__version__,
+        "xarray_version": xarray.__version__,
+        "netCDF4_version": netCDF4.__version__,
+        "netcdf_library_version": netCDF4.__netcdf4libversion__,
+        "hdf5_version": netCDF4.__hdf5libversion__,
+        "python_version": platform.python_version(),
+    }
+
+
 def global_attrs(plan: Plan, command: str, f_ref: float) -> dict:
     from .. import __version__
 
@@ -83,7 +102,14 @@ def global_attrs(plan: Plan, command: str, f_ref: float) -> dict:
         "title": "tribosweep regime map of the 1985 pin-on-disk slider over normal load, arm length and sliding speed",
         "institution": "tribosweep",
         "source": f"tribosweep {__version__}",
+        "tribosweep_version": __version__,
         "tribosweep_core_build": plan.config["core_build"],
+        **software_versions(),
+        # The whole configuration (model, contact and friction law, strategy, every solver setting),
+        # as the resume manifest holds it; the axes are the coordinates, and the chunking changes no
+        # result (tested), so that equal results make equal files.
+        "tribosweep_config": json.dumps({k: v for k, v in plan.config.items() if k not in ("axes", "chunk_size")},
+                                        sort_keys=True),  # fmt: skip
         "history": f"{now} {command}",
         "references": REFERENCES,
         "comment": HOPF_CAVEAT,
@@ -173,7 +199,7 @@ OPTIONAL_POINT_VARIABLES: dict[str, tuple[str, str | None, str]] = {
 #: Flag meanings of the categorical per-point variables.
 FLAG_MEANINGS: dict[str, tuple[tuple[int, ...], tuple[str, ...]]] = {
     "regime": (tuple(range(len(REGIME_NAMES))), REGIME_NAMES),
-    "status": (tuple(range(len(STATUS_NAMES))), STATUS_NAMES),
+    "status": (SWEEP_STATUS_VALUES, SWEEP_STATUS_NAMES),
     "decided_by": (tuple(range(len(DECIDED_BY_NAMES))), DECIDED_BY_NAMES),
     "bistable": (BISTABLE_VALUES, BISTABLE_NAMES),
     "wear_applicability": (tuple(range(len(WEAR_APPLICABILITY_NAMES))), WEAR_APPLICABILITY_NAMES),
