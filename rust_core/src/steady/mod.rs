@@ -19,7 +19,7 @@
 
 use crate::model::{event, idx, ContactMode, ContactModel, FrictionLaw, Slider, State};
 use crate::ode::{integrate, Control, Method, Observer, Options, Outcome, Sampler, Stats, StepView};
-use crate::status::Status;
+use crate::status::{Failure, Status};
 use nalgebra::SVector;
 
 /// Largest period multiplicity (section crossings per period) looked for.
@@ -132,6 +132,52 @@ pub struct RunResult {
     pub extremes: Extremes,
     /// Work counters.
     pub stats: Stats,
+    /// Why the run did not succeed, with its numbers (`None` for `Success`).
+    pub failure: Option<Failure>,
+}
+
+impl RunResult {
+    /// The result of a run that could not be computed: `status`, NaN state and time, no work.
+    pub fn failed(status: Status, failure: Option<Failure>) -> Self {
+        RunResult {
+            status,
+            t: f64::NAN,
+            y: State::repeat(f64::NAN),
+            extremes: Extremes::default(),
+            stats: Stats::default(),
+            failure,
+        }
+    }
+}
+
+/// The failure behind a run of `s` from `t = 0` towards `t_end` under `opts` that ended with
+/// `status` at `(t, y)` with step size `h` after `steps` attempted steps (`None` for `Success`).
+/// Shared by the scalar driver and the lane-batched paths, so that every route gives the same text.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn run_failure(
+    status: Status,
+    s: &Slider,
+    t: f64,
+    y: &State,
+    h: f64,
+    steps: u64,
+    t_end: f64,
+    opts: &Options<6>,
+) -> Option<Failure> {
+    Some(match status {
+        Status::Success => return None,
+        Status::MaxSteps => Failure::MaxSteps { max_steps: opts.max_steps, t, t_end },
+        Status::StepTooSmall if t_end < 0.0 => Failure::Backwards { t0: 0.0, t_end },
+        Status::StepTooSmall => {
+            Failure::StepTooSmall { t, h, floor: opts.h_min_rel * t.abs().max(1.0), rtol: opts.rtol }
+        }
+        Status::NonFinite if steps == 0 && h.is_nan() => Failure::NonFiniteStart { t },
+        Status::NonFinite => Failure::NonFinite { t, h },
+        Status::EventChatter => Failure::EventChatter { max_events: opts.max_events, t },
+        Status::Diverged => Failure::Escaped { t, z: y[idx::Z], limit: s.p.escape_limit },
+        Status::NotComputed => Failure::Cancelled { t },
+        other => Failure::Ended { status: other, t },
+    })
 }
 
 pub(crate) struct ExtremesObserver<'a, O> {
@@ -175,7 +221,9 @@ pub fn run_observed<O: Observer<6, ContactMode>>(
     let sol = integrate(s, method, 0.0, *y0, t_end, &opts, &mut o);
     let escaped = sol.y[idx::Z].abs() >= s.p.escape_limit * (1.0 - 1e-9);
     let status = status_of(sol.outcome, escaped);
-    (RunResult { status, t: sol.t, y: sol.y, extremes: o.ext, stats: sol.stats }, o.inner)
+    let steps = sol.stats.n_accept + sol.stats.n_reject;
+    let failure = run_failure(status, s, sol.t, &sol.y, sol.h, steps, t_end, &opts);
+    (RunResult { status, t: sol.t, y: sol.y, extremes: o.ext, stats: sol.stats, failure }, o.inner)
 }
 
 /// Integrate to `t_end` and return the end state.
@@ -327,6 +375,8 @@ pub struct Summary {
     pub extremes: Extremes,
     /// Work counters, transient and the Fourier period together.
     pub stats: Stats,
+    /// Why the status is not `Success`, with its numbers (`None` for `Success`).
+    pub failure: Option<Failure>,
 }
 
 impl Summary {
@@ -351,12 +401,13 @@ impl Summary {
             min_slip_velocity: f64::NAN,
             extremes: Extremes::default(),
             stats: Stats::default(),
+            failure: None,
         }
     }
 
-    /// A summary for a point that could not be computed.
-    pub fn failed(status: Status) -> Self {
-        Self::empty(status, SteadyOutcome::Failed)
+    /// A summary for a point that could not be computed (`failure`: why, where known).
+    pub fn failed(status: Status, failure: Option<Failure>) -> Self {
+        Summary { failure, ..Self::empty(status, SteadyOutcome::Failed) }
     }
 }
 
@@ -633,6 +684,7 @@ pub(crate) fn summarize(s: &Slider, r: &RunResult, w: &SectionWatcher, opts: &St
     sum.y_end = r.y;
     sum.extremes = r.extremes;
     sum.stats = r.stats;
+    sum.failure = r.failure;
     sum.min_normal_force = r.extremes.min_normal_force;
     sum.min_slip_velocity = r.extremes.min_slip_velocity;
     // Not periodic: the mean crossing rate of the newest window (for a decayed motion, the
@@ -642,6 +694,7 @@ pub(crate) fn summarize(s: &Slider, r: &RunResult, w: &SectionWatcher, opts: &St
         Status::Diverged => {
             sum.outcome = SteadyOutcome::Diverged;
             sum.status = Status::Success;
+            sum.failure = None;
             return sum;
         }
         Status::Success => {}
@@ -660,6 +713,7 @@ pub(crate) fn summarize(s: &Slider, r: &RunResult, w: &SectionWatcher, opts: &St
     } else {
         sum.outcome = SteadyOutcome::Unsettled;
         sum.status = Status::NotConverged;
+        sum.failure = Some(Failure::Unsettled { t_max: opts.t_max, periodic_tol: opts.periodic_tol });
     }
     sum
 }
@@ -681,10 +735,9 @@ fn fourier_period(s: &Slider, y0: &State, period: f64, opts: &SteadyOptions, sum
     let sol = integrate(s, opts.method, 0.0, *y0, period, &o, &mut obs);
     sum.stats += sol.stats;
     if sol.outcome != Outcome::Finished || obs.sampler.out.len() != n {
-        sum.status = sol.outcome.status();
-        if sum.status.is_ok() {
-            sum.status = Status::NotConverged;
-        }
+        let failure = Failure::PeriodRerun { period, t: sum.t_end, status: sol.outcome.status() };
+        sum.status = failure.status();
+        sum.failure = Some(failure);
         return;
     }
     if let Some(t_start) = obs.off_since {
