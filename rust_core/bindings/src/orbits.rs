@@ -70,7 +70,8 @@ fn orbit_dict<'py>(py: Python<'py>, o: &PeriodicOrbit) -> PyResult<Bound<'py, Py
 }
 
 /// Periodic orbit by shooting from a state on it and a period guess, or from a describing-function
-/// root `root = [omega, A0, A1, A2, theta]` (with `variant` to rebuild its phasors).
+/// root `root = [omega, A0, A1, A2, theta]` (with `variant` to rebuild its phasors). When no orbit
+/// was found the values are NaN, `stable` is None and `reason` says why.
 #[pyfunction]
 #[pyo3(signature = (values, contact, friction_law, *, y0=None, period=None, root=None, variant="consistent", rtol=1e-11, max_iter=30, tol=1e-9))]
 #[allow(clippy::too_many_arguments)]

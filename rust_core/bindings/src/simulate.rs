@@ -12,8 +12,10 @@ use tribosweep_core::model::State;
 use tribosweep_core::status::Status;
 use tribosweep_core::steady::{self, RunResult, SteadyOptions, Summary};
 
-/// One trajectory. Returns a dict: `t` (n,), `y` (n, 6), and the run's status, counters, extremes.
-/// With `t_eval` the states are sampled there; otherwise every accepted step end is returned.
+/// One trajectory. Returns a dict: `t` (n,), `y` (n, 6), and the run's status, reason (why the
+/// status is not success, with its numbers; empty for success), counters, extremes. With `t_eval`
+/// the states are sampled there; otherwise every accepted step end is returned. Ctrl-C stops it
+/// (`KeyboardInterrupt`).
 #[pyfunction]
 #[pyo3(signature = (values, contact, friction_law, y0, t_end, method, rtol, *, atol=None, t_eval=None, max_steps=None, max_events=None))]
 #[allow(clippy::too_many_arguments)]
@@ -107,7 +109,8 @@ fn with_reasons(out: Vec<Result<TrajectoryResult, String>>, steady: bool) -> Vec
 /// Many trajectories in parallel (GIL released). `kind` is "final" (end state), "sampled"
 /// (states at `t_eval`) or "steady" (run to steady state and summarise; `t_end` is then `t_max`).
 /// The core picks the path (lane-batched or scalar) and the grouping; results do not depend on it
-/// beyond integration accuracy, nor on the thread count at all.
+/// beyond integration accuracy, nor on the thread count at all. Every non-success status has a
+/// reason; Ctrl-C stops every thread (`KeyboardInterrupt`, the results are dropped).
 #[pyfunction]
 #[pyo3(signature = (base, contact, friction_law, names, values, y0, t_end, method, rtol, *, atol=None, t_eval=None, threads=None, kind="final", periodic_tol=1e-5, decay_amplitude=None, n_fourier=512, max_steps=None, max_events=None, decay_amplitudes=None))]
 #[allow(clippy::too_many_arguments)]

@@ -190,12 +190,7 @@ fn run_impl(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances) -> 
     while ln.who.iter().any(|&w| w != usize::MAX) {
         rounds += 1;
         if cancel::requested_every(rounds) {
-            for l in 0..W {
-                if ln.who[l] != usize::MAX {
-                    let h = ln.h[l];
-                    finish(&mut ln, l, Status::NotComputed, h, &end, &mut out);
-                }
-            }
+            stop_all(&mut ln, &end, &mut out);
             break;
         }
         // ---- before the attempt: landing on t_end, the step floor, the step budget ----
@@ -345,6 +340,18 @@ fn run_impl(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances) -> 
     out.into_iter()
         .map(|r| r.unwrap_or_else(|| RunResult::failed(Status::NotComputed, Some(Failure::NotStarted))))
         .collect()
+}
+
+/// The caller cancelled: every running lane ends where it is (`NotComputed`).
+#[cold]
+#[inline(never)]
+fn stop_all(ln: &mut Lanes, end: &End<'_>, out: &mut [Option<RunResult>]) {
+    for l in 0..W {
+        if ln.who[l] != usize::MAX {
+            let h = ln.h[l];
+            finish(ln, l, Status::NotComputed, h, end, out);
+        }
+    }
 }
 
 /// What [`finish`] needs to say why a run failed.
