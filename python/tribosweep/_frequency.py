@@ -218,7 +218,13 @@ def periodic_orbit(
         ``period`` [s], ``omega``, ``floquet_multipliers`` (complex, by modulus descending) and their
         ``floquet_moduli``, ``stable``, ``instability`` (stable, fold, flip, torus), ``flip_multiplier`` and
         ``period_doubling`` (a real multiplier below ``-1 + FLIP_TOL``), harmonics of z (``A0, A1, A2, A3, theta``), ``z_max``,
-        ``contact_opens``, ``fraction_off_disk``, ``min_normal_force``, ``status``, cost.
+        ``contact_opens``, ``fraction_off_disk``, ``min_normal_force``, ``status``, ``reason``, cost.
+
+        When no orbit was found (``status`` other than success: Newton did not converge within
+        ``max_iter``, it ended on steady sliding, an integration failed), every value of the orbit is
+        NaN (never the last Newton iterate), ``instability`` is ``unknown``, the flags ``stable``,
+        ``contact_opens`` and ``period_doubling`` are absent (unset: not known), and ``reason`` says
+        why, with its numbers; ``residual``, ``newton_iterations`` and the cost describe the attempt.
     """
     model = _model(model)
     rtol = _checks.rtol(rtol)
@@ -261,19 +267,23 @@ def periodic_orbit(
     data["floquet_multiplier_imag"] = (("floquet",), mult.imag, {"units": "1", "long_name": "Floquet multiplier, imaginary part"})
     data["floquet_moduli"] = (("floquet",), np.array(out["moduli"]), {"units": "1", "long_name": "moduli of the Floquet multipliers"})
     data["state0"] = (("state",), np.array(out["state0"]), {"long_name": "state at t = 0 (zd = 0)"})
-    data["stable"] = ((), bool(out["stable"]), {"long_name": "every non-trivial multiplier inside the unit circle"})
+    found = out["stable"] is not None  # unset when no orbit was found
+    if found:
+        data["stable"] = ((), bool(out["stable"]), {"long_name": "every non-trivial multiplier inside the unit circle"})
     data["instability"] = ((), np.uint8(out["instability"]),
                            flag_attrs(INSTABILITY_NAMES, "how the orbit is unstable (its largest non-trivial multiplier)"))
     data["flip_multiplier"] = ((), out["flip_multiplier"], {
         "units": "1", "long_name": "most negative real non-trivial Floquet multiplier (NaN if none)",
         "comment": "near -1 the orbit is close to a period doubling; below -1 it is unstable and the attractor "
                    "nearby has twice the period (see period_doubling)"})
-    data["period_doubling"] = ((), bool(np.isfinite(out["flip_multiplier"]) and out["flip_multiplier"] < -1.0 + FLIP_TOL), {
-        "long_name": f"a real multiplier below -1 + {FLIP_TOL}: at or past a period doubling",
-        "comment": "the period-1 orbit is (or is about to be) unstable by a flip; a solve for the doubled orbit is "
-                   "ill-conditioned here. Confirm the attractor with a transient."})
-    data["contact_opens"] = ((), bool(out["contact_opens"]), {"long_name": "the pin leaves the disk on the orbit"})
+    if found:
+        data["period_doubling"] = ((), bool(np.isfinite(out["flip_multiplier"]) and out["flip_multiplier"] < -1.0 + FLIP_TOL), {
+            "long_name": f"a real multiplier below -1 + {FLIP_TOL}: at or past a period doubling",
+            "comment": "the period-1 orbit is (or is about to be) unstable by a flip; a solve for the doubled orbit is "
+                       "ill-conditioned here. Confirm the attractor with a transient."})
+        data["contact_opens"] = ((), bool(out["contact_opens"]), {"long_name": "the pin leaves the disk on the orbit"})
     data["status"] = ((), np.uint8(out["status"]), flag_attrs(STATUS_NAMES, "status of the shooting solve"))
+    data["reason"] = ((), str(out["reason"]), {"long_name": "why the status is not success (empty if it is)"})
     for k in ("newton_iterations", "n_rhs", "n_accept", "n_reject", "n_switches"):
         data[k] = ((), np.int64(out[k]), {"units": "1", "long_name": k.replace("_", " ")})
     ds = xr.Dataset(data, coords={"floquet": np.arange(6), "state": ["z", "z_dot", "x", "x_dot", "phi", "phi_dot"]})
@@ -356,10 +366,10 @@ def follow_cycle(
     for k in range(n + 1):
         value = target if k == n else float(start) + (target - float(start)) * k / n
         orb = periodic_orbit(model.replace(**{parameter: value}), (y, period), rtol=rtol)
-        path.append({parameter: value, "status": int(orb.status), "omega": float(orb.omega), "A1": float(orb.A1),
-                     "stable": bool(orb.stable)})  # fmt: skip
         if int(orb.status) != STATUS["success"]:
             raise ValueError(f"the cycle could not be followed to {parameter} = {value:g}: shooting ended with "
-                             f"{STATUS_NAMES[int(orb.status)]}; try a smaller step")  # fmt: skip
+                             f"{STATUS_NAMES[int(orb.status)]} ({orb.reason.item()}); try a smaller step")  # fmt: skip
+        path.append({parameter: value, "status": int(orb.status), "omega": float(orb.omega), "A1": float(orb.A1),
+                     "stable": bool(orb.stable)})  # fmt: skip
         y, period = orb.state0.values, float(orb.period)
     return orb, path

@@ -51,7 +51,8 @@ def seed_analysis(model: SliderModel | None = None) -> dict:
         orb = periodic_orbit(m.replace(contact="bilateral"), r)
         out["orbit"] = dict(omega=float(orb.omega), period=float(orb.period), A0=float(orb.A0), A1=float(orb.A1),
                             A2=float(orb.A2), A3=float(orb.A3), theta_deg=float(orb.theta) * _DEG,
-                            moduli=orb.floquet_moduli.values.tolist(), stable=bool(orb.stable),
+                            moduli=orb.floquet_moduli.values.tolist(),
+                            stable=bool(orb.stable) if "stable" in orb else None,
                             z_max=float(orb.z_max), fraction_off_disk=float(orb.fraction_off_disk), status=int(orb.status))
     # The unilateral bouncing cycle, followed from mu = 0.30 (where it is the attractor a small
     # disturbance grows into) down to the model's mu by shooting: a property of the model, not of

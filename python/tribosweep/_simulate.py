@@ -120,8 +120,17 @@ def simulate(
     -------
     xarray.Dataset
         Variables ``z, z_dot, x, x_dot, phi, phi_dot`` on dimension ``time``, and the run's
-        ``status`` (0 = success; see ``tribosweep.STATUS_NAMES``), work counters, and extremes
+        ``status`` (0 = success; see ``tribosweep.STATUS_NAMES``) with its ``reason`` (for every
+        other status, why, with its numbers: the time reached, the step size against its floor and
+        the tolerance, the step or event budget; empty for success), work counters, and extremes
         (``min_normal_force``, ``max_gap``, ``min_slip_velocity``) as scalar variables.
+
+    Raises
+    ------
+    ValueError
+        A bad argument, before any work.
+    KeyboardInterrupt
+        Ctrl-C (SIGINT) stops the integration within about a second, however long it would run.
 
     Examples
     --------
@@ -202,7 +211,16 @@ def ensemble(
     Returns
     -------
     xarray.Dataset
-        Dimension ``trajectory`` with the overridden parameters as coordinates.
+        Dimension ``trajectory`` with the overridden parameters as coordinates; per trajectory
+        ``status`` and ``reason`` (why the status is not success, with its numbers, as in
+        :func:`simulate`; with ``steady=True`` also a run that reached ``t_end`` unsettled).
+
+    Raises
+    ------
+    ValueError
+        A bad argument, before any work.
+    KeyboardInterrupt
+        Ctrl-C (SIGINT) stops every thread within about a second; the results are discarded.
     """
     t_end, method, rtol, atol, t_eval = _check_common(model, t_end, method, rtol, atol, t_eval)
     names, values = _checks.param_arrays(params, PARAM_NAMES)

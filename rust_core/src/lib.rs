@@ -19,9 +19,11 @@
 //!   describing function with all its roots, periodic orbits with Floquet multipliers.
 //! - [`branch`]: branches of periodic orbits by pseudo-arclength continuation, with folds, period
 //!   doublings, torus and grazing points located on them, and two-parameter curves of folds and grazing.
-//! - [`status`]: the per-point status codes, defined in one place.
+//! - [`status`]: the per-point status codes and the failures behind them, defined in one place.
+//! - [`cancel`]: the caller's stop request, looked at by every long loop (a leaf module).
 
 pub mod branch;
+pub mod cancel;
 pub mod ensemble;
 pub mod hopf;
 pub mod linear;
@@ -34,4 +36,4 @@ pub mod steady;
 pub mod tidf;
 
 pub use model::{ContactMode, ContactModel, FrictionLaw, ParamError, Params, Slider, State};
-pub use status::Status;
+pub use status::{Failure, Status};

@@ -5,6 +5,7 @@
 //! (tested). A panic inside one point is caught and becomes that point's `Status::Panic`, so one
 //! bad point cannot take a sweep down. Thread pools are cached per thread count.
 
+use crate::cancel;
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -52,7 +53,9 @@ pub fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
 }
 
 /// Apply `f` to every item in parallel on `threads` threads (`None`: [`default_threads`]),
-/// in input order. A panic in `f` for an item becomes `on_panic(message)` for that item.
+/// in input order. A panic in `f` for an item becomes `on_panic(message)` for that item; an item
+/// not started because the caller cancelled ([`crate::cancel`]) becomes
+/// `on_panic(cancel::CANCELLED)` (see [`par_map_or`] to tell the two apart).
 pub fn par_map<T, R, F, P>(items: &[T], threads: Option<usize>, f: F, on_panic: P) -> Vec<R>
 where
     T: Sync,
@@ -60,10 +63,32 @@ where
     F: Fn(&T) -> R + Sync,
     P: Fn(String) -> R + Sync,
 {
+    par_map_or(items, threads, f, &on_panic, || on_panic(cancel::CANCELLED.to_string()))
+}
+
+/// [`par_map`] with its own result for the items not started because the caller cancelled:
+/// `on_cancel()`. The caller's stop request ([`cancel::current`]) is handed to the worker threads,
+/// so that `f` sees it there too; it is looked at before each item.
+pub fn par_map_or<T, R, F, P, C>(items: &[T], threads: Option<usize>, f: F, on_panic: P, on_cancel: C) -> Vec<R>
+where
+    T: Sync,
+    R: Send,
+    F: Fn(&T) -> R + Sync,
+    P: Fn(String) -> R + Sync,
+    C: Fn() -> R + Sync,
+{
     let threads = threads.unwrap_or_else(default_threads).max(1);
-    let run_one = |item: &T| match catch_unwind(AssertUnwindSafe(|| f(item))) {
-        Ok(r) => r,
-        Err(payload) => on_panic(panic_message(payload.as_ref())),
+    let token = cancel::current();
+    let run_one = |item: &T| {
+        cancel::scope_opt(token.as_ref(), || {
+            if cancel::requested() {
+                return on_cancel();
+            }
+            match catch_unwind(AssertUnwindSafe(|| f(item))) {
+                Ok(r) => r,
+                Err(payload) => on_panic(panic_message(payload.as_ref())),
+            }
+        })
     };
     if threads == 1 || items.len() <= 1 {
         return items.iter().map(run_one).collect();
@@ -98,6 +123,41 @@ mod tests {
             } else {
                 assert_eq!(*r.as_ref().unwrap(), 2 * i as u32);
             }
+        }
+    }
+
+    #[test]
+    fn a_cancelled_caller_stops_the_workers() {
+        // Items after the cancel are not started, on every thread; the token reaches the workers.
+        // Item 0 cancels; every other item waits for the cancel (at most 10 s), so that no thread
+        // runs more than one item before it: rayon runs the leftmost item on the calling worker.
+        let items: Vec<u32> = (0..64).collect();
+        for threads in [1, 3] {
+            let token = cancel::Token::new();
+            let out = token.scope(|| {
+                par_map_or(
+                    &items,
+                    Some(threads),
+                    |&i| {
+                        if i == 0 {
+                            cancel::current().expect("the token reaches the worker").cancel();
+                        }
+                        let start = std::time::Instant::now();
+                        while !cancel::requested() && start.elapsed().as_secs() < 10 {
+                            std::thread::yield_now();
+                        }
+                        Some(cancel::requested())
+                    },
+                    |_| None,
+                    || None,
+                )
+            });
+            assert_eq!(out[0], Some(true));
+            // With one thread every later item is skipped; with several, only those already
+            // running when the cancel came may still run (and they see it).
+            let ran = out.iter().filter(|o| o.is_some()).count();
+            assert!(ran <= threads, "{threads} threads: {ran} items ran");
+            assert!(out.iter().flatten().all(|&seen| seen));
         }
     }
 

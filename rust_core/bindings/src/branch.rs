@@ -179,7 +179,7 @@ fn branch<'py>(
     let st = start(y0, period, direction, hopf_omega)?;
     let o = self::options(&options, stop_at)?;
     let name = parameter.to_string();
-    let b = py.detach(|| core::branch(&p, &name, value, st, (lo, hi), &o)).map_err(err)?;
+    let b = crate::interrupt::detach(py, || core::branch(&p, &name, value, st, (lo, hi), &o))?.map_err(err)?;
     let d = PyDict::new(py);
     points_into(&d, &b.points)?;
     d.set_item("status", b.status.code())?;
@@ -226,7 +226,9 @@ fn special_curve<'py>(
     };
     let ys = ys.as_slice()?.to_vec();
     let (xn, yn) = (x.to_string(), y.to_string());
-    let c = py.detach(|| core::special_curve(&p, kind, &xn, x_value, (x_lo, x_hi), st, &yn, &ys, &o)).map_err(err)?;
+    let c =
+        crate::interrupt::detach(py, || core::special_curve(&p, kind, &xn, x_value, (x_lo, x_hi), st, &yn, &ys, &o))?
+            .map_err(err)?;
     let d = PyDict::new(py);
     let pts: Vec<BranchPoint> = c.points.iter().map(|q| q.point).collect();
     points_into(&d, &pts)?;

@@ -5,6 +5,7 @@
 //! work, with a message that names the argument, its value and what is valid.
 
 use crate::errors::CoreError;
+use crate::interrupt;
 use numpy::ndarray::{Array1, Array2, ArrayView2};
 use numpy::{IntoPyArray, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
@@ -15,6 +16,20 @@ use tribosweep_core::ode::{Method, Stats};
 use tribosweep_core::parallel::par_map;
 use tribosweep_core::steady::{RunResult, Summary, Tolerances};
 use tribosweep_core::tidf::Variant;
+
+/// Most worker threads a call accepts (as the Python API's `_checks.MAX_THREADS`): far above any
+/// machine's core count, and far below what would make the thread pool fail to start.
+pub(crate) const MAX_THREADS: usize = 1024;
+
+/// `threads`: `None` or an integer in `[1, MAX_THREADS]`.
+pub(crate) fn threads_from(threads: Option<usize>) -> Result<Option<usize>, CoreError> {
+    match threads {
+        Some(n) if !(1..=MAX_THREADS).contains(&n) => {
+            Err(CoreError(format!("threads = {n} is out of range: must be an integer in [1, {MAX_THREADS}] or None")))
+        }
+        t => Ok(t),
+    }
+}
 
 /// `contact` by name.
 pub(crate) fn contact_from(name: &str) -> Result<ContactModel, CoreError> {
@@ -150,7 +165,7 @@ impl<'py> Call<'py> {
         friction_law: &str,
         threads: Option<usize>,
     ) -> Result<Self, CoreError> {
-        Ok(Call { py, params: vec![params_from(values, contact, friction_law)?], threads })
+        Ok(Call { py, params: vec![params_from(values, contact, friction_law)?], threads: threads_from(threads)? })
     }
 
     /// One parameter set per row: `base` with the columns `names` of `values` (n, k) overriding.
@@ -164,6 +179,7 @@ impl<'py> Call<'py> {
         values: &PyReadonlyArray2<'py, f64>,
         threads: Option<usize>,
     ) -> Result<Self, CoreError> {
+        let threads = threads_from(threads)?;
         Ok(Call { py, params: param_rows(base, contact, friction_law, names, &values.as_array())?, threads })
     }
 
@@ -187,21 +203,23 @@ impl<'py> Call<'py> {
         self.params.iter().map(|p| Slider::new(*p).map_err(CoreError::from)).collect()
     }
 
-    /// `f` with the GIL released.
-    pub(crate) fn detach<R: Send>(&self, f: impl FnOnce() -> R + Send) -> R {
-        self.py.detach(f)
+    /// `f` with the GIL released, stopped by Ctrl-C (see [`interrupt::detach`]: the error of
+    /// the signal handler, `KeyboardInterrupt`, is returned).
+    pub(crate) fn detach<R: Send>(&self, f: impl FnOnce() -> R + Send) -> PyResult<R> {
+        interrupt::detach(self.py, f)
     }
 
-    /// `f` of every item on the core's thread pool, in item order, with the GIL released; a panic
-    /// in `f` becomes `on_panic(message)` for its item.
+    /// `f` of every item on the core's thread pool, in item order, with the GIL released and
+    /// stopped by Ctrl-C as [`Call::detach`]; a panic in `f` becomes `on_panic(message)` for its
+    /// item.
     pub(crate) fn map<T: Sync, R: Send>(
         &self,
         items: &[T],
         f: impl Fn(&T) -> R + Sync + Send,
         on_panic: impl Fn(String) -> R + Sync + Send,
-    ) -> Vec<R> {
+    ) -> PyResult<Vec<R>> {
         let threads = self.threads;
-        self.py.detach(move || par_map(items, threads, f, on_panic))
+        interrupt::detach(self.py, move || par_map(items, threads, f, on_panic))
     }
 }
 
@@ -216,6 +234,11 @@ pub(crate) fn stats_into(d: &Bound<'_, PyDict>, stats: &[Stats]) -> PyResult<()>
     d.set_item("n_reject", col(|s| s.n_reject))?;
     d.set_item("n_events", col(|s| s.n_events))?;
     Ok(())
+}
+
+/// The reason of a status: the failure's text, else empty (success).
+pub(crate) fn reason_of(failure: Option<tribosweep_core::Failure>) -> String {
+    failure.map(|f| f.to_string()).unwrap_or_default()
 }
 
 /// Plain runs as columns: status, reason, time and state reached, extremes, work counters.

@@ -36,7 +36,7 @@ fn describing_function<'py>(
     let opts = SearchOptions { w_min, w_max, n_base, ..SearchOptions::default() };
     let sliders = call.sliders()?;
     let out: Vec<Option<RootSearch>> =
-        call.map(&sliders, |s| Some(Tidf::new(s, variant).find_roots(s, &opts)), |_| None);
+        call.map(&sliders, |s| Some(Tidf::new(s, variant).find_roots(s, &opts)), |_| None)?;
     let n = out.len();
     let r = out.iter().map(|o| o.as_ref().map_or(0, |s| s.roots.len())).max().unwrap_or(0).max(1);
     let d = PyDict::new(py);
@@ -133,7 +133,7 @@ fn tidf_solve<'py>(
     let rows: Vec<Unknowns> = (0..g.nrows()).map(|i| Unknowns::from_fn(|c, _| g[(i, c)])).collect();
     let t = Tidf::new(&s, variant);
     let opts = tidf::NewtonOptions::default();
-    let out: Vec<Option<tidf::NewtonResult>> = call.map(&rows, |x| Some(t.solve(x, &opts)), |_| None);
+    let out: Vec<Option<tidf::NewtonResult>> = call.map(&rows, |x| Some(t.solve(x, &opts)), |_| None)?;
     let n = out.len();
     let mut x = Array2::<f64>::from_elem((n, 5), f64::NAN);
     for (i, o) in out.iter().enumerate() {

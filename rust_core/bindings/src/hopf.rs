@@ -106,7 +106,7 @@ fn sliding_branch<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let fam = family_from(&values, contact, friction_law, vec![axis])?;
     let opts = ScanOptions { n_points, xtol, ..ScanOptions::default() };
-    let sc = py.detach(|| scan(&fam, lo, hi, &opts)).map_err(value_error)?;
+    let sc = crate::interrupt::detach(py, || scan(&fam, lo, hi, &opts))?.map_err(value_error)?;
     let d = PyDict::new(py);
     let n = sc.samples.len();
     let m = sc.samples.iter().map(|s| s.eigenvalues.len()).max().unwrap_or(0);
@@ -198,7 +198,7 @@ fn hopf_curve<'py>(
         marks: [x_marks, y_marks],
     };
     let bx = [[x_range.0, x_range.1], [y_range.0, y_range.1]];
-    let res = py.detach(|| hopf_curves(&fam, bx, &opts)).map_err(value_error)?;
+    let res = crate::interrupt::detach(py, || hopf_curves(&fam, bx, &opts))?.map_err(value_error)?;
     let pts: Vec<(usize, &tribosweep_core::hopf::curve::CurvePoint)> =
         res.curves.iter().enumerate().flat_map(|(i, c)| c.points.iter().map(move |p| (i, p))).collect();
     let d = PyDict::new(py);

@@ -1,7 +1,7 @@
 //! `tribosweep._core`: the thin PyO3 layer over `tribosweep-core`.
 //!
 //! It only converts arguments and results (`convert`), maps errors into one exception hierarchy
-//! (`errors`), and releases the GIL around the numerics; every policy (which integrator path, how
+//! (`errors`), and releases the GIL around the numerics, which Ctrl-C stops (`interrupt`); every policy (which integrator path, how
 //! trajectories are grouped) is the core's. The public Python API (argument checking with clear
 //! messages, xarray Datasets) lives in `python/tribosweep/`; this module is private.
 //!
@@ -10,6 +10,7 @@
 mod convert;
 mod describing;
 mod errors;
+mod interrupt;
 mod linear;
 mod names;
 mod orbits;

@@ -39,7 +39,7 @@ fn linear_stability<'py>(
     let call = Call::rows(py, &base, contact, friction_law, &names, &values, threads)?;
     let n = call.len();
     let sliders = call.sliders()?;
-    let out: Vec<LinearStability> = call.map(&sliders, linear::linear_stability, |_| failed_linear());
+    let out: Vec<LinearStability> = call.map(&sliders, linear::linear_stability, |_| failed_linear())?;
     let d = PyDict::new(py);
     let mut ev = Array2::<numpy::Complex64>::zeros((n, 6));
     let mut gr = Array2::<f64>::zeros((n, 3));
@@ -80,7 +80,7 @@ fn hopf_loads<'py>(
 ) -> PyResult<Vec<Bound<'py, PyDict>>> {
     let call = Call::one(py, &values, "bilateral", friction_law, None)?;
     let p = call.params();
-    let pts = call.detach(|| linear::hopf_loads(&p, load_min, load_max, n_grid)).map_err(CoreError::from)?;
+    let pts = call.detach(|| linear::hopf_loads(&p, load_min, load_max, n_grid))?.map_err(CoreError::from)?;
     let mut out = Vec::new();
     for h in pts {
         let d = PyDict::new(py);

@@ -1,6 +1,6 @@
 //! Periodic orbits by shooting, with Floquet multipliers: one orbit, or one per parameter set.
 
-use crate::convert::{variant_from, y0_rows, Call};
+use crate::convert::{reason_of, variant_from, y0_rows, Call};
 use crate::errors::CoreError;
 use numpy::ndarray::{Array1, Array2};
 use numpy::{IntoPyArray, PyReadonlyArray1, PyReadonlyArray2};
@@ -43,7 +43,9 @@ fn orbit_dict<'py>(py: Python<'py>, o: &PeriodicOrbit) -> PyResult<Bound<'py, Py
     d.set_item("multipliers_im", o.multipliers.iter().map(|c| c.im).collect::<Vec<_>>())?;
     d.set_item("moduli", o.moduli.to_vec())?;
     d.set_item("trivial_error", o.trivial_error)?;
-    d.set_item("stable", o.stable)?;
+    // Unset (None) for an orbit that was not found: its stability is unknown.
+    d.set_item("stable", if o.status == Status::Success { Some(o.stable) } else { None })?;
+    d.set_item("reason", reason_of(o.failure))?;
     d.set_item("instability", o.instability.code())?;
     d.set_item("flip_multiplier", o.flip_multiplier)?;
     d.set_item("A0", o.harmonics.a0)?;
@@ -68,7 +70,8 @@ fn orbit_dict<'py>(py: Python<'py>, o: &PeriodicOrbit) -> PyResult<Bound<'py, Py
 }
 
 /// Periodic orbit by shooting from a state on it and a period guess, or from a describing-function
-/// root `root = [omega, A0, A1, A2, theta]` (with `variant` to rebuild its phasors).
+/// root `root = [omega, A0, A1, A2, theta]` (with `variant` to rebuild its phasors). When no orbit
+/// was found the values are NaN, `stable` is None and `reason` says why.
 #[pyfunction]
 #[pyo3(signature = (values, contact, friction_law, *, y0=None, period=None, root=None, variant="consistent", rtol=1e-11, max_iter=30, tol=1e-9))]
 #[allow(clippy::too_many_arguments)]
@@ -102,12 +105,13 @@ fn periodic_orbit<'py>(
         }
         _ => return Err(CoreError("give either y0 and period, or root".into()).into()),
     };
-    let orbit = call.detach(|| shoot_start(&s, &start, variant, &opts));
+    let orbit = call.detach(|| shoot_start(&s, &start, variant, &opts))?;
     orbit_dict(py, &orbit)
 }
 
 /// Periodic orbits of many parameter sets in parallel (GIL released; a panic becomes
-/// `status = panic` for its row). Each row starts from a describing-function root
+/// `status = panic` for its row; `reason` says why a row's status is not success; `stable` is
+/// false where the orbit was not found). Each row starts from a describing-function root
 /// `roots[i] = [omega, A0, A1, A2, theta]` (with `variant`), or from a state `y0[i]` with a
 /// period guess `periods[i]`. Returns arrays over rows, the per-orbit fields of `periodic_orbit`.
 #[pyfunction]
@@ -152,11 +156,15 @@ fn periodic_orbits<'py>(
         _ => return Err(CoreError("give either roots, or y0 and periods".into()).into()),
     };
     let rows: Vec<(Slider, Start)> = call.sliders()?.into_iter().zip(starts).collect();
-    let out: Vec<PeriodicOrbit> = call.map(
+    let out: Vec<(PeriodicOrbit, String)> = call.map(
         &rows,
-        |(s, start)| shoot_start(s, start, variant, &opts),
-        |_| PeriodicOrbit::not_computed(Status::Panic),
-    );
+        |(s, start)| {
+            let o = shoot_start(s, start, variant, &opts);
+            (o, reason_of(o.failure))
+        },
+        |msg| (PeriodicOrbit::not_computed(Status::Panic), format!("panic: {msg}")),
+    )?;
+    let (out, reasons): (Vec<PeriodicOrbit>, Vec<String>) = out.into_iter().unzip();
     let d = PyDict::new(py);
     let f = |g: fn(&PeriodicOrbit) -> f64| Array1::from_iter(out.iter().map(g)).into_pyarray(py);
     d.set_item("period", f(|o| o.period))?;
@@ -185,6 +193,7 @@ fn periodic_orbits<'py>(
     d.set_item("contact_opens", Array1::from_iter(out.iter().map(|o| o.contact_opens)).into_pyarray(py))?;
     d.set_item("instability", Array1::from_iter(out.iter().map(|o| o.instability.code())).into_pyarray(py))?;
     d.set_item("status", Array1::from_iter(out.iter().map(|o| o.status.code())).into_pyarray(py))?;
+    d.set_item("reason", reasons)?;
     d.set_item("newton_iterations", Array1::from_iter(out.iter().map(|o| o.newton_iterations)).into_pyarray(py))?;
     d.set_item("n_rhs", Array1::from_iter(out.iter().map(|o| o.stats.n_rhs)).into_pyarray(py))?;
     Ok(d)

@@ -1,6 +1,6 @@
 //! Trajectories: one (`simulate`) or many (`ensemble`, routed by the core's `ensemble::run`).
 
-use crate::convert::{method_from, runs_into, states, summaries_into, tolerances, y0_rows, Call};
+use crate::convert::{method_from, reason_of, runs_into, states, summaries_into, tolerances, y0_rows, Call};
 use crate::errors::CoreError;
 use numpy::ndarray::{Array1, Array3};
 use numpy::{IntoPyArray, PyReadonlyArray1, PyReadonlyArray2};
@@ -12,8 +12,10 @@ use tribosweep_core::model::State;
 use tribosweep_core::status::Status;
 use tribosweep_core::steady::{self, RunResult, SteadyOptions, Summary};
 
-/// One trajectory. Returns a dict: `t` (n,), `y` (n, 6), and the run's status, counters, extremes.
-/// With `t_eval` the states are sampled there; otherwise every accepted step end is returned.
+/// One trajectory. Returns a dict: `t` (n,), `y` (n, 6), and the run's status, reason (why the
+/// status is not success, with its numbers; empty for success), counters, extremes. With `t_eval`
+/// the states are sampled there; otherwise every accepted step end is returned. Ctrl-C stops it
+/// (`KeyboardInterrupt`).
 #[pyfunction]
 #[pyo3(signature = (values, contact, friction_law, y0, t_end, method, rtol, *, atol=None, t_eval=None, max_steps=None, max_events=None))]
 #[allow(clippy::too_many_arguments)]
@@ -47,11 +49,11 @@ fn simulate<'py>(
             let (r, rec) = steady::run_observed(&slider, &y0, t_end, method, &tol, rec);
             (r, rec.t, rec.y)
         }
-    });
+    })?;
     let d = PyDict::new(py);
     d.set_item("t", Array1::from_vec(t).into_pyarray(py))?;
     d.set_item("y", states(ys.iter(), ys.len()).into_pyarray(py))?;
-    runs_into(&d, &[run], &[String::new()])?;
+    runs_into(&d, &[run], &[reason_of(run.failure)])?;
     Ok(d)
 }
 
@@ -90,12 +92,15 @@ fn decays(a: Option<PyReadonlyArray1<'_, f64>>, n: usize) -> PyResult<Option<Vec
     Ok(Some(v))
 }
 
-/// Results with their reasons: a trajectory whose computation panicked gets `Status::Panic` and
-/// the message.
-fn with_reasons(out: Vec<Result<TrajectoryResult, String>>) -> Vec<(TrajectoryResult, String)> {
+/// Results with their reasons (the run's failure, or for `steady` the summary's): a trajectory
+/// whose computation panicked gets `Status::Panic` and the message.
+fn with_reasons(out: Vec<Result<TrajectoryResult, String>>, steady: bool) -> Vec<(TrajectoryResult, String)> {
     out.into_iter()
         .map(|r| match r {
-            Ok(x) => (x, String::new()),
+            Ok(x) => {
+                let failure = if steady { x.summary.as_ref().and_then(|s| s.failure) } else { x.run.failure };
+                (x, reason_of(failure))
+            }
             Err(msg) => (TrajectoryResult::failed(Status::Panic), format!("panic: {msg}")),
         })
         .collect()
@@ -104,7 +109,8 @@ fn with_reasons(out: Vec<Result<TrajectoryResult, String>>) -> Vec<(TrajectoryRe
 /// Many trajectories in parallel (GIL released). `kind` is "final" (end state), "sampled"
 /// (states at `t_eval`) or "steady" (run to steady state and summarise; `t_end` is then `t_max`).
 /// The core picks the path (lane-batched or scalar) and the grouping; results do not depend on it
-/// beyond integration accuracy, nor on the thread count at all.
+/// beyond integration accuracy, nor on the thread count at all. Every non-success status has a
+/// reason; Ctrl-C stops every thread (`KeyboardInterrupt`, the results are dropped).
 #[pyfunction]
 #[pyo3(signature = (base, contact, friction_law, names, values, y0, t_end, method, rtol, *, atol=None, t_eval=None, threads=None, kind="final", periodic_tol=1e-5, decay_amplitude=None, n_fourier=512, max_steps=None, max_events=None, decay_amplitudes=None))]
 #[allow(clippy::too_many_arguments)]
@@ -144,7 +150,7 @@ fn ensemble<'py>(
         Kind::Plain => {
             let te = t_eval.unwrap_or_default();
             let task = if te.is_empty() { Task::Final } else { Task::Sampled(&te) };
-            let out = with_reasons(call.detach(|| run_ensemble(&sliders, &y0s, &settings, task)));
+            let out = with_reasons(call.detach(|| run_ensemble(&sliders, &y0s, &settings, task))?, false);
             let runs: Vec<RunResult> = out.iter().map(|o| o.0.run).collect();
             let reasons: Vec<String> = out.iter().map(|o| o.1.clone()).collect();
             runs_into(&d, &runs, &reasons)?;
@@ -171,10 +177,10 @@ fn ensemble<'py>(
                 ..SteadyOptions::default()
             };
             let task = Task::Steady { opts: &opts, decay: decays.as_deref() };
-            let out = with_reasons(call.detach(|| run_ensemble(&sliders, &y0s, &settings, task)));
+            let out = with_reasons(call.detach(|| run_ensemble(&sliders, &y0s, &settings, task))?, true);
             let sums: Vec<(Summary, String)> = out
                 .into_iter()
-                .map(|(r, reason)| (r.summary.unwrap_or_else(|| Summary::failed(r.run.status)), reason))
+                .map(|(r, reason)| (r.summary.unwrap_or_else(|| Summary::failed(r.run.status, r.run.failure)), reason))
                 .collect();
             summaries_into(&d, &sums)?;
         }

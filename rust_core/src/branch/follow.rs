@@ -148,6 +148,10 @@ pub(super) fn follow(
     let small = o.hopf_amplitude * ctx.sizes[idx::Z];
     let mut ds = o.ds;
     loop {
+        if crate::cancel::requested() {
+            let p = cur.point.parameter;
+            return (Status::NotComputed, format!("cancelled by the caller at {name} = {p:.10e}"));
+        }
         if points.len() >= o.max_points {
             let p = cur.point.parameter;
             return (Status::Success, format!("max_points = {} reached at {name} = {p:.10e}", o.max_points));

@@ -30,7 +30,10 @@
 //!   interpolation between a step end and the crossing; this path only sees step ends).
 //! - Failures: non-finite state or derivative (after cutting the step to the floor) ->
 //!   `NonFinite`, a step below the floor -> `StepTooSmall`, the step budget -> `MaxSteps`, as in
-//!   the scalar driver.
+//!   the scalar driver, each with the same [`Failure`] (its reason).
+//! - Cancellation ([`crate::cancel`]): looked at every [`cancel::CHECK_EVERY`] steps of the lanes;
+//!   the running trajectories end with `NotComputed` (`Failure::Cancelled`), the others are not
+//!   started (`Failure::NotStarted`).
 //!
 //! # Determinism
 //! Every lane's arithmetic is the same sequence of IEEE operations on that lane's values only
@@ -43,6 +46,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::lanes::Coef;
+use crate::cancel;
 use crate::model::{idx, ContactMode, ContactModel, FrictionLaw, Slider, State};
 use crate::ode::controller::{initial_step, FAC_MAX, FAC_MIN, SAFETY};
 use crate::ode::dopri5::Dopri5Dense;
@@ -51,8 +55,8 @@ use crate::ode::lanes::{
     dopri5_step, each6, exp_lanes, lane_state, ln_lanes, splat, LaneRhs, ALPHA, BETA, L, LN_ERR_FLOOR, LN_SAFETY, V6, W,
 };
 use crate::ode::{Dense, Options, Stats};
-use crate::status::Status;
-use crate::steady::{characteristic_sizes, options_for, Extremes, RunResult, Tolerances};
+use crate::status::{Failure, Status};
+use crate::steady::{characteristic_sizes, options_for, run_failure, Extremes, RunResult, Tolerances};
 
 /// The state of the eight lanes.
 struct Lanes {
@@ -175,6 +179,8 @@ fn run_impl(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances) -> 
     for l in 0..W {
         refill(&mut ln, l, &mut next, sliders, y0s, t_end, tol, &mut out);
     }
+    let end = End { sliders, t_end, opts: &opts };
+    let mut rounds = 0u64;
 
     // Scratch of the step: the stages k2..k7 and the new state.
     let mut k = [[zero; 6]; 6];
@@ -182,6 +188,11 @@ fn run_impl(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances) -> 
     let mut fz = zero;
 
     while ln.who.iter().any(|&w| w != usize::MAX) {
+        rounds += 1;
+        if cancel::requested_every(rounds) {
+            stop_all(&mut ln, &end, &mut out);
+            break;
+        }
         // ---- before the attempt: landing on t_end, the step floor, the step budget ----
         let mut hh = zero;
         let mut last = [false; W];
@@ -214,7 +225,7 @@ fn run_impl(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances) -> 
                 } else {
                     continue;
                 };
-                finish(&mut ln, l, status, &mut out);
+                finish(&mut ln, l, status, hh[l], &end, &mut out);
                 refill(&mut ln, l, &mut next, sliders, y0s, t_end, tol, &mut out);
             }
             continue;
@@ -318,12 +329,36 @@ fn run_impl(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances) -> 
                 } else {
                     Status::Success
                 };
-                finish(&mut ln, l, status, &mut out);
+                // After a rejection the step that fell below the floor is the new one.
+                let h = if ln.rejected[l] { ln.h[l] } else { hh[l] };
+                finish(&mut ln, l, status, h, &end, &mut out);
                 refill(&mut ln, l, &mut next, sliders, y0s, t_end, tol, &mut out);
             }
         }
     }
-    out.into_iter().map(|r| r.expect("every trajectory has a result")).collect()
+    // Only a cancelled call leaves trajectories without a result.
+    out.into_iter()
+        .map(|r| r.unwrap_or_else(|| RunResult::failed(Status::NotComputed, Some(Failure::NotStarted))))
+        .collect()
+}
+
+/// The caller cancelled: every running lane ends where it is (`NotComputed`).
+#[cold]
+#[inline(never)]
+fn stop_all(ln: &mut Lanes, end: &End<'_>, out: &mut [Option<RunResult>]) {
+    for l in 0..W {
+        if ln.who[l] != usize::MAX {
+            let h = ln.h[l];
+            finish(ln, l, Status::NotComputed, h, end, out);
+        }
+    }
+}
+
+/// What [`finish`] needs to say why a run failed.
+struct End<'a> {
+    sliders: &'a [Slider],
+    t_end: f64,
+    opts: &'a Options<6>,
 }
 
 /// Lanes whose accepted step ends at `|z| >= escape_limit`: locate the crossing on the step's
@@ -376,15 +411,17 @@ fn locate_escapes(
     }
 }
 
-/// Write lane `l`'s result and mark it idle.
+/// Write lane `l`'s result (ended with `status`, step size `h`) and mark it idle.
 #[cold]
-fn finish(ln: &mut Lanes, l: usize, status: Status, out: &mut [Option<RunResult>]) {
+fn finish(ln: &mut Lanes, l: usize, status: Status, h: f64, end: &End<'_>, out: &mut [Option<RunResult>]) {
     let i = ln.who[l];
     let steps = ln.n_acc[l] + ln.n_rej[l];
+    let (t, y) = (ln.t[l], lane_state(&ln.y, l));
+    let failure = run_failure(status, &end.sliders[i], t, &y, h, steps, end.t_end, end.opts);
     out[i] = Some(RunResult {
         status,
-        t: ln.t[l],
-        y: lane_state(&ln.y, l),
+        t,
+        y,
         extremes: Extremes {
             min_normal_force: ln.min_n[l],
             max_gap: ln.max_gap[l],
@@ -392,6 +429,7 @@ fn finish(ln: &mut Lanes, l: usize, status: Status, out: &mut [Option<RunResult>
             max_abs_z: ln.max_z[l],
         },
         stats: Stats { n_rhs: 2 + 6 * steps, n_accept: ln.n_acc[l], n_reject: ln.n_rej[l], ..Stats::default() },
+        failure,
     });
     ln.who[l] = usize::MAX;
 }
@@ -421,12 +459,14 @@ fn refill(
         ext.max_gap = s.gap(&y0);
         ext.min_slip_velocity = f.slip_velocity;
         ext.max_abs_z = y0[idx::Z].abs();
+        let opts = options_for(s, tol);
         let early = |status, n_rhs| RunResult {
             status,
             t: 0.0,
             y: y0,
             extremes: ext,
             stats: Stats { n_rhs, ..Stats::default() },
+            failure: run_failure(status, s, 0.0, &y0, f64::NAN, 0, t_end, &opts),
         };
         if !t_end.is_finite() || !y0.iter().all(|v| v.is_finite()) {
             out[i] = Some(early(Status::NonFinite, 0));
@@ -445,7 +485,6 @@ fn refill(
             out[i] = Some(early(Status::NonFinite, 1));
             continue;
         }
-        let opts = options_for(s, tol);
         let mut n_rhs = 1;
         let h0 = initial_step(
             s,

@@ -29,9 +29,11 @@ mod tests;
 // The thread pools lived here before they moved to `parallel`; these names keep working.
 pub use crate::parallel::{default_threads, panic_message, par_map, THREADS_ENV};
 
+use crate::parallel::par_map_or;
+
 use crate::model::{ContactMode, ContactModel, FrictionLaw, Slider, State};
-use crate::ode::{Control, Method, Observer, Stats};
-use crate::status::Status;
+use crate::ode::{Control, Method, Observer};
+use crate::status::{Failure, Status};
 use crate::steady::{self, RunResult, SteadyOptions, Summary, Tolerances};
 
 /// What each trajectory of an ensemble computes.
@@ -73,14 +75,18 @@ impl TrajectoryResult {
     /// The result of a trajectory that could not be computed: `status`, NaN state and time, no
     /// samples, a failed summary.
     pub fn failed(status: Status) -> Self {
-        let run = RunResult {
-            status,
-            t: f64::NAN,
-            y: State::repeat(f64::NAN),
-            extremes: Default::default(),
-            stats: Stats::default(),
-        };
-        TrajectoryResult { summary: Some(Summary::failed(status)), ..Self::from_run(run) }
+        Self::failed_because(status, None)
+    }
+
+    /// [`TrajectoryResult::failed`] with the failure behind it.
+    pub fn failed_because(status: Status, failure: Option<Failure>) -> Self {
+        let run = RunResult::failed(status, failure);
+        TrajectoryResult { summary: Some(Summary::failed(status, failure)), ..Self::from_run(run) }
+    }
+
+    /// The result of a trajectory that a cancelled call never started (`NotComputed`).
+    pub fn not_started() -> Self {
+        Self::failed_because(Status::NotComputed, Some(Failure::NotStarted))
     }
 }
 
@@ -160,7 +166,10 @@ pub fn group_size(n: usize, threads: Option<usize>) -> usize {
 
 /// Integrate each `sliders[i]` from `y0s[i]` at `t = 0` and compute `task` for it, on the route
 /// that [`route`] picks; results in input order. `Err(message)` for a trajectory whose
-/// computation panicked (on the batch route: every trajectory of its group).
+/// computation panicked (on the batch route: every trajectory of its group). When the caller
+/// cancels ([`crate::cancel`]), every route stops within [`crate::cancel::CHECK_EVERY`] steps of a
+/// trajectory: the trajectories still running end with `NotComputed` (`Failure::Cancelled`), those
+/// not started with [`TrajectoryResult::not_started`].
 ///
 /// Preconditions (panics otherwise): `sliders.len() == y0s.len()`; for `Task::Steady` with
 /// `decay`, one decay amplitude per slider.
@@ -193,25 +202,33 @@ pub fn run_on(
             let group = group_size(sliders.len(), threads);
             let ranges: Vec<std::ops::Range<usize>> =
                 (0..sliders.len()).step_by(group).map(|a| a..(a + group).min(sliders.len())).collect();
-            let parts = par_map(
+            let parts = par_map_or(
                 &ranges,
                 threads,
-                |r| Ok(batch::run_bilateral_batch(&sliders[r.clone()], &y0s[r.clone()], settings.t_end, &tol)),
-                Err,
+                |r| Some(Ok(batch::run_bilateral_batch(&sliders[r.clone()], &y0s[r.clone()], settings.t_end, &tol))),
+                |msg| Some(Err(msg)),
+                || None,
             );
             parts
                 .into_iter()
                 .zip(&ranges)
                 .flat_map(|(p, r)| match p {
-                    Ok(v) => v.into_iter().map(|run| Ok(TrajectoryResult::from_run(run))).collect::<Vec<_>>(),
-                    Err(msg) => vec![Err(msg); r.len()],
+                    Some(Ok(v)) => v.into_iter().map(|run| Ok(TrajectoryResult::from_run(run))).collect::<Vec<_>>(),
+                    Some(Err(msg)) => vec![Err(msg); r.len()],
+                    None => vec![Ok(TrajectoryResult::not_started()); r.len()],
                 })
                 .collect()
         }
         Route::Lanes => lanes::run_lanes_threads(sliders, y0s, settings.t_end, method, &tol, task, threads),
         Route::Scalar => {
             let rows: Vec<usize> = (0..sliders.len()).collect();
-            par_map(&rows, threads, |&i| Ok(scalar(&sliders[i], &y0s[i], i, settings.t_end, method, &tol, task)), Err)
+            par_map_or(
+                &rows,
+                threads,
+                |&i| Ok(scalar(&sliders[i], &y0s[i], i, settings.t_end, method, &tol, task)),
+                Err,
+                || Ok(TrajectoryResult::not_started()),
+            )
         }
     }
 }
@@ -238,8 +255,14 @@ fn scalar(
                 None => *opts,
             };
             let sum = steady::run_to_steady(s, y0, &o);
-            let run =
-                RunResult { status: sum.status, t: sum.t_end, y: sum.y_end, extremes: sum.extremes, stats: sum.stats };
+            let run = RunResult {
+                status: sum.status,
+                t: sum.t_end,
+                y: sum.y_end,
+                extremes: sum.extremes,
+                stats: sum.stats,
+                failure: sum.failure,
+            };
             TrajectoryResult { summary: Some(sum), ..TrajectoryResult::from_run(run) }
         }
         Task::Events => {

@@ -276,3 +276,141 @@ fn failed_results_carry_the_status_and_no_numbers() {
     assert!(f.run.t.is_nan() && f.run.y.iter().all(|v| v.is_nan()));
     assert_eq!(f.summary.map(|s| (s.status, s.outcome)), Some((Status::Panic, SteadyOutcome::Failed)));
 }
+
+#[test]
+fn failures_carry_the_same_reason_on_every_route() {
+    use crate::status::Failure;
+    // Past the bilateral law's saddle z blows up in finite time (t = 2.93 ms from 300 um at rest,
+    // tests/test_detectors.py): with the escape limit lifted the step size collapses onto the
+    // singularity (StepTooSmall); with the default 1 mm limit the escape is located (Diverged,
+    // about 2.04 ms); a budget of 10 steps runs out first (MaxSteps).
+    let blow = Params { escape_limit: 1e100, ..seed_bilateral() };
+    let cases = [
+        (blow, None, Status::StepTooSmall),
+        (seed_bilateral(), None, Status::Diverged),
+        (seed_bilateral(), Some(10), Status::MaxSteps),
+    ];
+    for (p, max_steps, want) in cases {
+        let s = vec![Slider::new(p).unwrap()];
+        let y0 = starts(1, 300e-6);
+        let mut set = settings(1.0, Method::Dopri5, 1e-8, Some(1));
+        set.tol.max_steps = max_steps;
+        let mut seen = 0;
+        for r in Route::ALL {
+            if !supports(r, &s, &set, &Task::Final) {
+                continue;
+            }
+            seen += 1;
+            let run = unwrap(run_on(r, &s, &y0, &set, Task::Final))[0].run;
+            assert_eq!(run.status, want, "{r:?}");
+            let f = run.failure.unwrap_or_else(|| panic!("{r:?}: {want:?} without a reason"));
+            assert_eq!(f.status(), want, "{r:?}: {f:?}");
+            match f {
+                Failure::StepTooSmall { t, h, floor, rtol } => {
+                    assert!(t == run.t && h < floor && rtol == 1e-8, "{r:?}: {f:?}");
+                    assert!(t > 2.90e-3 && t < 2.95e-3, "{r:?}: {f:?}");
+                }
+                Failure::Escaped { t, z, limit } => {
+                    assert!(t == run.t && limit == 1e-3 && z.abs() >= limit * (1.0 - 1e-9), "{r:?}: {f:?}");
+                }
+                Failure::MaxSteps { max_steps, t, t_end } => {
+                    assert!(max_steps == 10 && t_end == 1.0 && t == run.t, "{r:?}: {f:?}");
+                    assert_eq!(run.stats.n_accept + run.stats.n_reject, 10);
+                }
+                other => panic!("{r:?}: unexpected {other:?}"),
+            }
+        }
+        // The batch takes no step budget; the other two routes always apply.
+        assert!(seen >= 2, "{want:?}: {seen} routes");
+    }
+}
+
+#[test]
+fn a_call_cancelled_before_it_starts_computes_nothing() {
+    let s = sliders(seed_bilateral(), &[0.215; 20]);
+    let y0 = starts(20, 1e-6);
+    let so = SteadyOptions { t_max: 1.0, ..SteadyOptions::default() };
+    let token = crate::cancel::Token::new();
+    token.cancel();
+    for threads in [Some(1), Some(2)] {
+        let set = settings(1.0, Method::Dopri5, 1e-8, threads);
+        for task in [Task::Final, Task::Steady { opts: &so, decay: None }] {
+            for r in Route::ALL {
+                if !supports(r, &s, &set, &task) {
+                    continue;
+                }
+                let out = token.scope(|| unwrap(run_on(r, &s, &y0, &set, task)));
+                for o in &out {
+                    assert_eq!(o.run.status, Status::NotComputed, "{r:?} {task:?}");
+                    let f = o.run.failure.expect("a reason");
+                    assert_eq!(f.status(), Status::NotComputed);
+                    assert!(o.run.stats.n_accept + o.run.stats.n_reject <= crate::cancel::CHECK_EVERY);
+                }
+            }
+        }
+    }
+}
+
+/// `run_on(route)` with `token` cancelled from another thread after `after`.
+fn cancelled_after(
+    after: std::time::Duration,
+    route: Route,
+    s: &[Slider],
+    y0: &[State],
+    set: &Settings,
+    task: Task<'_>,
+) -> Vec<TrajectoryResult> {
+    let token = crate::cancel::Token::new();
+    std::thread::scope(|sc| {
+        let t2 = token.clone();
+        sc.spawn(move || {
+            std::thread::sleep(after);
+            t2.cancel();
+        });
+        token.scope(|| unwrap(run_on(route, s, y0, set, task)))
+    })
+}
+
+#[test]
+fn a_call_cancelled_while_it_runs_stops_and_keeps_what_finished() {
+    // 20,000 trajectories of 1 s (about 10 s of work per route on one thread), cancelled after
+    // 0.1 s: some finished, the rest are not computed; the finished ones are bitwise those of an
+    // uncancelled call (the cancel checks change no numbers).
+    let n = 20_000;
+    for (base, r) in [(seed_bilateral(), Route::Batch), (unilateral(), Route::Lanes), (seed_bilateral(), Route::Scalar)]
+    {
+        let s = sliders(base, &vec![0.215; n]);
+        let y0 = starts(n, 1e-6);
+        let set = settings(1.0, Method::Dopri5, 1e-8, Some(1));
+        let out = cancelled_after(std::time::Duration::from_millis(100), r, &s, &y0, &set, Task::Final);
+        let done: Vec<usize> = (0..n).filter(|&i| out[i].run.status == Status::Success).collect();
+        let stopped = out.iter().filter(|o| o.run.status == Status::NotComputed).count();
+        assert_eq!(done.len() + stopped, n, "{r:?}: only finished and not-computed trajectories");
+        assert!(stopped > 0, "{r:?}: the cancel was not seen");
+        if let Some(&i) = done.first() {
+            let alone = unwrap(run_on(r, &s[i..=i], &y0[i..=i], &set, Task::Final));
+            assert_eq!(bits(&out[i]), bits(&alone[0]), "{r:?}: a finished trajectory changed");
+        }
+    }
+}
+
+#[test]
+fn a_long_trajectory_is_cancelled_inside_its_run() {
+    // The seed's unilateral bouncing cycle at mu = 0.3 never repeats to periodic_tol = 1e-15, so a
+    // run to steady state would go on to t_max = 1e4 s (minutes): the cancel after 0.1 s ends it
+    // partway, on the lanes and on the scalar driver.
+    let s = sliders(unilateral(), &[0.30, 0.30]);
+    let y0 = starts(2, 0.1e-6);
+    let so = SteadyOptions { t_max: 1e4, periodic_tol: 1e-15, ..SteadyOptions::default() };
+    let set = settings(1e4, Method::Dopri5, 1e-8, Some(1));
+    for r in [Route::Lanes, Route::Scalar] {
+        let task = Task::Steady { opts: &so, decay: None };
+        let out = cancelled_after(std::time::Duration::from_millis(100), r, &s, &y0, &set, task);
+        let sum = out[0].summary.expect("a summary");
+        assert_eq!(sum.status, Status::NotComputed, "{r:?}");
+        match sum.failure {
+            Some(crate::status::Failure::Cancelled { t }) => assert!(t > 0.0 && t < 1e4, "{r:?}: t = {t}"),
+            other => panic!("{r:?}: {other:?}"),
+        }
+    }
+}

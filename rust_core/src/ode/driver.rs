@@ -53,6 +53,7 @@ use super::events::{crosses, hidden_crossing, step_events, StepEnd};
 use super::rodas::Rodas4;
 use super::stepper::{StepDense, Stepper};
 use super::{Control, Method, Observer, OdeSystem, Options, Outcome, Solution, Stats, StepView, MAX_EVENTS};
+use crate::cancel;
 use nalgebra::SVector;
 
 /// Integrate `sys` from `(t0, y0)` to `t_end` (> t0) with `method`, starting in `sys.initial_mode(t0, y0)`.
@@ -143,9 +144,10 @@ where
     let mut mode = sys.initial_mode(t0, &y0);
     let mut t = t0;
     let mut y = y0;
+    let mut h = f64::NAN;
     macro_rules! done {
         ($t:expr, $y:expr, $mode:expr, $outcome:expr) => {
-            return Solution { t: $t, y: $y, mode: $mode, outcome: $outcome, stats }
+            return Solution { t: $t, y: $y, mode: $mode, outcome: $outcome, stats, h }
         };
     }
     if !t0.is_finite() || !t_end.is_finite() || !all_finite(&y) {
@@ -180,7 +182,7 @@ where
     let mut ctl = Controller::new(St::ERR_EXP, St::BETA, St::PREDICTIVE);
     st.begin(sys, mode, t, &y, &f, &mut stats);
     let h_max = if opts.h_max > 0.0 { opts.h_max } else { f64::INFINITY };
-    let mut h = if opts.h0 > 0.0 {
+    h = if opts.h0 > 0.0 {
         opts.h0.min(h_max)
     } else {
         initial_step(sys, mode, t, &y, &f, t_end, St::ORDER, &opts.atol, opts.rtol, h_max, &mut stats.n_rhs)
@@ -198,8 +200,12 @@ where
         if (h.is_nan() || h < floor) && !last {
             done!(t, y, mode, if h.is_finite() { Outcome::StepTooSmall } else { Outcome::NonFinite });
         }
-        if stats.n_accept + stats.n_reject >= opts.max_steps {
+        let steps = stats.n_accept + stats.n_reject;
+        if steps >= opts.max_steps {
             done!(t, y, mode, Outcome::MaxSteps);
+        }
+        if cancel::requested_every(steps) {
+            done!(t, y, mode, Outcome::Cancelled);
         }
 
         let (y_new, err) = st.try_step(sys, mode, t, &y, &f, h, &opts.atol, opts.rtol, &mut stats);

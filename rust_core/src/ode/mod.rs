@@ -11,6 +11,9 @@
 //! - An [`Observer`] sees every accepted step (with its dense output) and every event, and may stop
 //!   the run. Sampling at output times, Poincare sections and running extrema live in observers.
 //! - The run ends with an [`Outcome`] and [`Stats`]; a failure is data, never a panic.
+//! - A run looks at the caller's stop request ([`crate::cancel`], the one module outside `ode` it
+//!   uses: a leaf that knows nothing else) every [`crate::cancel::CHECK_EVERY`] steps, and ends with
+//!   [`Outcome::Cancelled`] when asked.
 //!
 //! Generic: nothing here knows the slider (the layering test `tests/architecture.rs` checks that
 //! `ode` refers to no other module of the crate). The files, bottom up:
@@ -236,6 +239,8 @@ pub enum Outcome {
     NonFinite,
     /// More than `max_events` events.
     EventChatter,
+    /// The caller asked to stop ([`crate::cancel`]): the run ended early where it was.
+    Cancelled,
 }
 
 /// End state of a run.
@@ -251,6 +256,9 @@ pub struct Solution<const N: usize, M> {
     pub outcome: Outcome,
     /// Work counters.
     pub stats: Stats,
+    /// The step size in use when the run ended [s]: for `StepTooSmall` and `NonFinite` the one that
+    /// fell below the floor (for reasons; NaN before the first step was chosen).
+    pub h: f64,
 }
 
 /// Dense output of one accepted step on `[t0, t1]`.

@@ -34,7 +34,7 @@ use crate::model::{event, idx, ContactMode, Jacobian, Slider, State};
 use crate::ode::{
     integrate, Control, EventAction, Method, Observer, OdeSystem, Options, Outcome, Stats, StepView, MAX_EVENTS,
 };
-use crate::status::Status;
+use crate::status::{Failure, Status};
 use crate::tidf::{two_harmonic_argmax, Root};
 use nalgebra::{Complex, SMatrix, SVector};
 use std::f64::consts::PI;
@@ -43,7 +43,10 @@ type C64 = Complex<f64>;
 /// State and column-major monodromy matrix `[y, Phi[:,0], ..., Phi[:,5]]`.
 pub type Augmented = SVector<f64, 42>;
 
+mod floquet;
 mod switches;
+use floquet::classify;
+pub use floquet::{Instability, INSTABILITY_NAMES};
 #[cfg(test)]
 use switches::missed_crossing;
 pub use switches::*;
@@ -154,11 +157,17 @@ pub struct PeriodicOrbit {
     pub residual_norm: f64,
     /// Newton iterations.
     pub newton_iterations: u32,
-    /// `Success`; `NewtonNotConverged` (no convergence: the other fields describe the last iterate),
-    /// `Diverged` (the escape event fired), or an integrator status.
+    /// `Success`; `NewtonNotConverged`, `NotConverged` (no cycle near the start: Newton ended on
+    /// steady sliding, or the start never reached the section), `InvalidInput`, `Diverged` (the
+    /// escape event fired), `NotComputed` (cancelled), or an integrator status. For every status
+    /// but `Success` the orbit's values are NaN (`stable` false, `instability` `Unknown`,
+    /// `contact_opens` false): never those of the last iterate; only `residual_norm`,
+    /// `newton_iterations` and `stats` describe the attempt.
     pub status: Status,
     /// Integrator work, summed over every integration of the solve.
     pub stats: Stats,
+    /// Why the status is not `Success`, with its numbers (`None` for `Success`).
+    pub failure: Option<Failure>,
 }
 
 /// Initial state and period of the shooting guess from a describing-function root: the state of
@@ -287,12 +296,15 @@ fn shoot_impl(s: &Slider, y0: &State, period: f64, opts: &ShootingOptions, refin
     let sz = scales(s);
     let mut y = *y0;
     if !period.is_finite() || period <= 0.0 || !y.iter().all(|v| v.is_finite()) {
-        return failed(y, period, Status::InvalidInput, stats);
+        return unconverged(Failure::InvalidStart { period }, f64::NAN, 0, stats);
     }
     if y[idx::ZD] != 0.0 {
         match to_section(s, &y, 2.0 * period, opts, &mut stats) {
             Some(v) => y = v,
-            None => return failed(y, period, Status::NotConverged, stats),
+            None if crate::cancel::requested() => {
+                return unconverged(Failure::Cancelled { t: f64::NAN }, f64::NAN, 0, stats)
+            }
+            None => return unconverged(Failure::NoSection { horizon: 2.0 * period }, f64::NAN, 0, stats),
         }
     }
     y[idx::ZD] = 0.0;
@@ -314,11 +326,15 @@ fn shoot_impl(s: &Slider, y0: &State, period: f64, opts: &ShootingOptions, refin
     let mut rtol = opts.rtol.max(1e-7);
     let (mut fl, mut r, mut rn) = match eval(&y, t, rtol, &mut stats) {
         Ok(v) => v,
-        Err(st) => return failed(y, t, st, stats),
+        Err(st) => return unconverged(Failure::OrbitFlow { status: st, period: t }, f64::NAN, 0, stats),
     };
     let mut status = Status::NewtonNotConverged;
     let mut stalled = false;
     loop {
+        if crate::cancel::requested() {
+            status = Status::NotComputed;
+            break;
+        }
         if !rn.is_finite() {
             status = Status::NonFinite;
             break;
@@ -403,69 +419,41 @@ fn shoot_impl(s: &Slider, y0: &State, period: f64, opts: &ShootingOptions, refin
             break;
         }
     }
+    if status != Status::Success {
+        let failure = match status {
+            Status::NewtonNotConverged => {
+                Failure::Newton { iterations, max_iter: opts.max_iter, residual: rn, tol: opts.tol }
+            }
+            Status::NotComputed => Failure::Cancelled { t: f64::NAN },
+            other => Failure::OrbitFlow { status: other, period: t },
+        };
+        return unconverged(failure, rn, iterations, stats);
+    }
     let mut orbit = analyse(s, &y, t, &fl, opts, &mut stats);
-    orbit.residual_norm = rn;
-    orbit.newton_iterations = iterations;
-    if orbit.status == Status::Success {
-        orbit.status = status;
+    if orbit.status != Status::Success {
+        return unconverged(Failure::OrbitFlow { status: orbit.status, period: t }, rn, iterations, stats);
     }
     // Steady sliding is a "periodic orbit" of every period: Newton can end there from a poor
     // guess. That is no cycle.
     let swing = orbit.z_max - orbit.z_min;
-    if orbit.status == Status::Success && (swing.is_nan() || swing <= 1e-6 * sz[idx::Z]) {
-        orbit.status = Status::NotConverged;
+    let floor = 1e-6 * sz[idx::Z];
+    if swing.is_nan() || swing <= floor {
+        return unconverged(Failure::NoCycle { swing, floor }, rn, iterations, stats);
     }
+    orbit.residual_norm = rn;
+    orbit.newton_iterations = iterations;
     orbit.stats = stats;
     orbit
 }
 
-/// How a periodic orbit is unstable: the kind of its largest non-trivial Floquet multiplier.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Instability {
-    /// Every non-trivial multiplier inside the unit circle.
-    Stable,
-    /// A real multiplier above 1 (a saddle cycle; it meets a stable cycle at a fold).
-    Fold,
-    /// A real multiplier below -1 (past a period doubling).
-    Flip,
-    /// A complex pair outside the unit circle (past a Neimark-Sacker bifurcation: a torus).
-    Torus,
-    /// Multipliers not computed.
-    Unknown,
-}
-
-impl Instability {
-    /// Code in the order of `INSTABILITY_NAMES`.
-    pub fn code(self) -> u8 {
-        self as u8
-    }
-}
-
-/// Names of `Instability`, in code order.
-pub const INSTABILITY_NAMES: [&str; 5] = ["stable", "fold", "flip", "torus", "unknown"];
-
-/// A multiplier counts as real when its imaginary part is below this times `max(1, |rho|)`.
-const REAL_TOL: f64 = 1e-8;
-
-/// `(instability, flip_multiplier)` of sorted multipliers `ev` (modulus descending) with the
-/// trivial one at `trivial`.
-fn classify(ev: &[C64; 6], trivial: usize, stable: bool) -> (Instability, f64) {
-    let is_real = |c: &C64| c.im.abs() <= REAL_TOL * c.norm().max(1.0);
-    let flip = (0..6)
-        .filter(|&k| k != trivial && is_real(&ev[k]) && ev[k].re < 0.0)
-        .map(|k| ev[k].re)
-        .fold(f64::NAN, f64::min);
-    let kind = if stable {
-        Instability::Stable
-    } else {
-        match (0..6).find(|&k| k != trivial) {
-            Some(k) if is_real(&ev[k]) && ev[k].re > 0.0 => Instability::Fold,
-            Some(k) if is_real(&ev[k]) => Instability::Flip,
-            Some(_) => Instability::Torus,
-            None => Instability::Unknown,
-        }
-    };
-    (kind, flip)
+/// The result of a solve that found no orbit: NaN values (never the last iterate), the failure's
+/// status and the attempt's residual, iterations and work.
+fn unconverged(failure: Failure, residual: f64, iterations: u32, stats: Stats) -> PeriodicOrbit {
+    let mut o = failed(State::repeat(f64::NAN), f64::NAN, failure.status(), stats);
+    o.residual_norm = residual;
+    o.newton_iterations = iterations;
+    o.failure = Some(failure);
+    o
 }
 
 impl PeriodicOrbit {
@@ -502,6 +490,7 @@ fn failed(y: State, t: f64, status: Status, stats: Stats) -> PeriodicOrbit {
         newton_iterations: 0,
         status,
         stats,
+        failure: None,
     }
 }
 

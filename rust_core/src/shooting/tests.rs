@@ -409,3 +409,35 @@ fn timing() {
     }
     eprintln!("variational rhs: {:.0} ns", t0.elapsed().as_secs_f64() / 1e5 * 1e9);
 }
+
+#[test]
+fn an_unconverged_orbit_has_no_values_and_says_why() {
+    // max_iter = 0: Newton may not take a step from the describing function's guess, whose scaled
+    // residual is far above tol; no orbit, and nothing of the guess is reported as one.
+    let s = Slider::seed();
+    let root = seed_root(&s);
+    let o = shoot_from_root(&s, &root, &ShootingOptions { max_iter: 0, ..ShootingOptions::default() });
+    assert_eq!(o.status, Status::NewtonNotConverged);
+    assert!(o.period.is_nan() && o.omega.is_nan() && o.state0.iter().all(|v| v.is_nan()));
+    assert!(o.harmonics.a1.is_nan() && o.z_max.is_nan() && o.moduli.iter().all(|v| v.is_nan()));
+    assert!(!o.stable && o.instability == Instability::Unknown && !o.contact_opens);
+    assert!(o.residual_norm > 1e-9 && o.newton_iterations == 0);
+    match o.failure {
+        Some(Failure::Newton { iterations: 0, max_iter: 0, residual, tol }) => {
+            assert!(residual == o.residual_norm && tol == 1e-9);
+        }
+        other => panic!("{other:?}"),
+    }
+    // A converged orbit has no failure.
+    let ok = shoot_from_root(&s, &root, &ShootingOptions::default());
+    assert!(ok.status == Status::Success && ok.failure.is_none() && ok.period.is_finite());
+    // A bad start is refused with its reason.
+    let bad = shoot(&s, &State::zeros(), -1.0, &ShootingOptions::default());
+    assert_eq!((bad.status, bad.failure), (Status::InvalidInput, Some(Failure::InvalidStart { period: -1.0 })));
+    // A cancelled solve stops with no values.
+    let token = crate::cancel::Token::new();
+    token.cancel();
+    let c = token.scope(|| shoot_from_root(&s, &root, &ShootingOptions::default()));
+    assert_eq!(c.status, Status::NotComputed);
+    assert!(c.period.is_nan() && c.failure.is_some_and(|f| f.status() == Status::NotComputed));
+}

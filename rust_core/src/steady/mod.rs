@@ -17,9 +17,9 @@
 //! minimum sliding velocity. Phases are `alpha` in `|.| sin(k psi + alpha)`, `psi = w t` with the phase
 //! of `z1` set to 0 (MODEL.md §5), in radians in `[0, 2 pi)`.
 
-use crate::model::{event, idx, ContactMode, ContactModel, FrictionLaw, Slider, State};
+use crate::model::{idx, ContactMode, ContactModel, FrictionLaw, Slider, State};
 use crate::ode::{integrate, Control, Method, Observer, Options, Outcome, Sampler, Stats, StepView};
-use crate::status::Status;
+use crate::status::{Failure, Status};
 use nalgebra::SVector;
 
 /// Largest period multiplicity (section crossings per period) looked for.
@@ -132,6 +132,52 @@ pub struct RunResult {
     pub extremes: Extremes,
     /// Work counters.
     pub stats: Stats,
+    /// Why the run did not succeed, with its numbers (`None` for `Success`).
+    pub failure: Option<Failure>,
+}
+
+impl RunResult {
+    /// The result of a run that could not be computed: `status`, NaN state and time, no work.
+    pub fn failed(status: Status, failure: Option<Failure>) -> Self {
+        RunResult {
+            status,
+            t: f64::NAN,
+            y: State::repeat(f64::NAN),
+            extremes: Extremes::default(),
+            stats: Stats::default(),
+            failure,
+        }
+    }
+}
+
+/// The failure behind a run of `s` from `t = 0` towards `t_end` under `opts` that ended with
+/// `status` at `(t, y)` with step size `h` after `steps` attempted steps (`None` for `Success`).
+/// Shared by the scalar driver and the lane-batched paths, so that every route gives the same text.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn run_failure(
+    status: Status,
+    s: &Slider,
+    t: f64,
+    y: &State,
+    h: f64,
+    steps: u64,
+    t_end: f64,
+    opts: &Options<6>,
+) -> Option<Failure> {
+    Some(match status {
+        Status::Success => return None,
+        Status::MaxSteps => Failure::MaxSteps { max_steps: opts.max_steps, t, t_end },
+        Status::StepTooSmall if t_end < 0.0 => Failure::Backwards { t0: 0.0, t_end },
+        Status::StepTooSmall => {
+            Failure::StepTooSmall { t, h, floor: opts.h_min_rel * t.abs().max(1.0), rtol: opts.rtol }
+        }
+        Status::NonFinite if steps == 0 && h.is_nan() => Failure::NonFiniteStart { t },
+        Status::NonFinite => Failure::NonFinite { t, h },
+        Status::EventChatter => Failure::EventChatter { max_events: opts.max_events, t },
+        Status::Diverged => Failure::Escaped { t, z: y[idx::Z], limit: s.p.escape_limit },
+        Status::NotComputed => Failure::Cancelled { t },
+        other => Failure::Ended { status: other, t },
+    })
 }
 
 pub(crate) struct ExtremesObserver<'a, O> {
@@ -175,7 +221,9 @@ pub fn run_observed<O: Observer<6, ContactMode>>(
     let sol = integrate(s, method, 0.0, *y0, t_end, &opts, &mut o);
     let escaped = sol.y[idx::Z].abs() >= s.p.escape_limit * (1.0 - 1e-9);
     let status = status_of(sol.outcome, escaped);
-    (RunResult { status, t: sol.t, y: sol.y, extremes: o.ext, stats: sol.stats }, o.inner)
+    let steps = sol.stats.n_accept + sol.stats.n_reject;
+    let failure = run_failure(status, s, sol.t, &sol.y, sol.h, steps, t_end, &opts);
+    (RunResult { status, t: sol.t, y: sol.y, extremes: o.ext, stats: sol.stats, failure }, o.inner)
 }
 
 /// Integrate to `t_end` and return the end state.
@@ -327,6 +375,8 @@ pub struct Summary {
     pub extremes: Extremes,
     /// Work counters, transient and the Fourier period together.
     pub stats: Stats,
+    /// Why the status is not `Success`, with its numbers (`None` for `Success`).
+    pub failure: Option<Failure>,
 }
 
 impl Summary {
@@ -351,12 +401,13 @@ impl Summary {
             min_slip_velocity: f64::NAN,
             extremes: Extremes::default(),
             stats: Stats::default(),
+            failure: None,
         }
     }
 
-    /// A summary for a point that could not be computed.
-    pub fn failed(status: Status) -> Self {
-        Self::empty(status, SteadyOutcome::Failed)
+    /// A summary for a point that could not be computed (`failure`: why, where known).
+    pub fn failed(status: Status, failure: Option<Failure>) -> Self {
+        Summary { failure, ..Self::empty(status, SteadyOutcome::Failed) }
     }
 }
 
@@ -567,57 +618,6 @@ fn locate(st: &StepView<'_, 6, ContactMode>, g: impl Fn(&State) -> f64, tol: f64
     (b, yb)
 }
 
-/// Fourier coefficient pair (a_k, b_k) -> amplitude and phase alpha of |.| sin(k w t + alpha).
-fn amp_phase(a: f64, b: f64) -> (f64, f64) {
-    ((a * a + b * b).sqrt(), a.atan2(b))
-}
-
-fn wrap(x: f64) -> f64 {
-    let t = std::f64::consts::TAU;
-    let r = x.rem_euclid(t);
-    if r >= t {
-        0.0
-    } else {
-        r
-    }
-}
-
-/// Observer of the Fourier period: samples, off-disk time (from contact events), minimum forces.
-struct PeriodObserver<'a> {
-    s: &'a Slider,
-    sampler: Sampler<'a, 6>,
-    min_normal: f64,
-    min_slip: f64,
-    t_off: f64,
-    off_since: Option<f64>,
-}
-
-impl Observer<6, ContactMode> for PeriodObserver<'_> {
-    fn on_step(&mut self, st: &StepView<'_, 6, ContactMode>) -> Control {
-        self.sampler.on_step(st);
-        let f = self.s.forces(st.y1, st.mode);
-        self.min_normal = self.min_normal.min(f.normal);
-        self.min_slip = self.min_slip.min(f.slip_velocity);
-        Control::Continue
-    }
-    fn on_event(&mut self, i: usize, t: f64, y: &State, before: ContactMode, after: ContactMode) -> Control {
-        for m in [before, after] {
-            let f = self.s.forces(y, m);
-            self.min_normal = self.min_normal.min(f.normal);
-            self.min_slip = self.min_slip.min(f.slip_velocity);
-        }
-        if i == event::GAP {
-            // Off the disk after the crossing iff the pin moves away from it.
-            if y[idx::ZD] > 0.0 {
-                self.off_since = Some(t);
-            } else if let Some(t0) = self.off_since.take() {
-                self.t_off += t - t0;
-            }
-        }
-        Control::Continue
-    }
-}
-
 /// Run `s` from `y0` until it decays, settles on a periodic state, escapes, or reaches `t_max`,
 /// and summarise the motion.
 pub fn run_to_steady(s: &Slider, y0: &State, opts: &SteadyOptions) -> Summary {
@@ -633,6 +633,7 @@ pub(crate) fn summarize(s: &Slider, r: &RunResult, w: &SectionWatcher, opts: &St
     sum.y_end = r.y;
     sum.extremes = r.extremes;
     sum.stats = r.stats;
+    sum.failure = r.failure;
     sum.min_normal_force = r.extremes.min_normal_force;
     sum.min_slip_velocity = r.extremes.min_slip_velocity;
     // Not periodic: the mean crossing rate of the newest window (for a decayed motion, the
@@ -642,6 +643,7 @@ pub(crate) fn summarize(s: &Slider, r: &RunResult, w: &SectionWatcher, opts: &St
         Status::Diverged => {
             sum.outcome = SteadyOutcome::Diverged;
             sum.status = Status::Success;
+            sum.failure = None;
             return sum;
         }
         Status::Success => {}
@@ -660,79 +662,15 @@ pub(crate) fn summarize(s: &Slider, r: &RunResult, w: &SectionWatcher, opts: &St
     } else {
         sum.outcome = SteadyOutcome::Unsettled;
         sum.status = Status::NotConverged;
+        sum.failure = Some(Failure::Unsettled { t_max: opts.t_max, periodic_tol: opts.periodic_tol });
     }
     sum
 }
 
-/// Re-integrate one period from the section state and fill the harmonic part of `sum`.
-fn fourier_period(s: &Slider, y0: &State, period: f64, opts: &SteadyOptions, sum: &mut Summary) {
-    let n = opts.n_fourier.max(16);
-    let t_eval: Vec<f64> = (0..n).map(|j| j as f64 * period / n as f64).collect();
-    let mode0 = s.mode_at(y0);
-    let mut obs = PeriodObserver {
-        s,
-        sampler: Sampler::new(&t_eval),
-        min_normal: s.forces(y0, mode0).normal,
-        min_slip: s.slip_velocity(y0),
-        t_off: 0.0,
-        off_since: if s.gap(y0) > 0.0 { Some(0.0) } else { None },
-    };
-    let o = options_for(s, &opts.tol);
-    let sol = integrate(s, opts.method, 0.0, *y0, period, &o, &mut obs);
-    sum.stats += sol.stats;
-    if sol.outcome != Outcome::Finished || obs.sampler.out.len() != n {
-        sum.status = sol.outcome.status();
-        if sum.status.is_ok() {
-            sum.status = Status::NotConverged;
-        }
-        return;
-    }
-    if let Some(t_start) = obs.off_since {
-        obs.t_off += period - t_start;
-    }
-    let ys = &obs.sampler.out;
-    let w = std::f64::consts::TAU / period;
-    let coef = |comp: usize, k: usize| -> (f64, f64) {
-        let (mut a, mut b) = (0.0, 0.0);
-        for (j, y) in ys.iter().enumerate() {
-            let arg = k as f64 * w * t_eval[j];
-            a += y[comp] * arg.cos();
-            b += y[comp] * arg.sin();
-        }
-        (2.0 * a / n as f64, 2.0 * b / n as f64)
-    };
-    sum.z0 = ys.iter().map(|y| y[idx::Z]).sum::<f64>() / n as f64;
-    let mut alpha = [0.0; 3];
-    for k in 1..=3 {
-        let (a, b) = coef(idx::Z, k);
-        let (amp, ph) = amp_phase(a, b);
-        sum.z_amp[k - 1] = amp;
-        alpha[k - 1] = ph;
-    }
-    for k in 1..=3 {
-        sum.z_phase[k - 1] = wrap(alpha[k - 1] - k as f64 * alpha[0]);
-    }
-    let (a, b) = coef(idx::PHI, 1);
-    let (amp, ph) = amp_phase(a, b);
-    sum.phi_amp = amp;
-    sum.phi_phase = wrap(ph - alpha[0]);
-    let (a, b) = coef(idx::X, 1);
-    let (amp, ph) = amp_phase(a, b);
-    sum.x_amp = amp;
-    sum.x_phase = wrap(ph - alpha[0]);
-    // Samples miss the extremes between them; combine with step ends and events.
-    let mut min_n = obs.min_normal;
-    let mut min_v = obs.min_slip;
-    for y in ys {
-        let f = s.forces(y, s.mode_at(y));
-        min_n = min_n.min(f.normal);
-        min_v = min_v.min(f.slip_velocity);
-    }
-    sum.min_normal_force = min_n;
-    sum.min_slip_velocity = min_v;
-    // For the bilateral law too: "off the disk" means zc > 0, where the law acts outside its validity.
-    sum.fraction_off_disk = obs.t_off / period;
-}
+mod fourier;
+use fourier::fourier_period;
+#[cfg(test)]
+use fourier::{amp_phase, wrap};
 
 #[cfg(test)]
 mod tests;

@@ -329,7 +329,8 @@ pub struct RootSearch {
     pub complex_amplitude: Vec<Unresolved>,
     /// Grid points sampled.
     pub n_grid: usize,
-    /// `Success`, `InvalidInput` (bad box or `K_a = 0`: no describing function), or `NonFinite`.
+    /// `Success`, `InvalidInput` (bad box or `K_a = 0`: no describing function), `NonFinite`, or
+    /// `NotComputed` (cancelled by the caller during the scan).
     pub status: Status,
 }
 

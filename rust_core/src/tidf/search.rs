@@ -100,7 +100,9 @@ impl Tidf {
     ///
     /// # Errors
     /// `status` is `InvalidInput` for a bad box or `K_a = 0` (a linear contact has no describing
-    /// function: only Hopf points), `NonFinite` if the reduced function is not finite on the grid.
+    /// function: only Hopf points), `NonFinite` if the reduced function is not finite on the grid,
+    /// `NotComputed` if the caller cancelled during the scan ([`crate::cancel`], looked at every
+    /// [`crate::cancel::CHECK_EVERY`] grid points).
     pub fn find_roots(&self, slider: &Slider, opts: &SearchOptions) -> RootSearch {
         let lin = linear_stability(slider);
         let torsion_frequency = lin.mode(ModeKind::Torsion).frequency;
@@ -132,6 +134,12 @@ impl Tidf {
             candidates.push((w0, self.reduced(w0)));
         }
         while w0 < opts.w_max {
+            if crate::cancel::requested_every(n as u64) {
+                // The caller cancelled: the scan ends here, its roots unsearched.
+                out.status = Status::NotComputed;
+                out.n_grid = n;
+                return out;
+            }
             let w1 = (w0 + self.grid_step(w0, h_log, opts.kappa)).min(opts.w_max);
             let g1 = g_at(w1);
             n += 1;

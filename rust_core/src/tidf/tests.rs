@@ -338,3 +338,19 @@ fn timing() {
         it as f64 / m as f64
     );
 }
+
+#[test]
+fn a_cancelled_grid_scan_stops_at_the_first_check() {
+    // A billion base points would take minutes; cancelled, the scan stops at its first look at the
+    // stop request (grid point CHECK_EVERY) with no roots and status NotComputed.
+    let s = Slider::seed();
+    let opts = SearchOptions { n_base: 1_000_000_000, ..SearchOptions::default() };
+    let token = crate::cancel::Token::new();
+    token.cancel();
+    let r = token.scope(|| Tidf::new(&s, Variant::Consistent).find_roots(&s, &opts));
+    assert_eq!(r.status, Status::NotComputed);
+    assert_eq!(r.n_grid as u64, crate::cancel::CHECK_EVERY);
+    assert!(r.roots.is_empty());
+    // Uncancelled, the default grid finds the seed's roots as before.
+    assert_eq!(seed_search(Variant::Consistent).status, Status::Success);
+}

@@ -87,9 +87,12 @@ pub fn run_lanes(
 ) -> Vec<TrajectoryResult> {
     check(sliders, y0s, method, &task);
     let feed = AtomicUsize::new(0);
-    let mut out = dispatch(sliders, y0s, t_end, method, tol, task, &feed);
-    out.sort_unstable_by_key(|r| r.0);
-    out.into_iter().map(|r| r.1).collect()
+    let mut out: Vec<Option<TrajectoryResult>> = vec![None; sliders.len()];
+    for (i, r) in dispatch(sliders, y0s, t_end, method, tol, task, &feed) {
+        out[i] = Some(r);
+    }
+    // Only a cancelled call leaves trajectories without a result.
+    out.into_iter().map(|r| r.unwrap_or_else(TrajectoryResult::not_started)).collect()
 }
 
 /// [`run_lanes`] on `threads` threads (`None`: [`crate::parallel::default_threads`]): every
@@ -97,7 +100,9 @@ pub fn run_lanes(
 /// lanes ends, so the threads stay busy to the end however unequal the runs. A trajectory's
 /// result does not depend on which lanes or thread ran it (bitwise; tested), so results are the
 /// same for any thread count. A panic on a thread becomes `Err(message)` for the trajectories
-/// that thread had not finished.
+/// that thread had not finished. On cancellation ([`crate::cancel`]) every thread stops within
+/// [`crate::cancel::CHECK_EVERY`] steps: its running trajectories end with `NotComputed`, and those
+/// not started get [`TrajectoryResult::not_started`].
 pub fn run_lanes_threads(
     sliders: &[Slider],
     y0s: &[State],
@@ -112,11 +117,12 @@ pub fn run_lanes_threads(
     let nthreads = threads.unwrap_or_else(crate::parallel::default_threads).max(1).min(n.div_ceil(W).max(1));
     let feed = AtomicUsize::new(0);
     let workers: Vec<usize> = (0..nthreads).collect();
-    let parts = crate::parallel::par_map(
+    let parts = crate::parallel::par_map_or(
         &workers,
         Some(nthreads),
         |_| Ok(dispatch(sliders, y0s, t_end, method, tol, task, &feed)),
         Err,
+        || Ok(Vec::new()),
     );
     let mut out: Vec<Option<Result<TrajectoryResult, String>>> = vec![None; n];
     let mut panic = None;
@@ -130,8 +136,15 @@ pub fn run_lanes_threads(
             Err(msg) => panic = Some(msg),
         }
     }
-    let msg = panic.unwrap_or_default();
-    out.into_iter().map(|r| r.unwrap_or_else(|| Err(msg.clone()))).collect()
+    // Without a panic, only a cancelled call leaves trajectories without a result.
+    out.into_iter()
+        .map(|r| {
+            r.unwrap_or_else(|| match &panic {
+                Some(msg) => Err(msg.clone()),
+                None => Ok(TrajectoryResult::not_started()),
+            })
+        })
+        .collect()
 }
 
 fn check(sliders: &[Slider], y0s: &[State], method: Method, task: &Task<'_>) {

@@ -4,6 +4,7 @@
 
 use super::slider::{events_lanes, hidden_crossings, Coef, SliderRhs, EV_COMPS, NE};
 use super::state::{finish, refill, sync_from_side, sync_to_side, Input, Lanes, Side, Watch};
+use crate::cancel;
 use crate::ensemble::{Task, TrajectoryResult};
 use crate::model::{event, idx, ContactMode, Slider, State};
 use crate::ode::controller::{FAC_MAX, FAC_MIN, SAFETY};
@@ -77,7 +78,20 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
     let mut fzl = zero;
     let mut fzl_scratch = zero;
 
+    let mut rounds = 0u64;
     while ln.side.iter().any(|s| s.is_some()) {
+        rounds += 1;
+        if cancel::requested_every(rounds) {
+            // The running trajectories end where they are; no new one starts (the caller marks
+            // those as not started).
+            for l in 0..W {
+                if ln.side[l].is_some() {
+                    let (t, y, h) = (ln.t[l], lane_state(&ln.y, l), ln.h[l]);
+                    finish(&mut ln, l, t, y, h, Outcome::Cancelled, &mut out);
+                }
+            }
+            break;
+        }
         let live: [bool; W] = std::array::from_fn(|l| ln.side[l].is_some());
         // ---- before the attempt: landing on t_end, the step floor, the step budget ----
         let mut hh = zero;
@@ -114,7 +128,7 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
                     continue;
                 };
                 let (t, y) = (ln.t[l], lane_state(&ln.y, l));
-                finish(&mut ln, l, t, y, outcome, &mut out);
+                finish(&mut ln, l, t, y, hh[l], outcome, &mut out);
                 refill(&mut ln, l, &inp, &mut out);
             }
             continue;
@@ -255,7 +269,7 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
                 let ordinary = fin[l] && err[l].is_finite();
                 let outcome = if ordinary { Outcome::StepTooSmall } else { Outcome::NonFinite };
                 let (t, y) = (ln.t[l], lane_state(&ln.y, l));
-                finish(&mut ln, l, t, y, outcome, &mut out);
+                finish(&mut ln, l, t, y, h_new, outcome, &mut out);
                 refill(&mut ln, l, &inp, &mut out);
             }
         }
@@ -345,7 +359,7 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
                 };
                 sync_from_side(&mut ln, l, steady, sampled);
                 if let Some(outcome) = ev.end {
-                    finish(&mut ln, l, ev.t1, ev.y1, outcome, &mut out);
+                    finish(&mut ln, l, ev.t1, ev.y1, hh[l], outcome, &mut out);
                     refill(&mut ln, l, &inp, &mut out);
                     continue;
                 }
@@ -357,7 +371,7 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
                     let f = sd.s.rhs(&y1, mode);
                     sd.stats.n_rhs += 1;
                     if !f.iter().all(|v| v.is_finite()) {
-                        finish(&mut ln, l, t, y1, Outcome::NonFinite, &mut out);
+                        finish(&mut ln, l, t, y1, hh[l], Outcome::NonFinite, &mut out);
                         refill(&mut ln, l, &inp, &mut out);
                         continue;
                     }
@@ -398,7 +412,7 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
                         ln.pend[e][l] = sd.pend[e].is_some();
                     }
                     if last[l] {
-                        finish(&mut ln, l, t_new[l], y1, Outcome::Finished, &mut out);
+                        finish(&mut ln, l, t_new[l], y1, hh[l], Outcome::Finished, &mut out);
                         refill(&mut ln, l, &inp, &mut out);
                     }
                 }

@@ -9,7 +9,8 @@ use crate::ode::controller::initial_step;
 use crate::ode::lanes::{L, LN_ERR_FLOOR, V6, W};
 use crate::ode::{Control, Observer, OdeSystem, Options, Outcome, Sampler, Stats, StepView, MAX_EVENTS};
 use crate::steady::{
-    options_for, status_of, summarize, Extremes, ExtremesObserver, RunResult, SteadyObserver, SteadyOptions, Tolerances,
+    options_for, run_failure, status_of, summarize, Extremes, ExtremesObserver, RunResult, SteadyObserver,
+    SteadyOptions, Tolerances,
 };
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -47,6 +48,8 @@ pub(super) struct Side<'a> {
     pub(super) i: usize,
     pub(super) s: &'a Slider,
     pub(super) opts: Options<6>,
+    /// The end of the run [s] (`t_max` for a run to steady state).
+    pub(super) t_end: f64,
     pub(super) mode: ContactMode,
     pub(super) pend: [Option<f64>; MAX_EVENTS],
     /// Right-hand sides outside the steps (start, starting step, restarts) and located events.
@@ -125,13 +128,14 @@ pub(super) fn sync_from_side(ln: &mut Lanes<'_>, l: usize, steady: bool, sampled
     }
 }
 
-/// Write lane `l`'s result (ended at `(t, y)` with `outcome`) and mark it idle.
+/// Write lane `l`'s result (ended at `(t, y)` with step size `h` and `outcome`) and mark it idle.
 #[cold]
 pub(super) fn finish(
     ln: &mut Lanes<'_>,
     l: usize,
     t: f64,
     y: State,
+    h: f64,
     outcome: Outcome,
     out: &mut Vec<(usize, TrajectoryResult)>,
 ) {
@@ -150,7 +154,9 @@ pub(super) fn finish(
     stats.n_accept = ln.n_acc[l];
     stats.n_reject = ln.n_rej[l];
     let escaped = y[idx::Z].abs() >= sd.s.p.escape_limit * (1.0 - 1e-9);
-    let run = RunResult { status: status_of(outcome, escaped), t, y, extremes: ext, stats };
+    let status = status_of(outcome, escaped);
+    let failure = run_failure(status, sd.s, t, &y, h, steps, sd.t_end, &sd.opts);
+    let run = RunResult { status, t, y, extremes: ext, stats, failure };
     out.push((sd.i, conclude(run, &mut sd)));
     idle(ln, l);
 }
@@ -219,15 +225,17 @@ pub(super) fn refill<'a>(ln: &mut Lanes<'a>, l: usize, inp: &Input<'a, '_>, out:
         let mut obs = ExtremesObserver { s, ext: Extremes::default(), inner: watch };
         obs.ext.update(s, &y0, mode);
         let opts = options_for(s, &inp.tol);
-        let mut sd = Side { i, s, opts, mode, pend: [None; MAX_EVENTS], stats: Stats::default(), obs };
+        let mut sd = Side { i, s, opts, t_end, mode, pend: [None; MAX_EVENTS], stats: Stats::default(), obs };
         let early = |outcome: Outcome, n_rhs: u64, sd: &mut Side<'a>| {
             sd.stats.n_rhs = n_rhs;
+            let status = status_of(outcome, y0[idx::Z].abs() >= s.p.escape_limit * (1.0 - 1e-9));
             let run = RunResult {
-                status: status_of(outcome, y0[idx::Z].abs() >= s.p.escape_limit * (1.0 - 1e-9)),
+                status,
                 t: 0.0,
                 y: y0,
                 extremes: sd.obs.ext,
                 stats: sd.stats,
+                failure: run_failure(status, s, 0.0, &y0, f64::NAN, 0, t_end, &sd.opts),
             };
             conclude(run, sd)
         };
