@@ -35,7 +35,7 @@ pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="SIGINT to a pro
 #: Seconds from the signal to the end of the interrupted call (see the module docstring).
 REACTION = 2.0
 
-SEED = ts.SliderModel()
+SEED = ts.SliderModel(contact="bilateral")
 #: Unilateral contact at mu = 0.3: sliding is unstable and the motion grows into the bouncing cycle.
 BOUNCING = SEED.replace(contact="unilateral", mu=0.30)
 

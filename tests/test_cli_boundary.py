@@ -221,13 +221,17 @@ def test_branch_and_boundary_files_are_cf_1_11(tmp_path, capsys):
     assert not any(errors.values()), errors
 
 
-def test_a_linear_or_bilateral_sweep_stores_no_fold_or_grazing_curve_and_says_why():
+def test_a_linear_sweep_stores_no_fold_or_grazing_curve_and_a_bilateral_one_no_fold_and_says_why():
     ds = ts.sweep(SEED_U, normal_load=[10.0, 150.0], arm_length=[0.05, 0.127], strategy="linear", progress=False)
     assert "hopf_normal_load" in ds and "fold_normal_load" not in ds and "grazing_normal_load" not in ds
     assert ds.attrs["fold_curves"].startswith("not computed: strategy linear")
     ds = ts.sweep(SEED, normal_load=[10.0, 150.0], arm_length=[0.05, 0.127], strategy="tidf", census=False,
                   progress=False)  # fmt: skip
-    assert "fold_normal_load" not in ds and "bilateral contact" in ds.attrs["grazing_curves"]
+    # Bilateral: the grazing curve (where its cycles open the contact) is stored, the fold is not.
+    assert "fold_normal_load" not in ds and "bilateral contact" in ds.attrs["fold_curves"]
+    assert ds.sizes["grazing_point"] >= 2
+    uni = ts.boundary_curves(SEED_U, (10.0, 150.0), (0.05, 0.127), curves=("hopf", "grazing"))
+    np.testing.assert_allclose(ds.grazing_normal_load.values, uni.grazing_normal_load.values, rtol=1e-12)
 
 
 @pytest.mark.parametrize(

@@ -18,7 +18,7 @@ import pytest
 import tribosweep as ts
 from tribosweep import _core
 
-SEED = ts.SliderModel()
+SEED = ts.SliderModel(contact="bilateral")
 BLOW_UP = SEED.replace(escape_limit=1e100)
 #: Printed times carry 7 significant digits (``{:.6e}``).
 PRINTED = 1e-6

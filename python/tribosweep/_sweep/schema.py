@@ -345,7 +345,8 @@ def boundary_vars(plan: Plan) -> tuple[dict, dict]:
     steady sliding loses stability, so the sharp form of the map's linear boundary; and, for the
     unilateral contact law and a strategy that computes cycles (not ``linear``, which maps
     eigenvalues only), the fold and grazing curves of the cycles born there (``fold_*`` on
-    ``fold_point``, ``grazing_*`` on ``grazing_point``). Returns the variables and attributes (what
+    ``fold_point``, ``grazing_*`` on ``grazing_point``); for the bilateral law, the grazing curve
+    only (past it its cycles leave the law's validity). Returns the variables and attributes (what
     was found, the continuation's tolerances, the calls that reproduce each curve, or why no curve
     is stored); a failure is recorded, never raised.
     """
@@ -359,12 +360,16 @@ def boundary_vars(plan: Plan) -> tuple[dict, dict]:
     fixed = {d: float(a[0]) for d, a in axes.items() if d not in ("normal_load", "arm_length")}
     model = plan.model.replace(**fixed)
     curves = ["hopf"]
-    skipped = None
+    skipped = {}
     if plan.strategy == "linear":
-        skipped = "not computed: strategy linear maps eigenvalues only (tribosweep boundary computes them)"
+        reason = "not computed: strategy linear maps eigenvalues only (tribosweep boundary computes them)"
+        skipped = {"fold_curves": reason, "grazing_curves": reason}
     elif model.contact != "unilateral":
-        skipped = ("not computed for bilateral contact (without contact switches the search for a fold runs each "
-                   "slice's branch to the edge of the box; tribosweep boundary computes them)")  # fmt: skip
+        # The grazing curve is where the bilateral law's cycles open the contact and leave its
+        # validity: stored. A fold past it would be a fold of orbits outside the law's validity.
+        curves += ["grazing"]
+        skipped = {"fold_curves": "not computed for bilateral contact: past the grazing curve its cycles open the "
+                                  "contact, outside the law's validity (tribosweep boundary computes them)"}
     else:
         curves += ["fold", "grazing"]
     box = {"normal_load": (float(axes["normal_load"][0]), float(axes["normal_load"][-1])),
@@ -375,6 +380,5 @@ def boundary_vars(plan: Plan) -> tuple[dict, dict]:
         return {}, {"hopf_curves": f"not stored: the continuation failed ({type(e).__name__}: {e})"}
     out = {name: (da.dims, da.values, dict(da.attrs)) for name, da in ds.data_vars.items()}
     attrs = dict(ds.attrs)
-    if skipped:
-        attrs |= {"fold_curves": skipped, "grazing_curves": skipped}
+    attrs |= skipped
     return out, attrs
