@@ -41,3 +41,25 @@ def test_a_categorical_variable_gets_its_flag_names_in_the_legend(sweep3):
 def test_an_unknown_variable_names_the_valid_ones(sweep3):
     with pytest.raises(ValueError, match="var = 'nope' is not in the sweep: its per-point variables are"):
         variable_map(sweep3, "nope")
+
+
+@pytest.mark.parametrize("var", ["regime", "growth_rate"])
+def test_grid_points_are_marked_on_request_and_the_mark_is_in_the_legend(sweep3, var):
+    from tribosweep.plot import regime_map
+
+    def draw(mark):
+        return regime_map(sweep3, mark_points=mark) if var == "regime" else variable_map(sweep3, var, mark_points=mark)
+
+    fig = draw(True)
+    panels = [ax for ax in fig.axes if ax.get_visible() and ax.collections and ax.get_label() != "<colorbar>"]
+    n_grid = sweep3.sizes["normal_load"] * sweep3.sizes["arm_length"]
+    for ax in panels:
+        dots = [c for c in ax.collections if c.get_offsets().shape == (n_grid, 2)]
+        assert len(dots) == 1  # one dot per computed point, at the points' coordinates
+        xy = np.asarray(dots[0].get_offsets())
+        assert set(np.round(xy[:, 0], 9)) == set(np.round(sweep3.normal_load.values, 9))
+    labels = [t.get_text() for leg in fig.legends for t in leg.get_texts()]
+    assert "computed point" in labels
+    # Without the option: no dots, no legend entry.
+    plain = draw(False)
+    assert "computed point" not in [t.get_text() for leg in plain.legends for t in leg.get_texts()]

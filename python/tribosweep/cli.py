@@ -430,6 +430,7 @@ def _add_plot_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--x", metavar="DIM", help="dimension on the x axis (default normal_load)")
     p.add_argument("--y", metavar="DIM", help="dimension on the y axis (default arm_length)")
     p.add_argument("--facet", metavar="DIM", help="dimension with one panel per value (default sliding_speed)")
+    p.add_argument("--mark-points", action="store_true", help="mark each computed grid point with a dot")
     p.add_argument("--var", metavar="NAME", default="regime",
                    help="the variable to draw (default regime): any per-point variable, e.g. growth_rate, "
                    "z1_amplitude, basin_fraction (one panel per attractor), status")
@@ -438,7 +439,8 @@ def _run_plot(args: argparse.Namespace) -> int:
     from .plot import save_regime_map
 
     with _open(args.file) as ds:
-        save_regime_map(ds, args.output, x=args.x, y=args.y, facet=args.facet, var=args.var)
+        save_regime_map(ds, args.output, x=args.x, y=args.y, facet=args.facet, var=args.var,
+                        mark_points=args.mark_points)
     print(f"{args.var} map: {args.output}")
     return 0
 

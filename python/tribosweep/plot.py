@@ -162,7 +162,7 @@ def _curve_handles(present: set[str]) -> list:
 
 
 def regime_map(ds: xr.Dataset, *, x: str | None = None, y: str | None = None, facet: str | None = None,
-               ncols: int = 4):  # fmt: skip
+               ncols: int = 4, mark_points: bool = False):  # fmt: skip
     """Regime map of a sweep over two dimensions, one panel per value of a third.
 
     Parameters
@@ -176,6 +176,8 @@ def regime_map(ds: xr.Dataset, *, x: str | None = None, y: str | None = None, fa
         Dimension with one panel per value (default: the next swept one).
     ncols : int
         Panels per row: a longer facet dimension wraps into rows, and every value gets its panel.
+    mark_points : bool
+        Mark each computed grid point with a dot (the cells are drawn around the points).
 
     Returns
     -------
@@ -221,6 +223,8 @@ def regime_map(ds: xr.Dataset, *, x: str | None = None, y: str | None = None, fa
         z = sub.transpose(y, x).values
         present.update(np.unique(z).tolist())
         ax.pcolormesh(_edges(ds[x].values), _edges(ds[y].values), z, cmap=cmap, norm=norm, shading="flat")
+        if mark_points:
+            present.add(_mark_points(ax, ds, x, y))
         if "bistable" in ds:
             # Stable sliding coexisting with another motion: hatched, since the regime then depends
             # on the initial disturbance (docs/model.md §6: the seed point is such a case).
@@ -271,6 +275,8 @@ def regime_map(ds: xr.Dataset, *, x: str | None = None, y: str | None = None, fa
 
             handles.append(Line2D([], [], color="k", lw=1.4, ls=style, label=label))
     handles += _curve_handles(present)
+    if "grid_points" in present:
+        handles.append(_points_handle())
     if "multi_period" in present:
         handles.append(Patch(facecolor="none", edgecolor="none", label="nT: a cycle of n mode periods\n(period doubling, subharmonic)"))
     fig.legend(handles=handles, loc="outside right center", fontsize=8, frameon=False)
@@ -281,13 +287,27 @@ def regime_map(ds: xr.Dataset, *, x: str | None = None, y: str | None = None, fa
     return fig
 
 
+def _mark_points(ax, ds: xr.Dataset, x: str, y: str) -> str:
+    """A dot at every computed grid point (white with a dark edge: visible on every fill colour)."""
+    gx, gy = np.meshgrid(ds[x].values, ds[y].values)
+    size = 6.0 if gx.size <= 400 else 2.0
+    ax.scatter(gx.ravel(), gy.ravel(), s=size, c="w", edgecolors="k", linewidths=0.3, zorder=3)
+    return "grid_points"
+
+
+def _points_handle():
+    from matplotlib.lines import Line2D
+
+    return Line2D([], [], ls="none", marker="o", ms=3, mfc="w", mec="k", mew=0.4, label="computed point")
+
+
 #: Colours of a categorical variable's values (Okabe-Ito, colour-blind safe), in flag order.
 _CATEGORY_COLORS = ("#56B4E9", "#E69F00", "#009E73", "#F0E442", "#0072B2", "#D55E00", "#CC79A7", "#000000",
                     "#999999", "#882255", "#44AA99")  # fmt: skip
 
 
 def variable_map(ds: xr.Dataset, var: str, *, x: str | None = None, y: str | None = None, facet: str | None = None,
-                 ncols: int = 4):  # fmt: skip
+                 ncols: int = 4, mark_points: bool = False):  # fmt: skip
     """Map of any per-point variable of a sweep over two dimensions, one panel per value of a third.
 
     A categorical variable (CF ``flag_values``/``flag_meanings``) gets one colour per value and a
@@ -295,7 +315,7 @@ def variable_map(ds: xr.Dataset, var: str, *, x: str | None = None, y: str | Non
     units (logarithmic where its finite values are positive and span more than three decades).
     Panels wrap into rows of ``ncols``; every facet value gets its panel. A variable with a
     trailing dimension (``basin_fraction`` over ``attractor``) is drawn at its first value unless
-    that dimension is the facet.
+    that dimension is the facet. ``mark_points=True`` marks each computed grid point with a dot.
 
     Examples
     --------
@@ -354,6 +374,8 @@ def variable_map(ds: xr.Dataset, var: str, *, x: str | None = None, y: str | Non
         sub = da if fi is None else da.isel({facet: fi})
         mesh = ax.pcolormesh(_edges(ds[x].values), _edges(ds[y].values), sub.transpose(y, x).values, cmap=cmap,
                              norm=norm, shading="flat")  # fmt: skip
+        if mark_points:
+            _mark_points(ax, ds, x, y)
         if fi is not None:
             coord = ds[facet].values[fi]
             label = f"{coord:.4g}" if np.issubdtype(np.asarray(coord).dtype, np.number) else str(coord)
@@ -369,12 +391,16 @@ def variable_map(ds: xr.Dataset, var: str, *, x: str | None = None, y: str | Non
     if flags:
         present = sorted({int(v) for v in np.unique(values[np.isfinite(values)])})
         handles = [Patch(facecolor=cmap(i), edgecolor="k", lw=0.3, label=names[i].replace("_", " ")) for i in present]
+        if mark_points:
+            handles.append(_points_handle())
         fig.legend(handles=handles, loc="outside right center", fontsize=8, frameon=False, title=var)
     else:
         bar = fig.colorbar(mesh, ax=axes[:n].tolist(), shrink=0.9)
         # Wrapped to the bar's height (about 42 characters of 8 pt per 3.2-inch row), never cut off.
         text = f"{long} [{unit}]" if unit else long
         bar.ax.set_ylabel(textwrap.fill(text, 42 * nr, break_long_words=False), fontsize=8)
+        if mark_points:
+            fig.legend(handles=[_points_handle()], loc="outside lower center", fontsize=8, frameon=False)
     fixed = [f"{d} = {ds[d].values[0]:.4g} {ds[d].attrs.get('units', '')}".strip() for d in rest if ds.sizes[d] > 1]
     blank = "; white: no value there" if np.isnan(values).any() else ""
     fig.suptitle(var + ("; " + ", ".join(fixed) if fixed else "") + blank, fontsize=10)
