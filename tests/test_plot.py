@@ -63,3 +63,25 @@ def test_grid_points_are_marked_on_request_and_the_mark_is_in_the_legend(sweep3,
     # Without the option: no dots, no legend entry.
     plain = draw(False)
     assert "computed point" not in [t.get_text() for leg in plain.legends for t in leg.get_texts()]
+
+
+def test_a_wide_grid_marks_multi_period_cycles_instead_of_labels_that_would_run_together():
+    from tribosweep.plot import MAX_LABELLED_COLUMNS, regime_map
+
+    loads = np.linspace(30.0, 150.0, MAX_LABELLED_COLUMNS + 4)
+    ds = ts.sweep(normal_load=loads, arm_length=[0.05, 0.1], strategy="linear", progress=False)
+    ratio = np.full(ds.regime.shape, np.nan)
+    ratio[3, 0, 0] = ratio[7, 1, 0] = 2.0  # two period-doubled cells (synthetic values)
+    ds["cycle_period_ratio"] = (ds.regime.dims, ratio)
+    fig = regime_map(ds)
+    ax = fig.axes[0]
+    assert not [t for t in ax.texts if t.get_text().endswith("T")]
+    marks = [c for c in ax.collections if c.get_offsets().shape == (2, 2)]
+    assert len(marks) == 1
+    labels = [t.get_text() for leg in fig.legends for t in leg.get_texts()]
+    assert any(lbl.startswith("a cycle of 2 or more mode periods") for lbl in labels)
+    # The contact law's identified range (22-93 N) is drawn only where it lies inside the map.
+    assert [ln.get_xdata()[0] for ln in ax.lines if ln.get_linestyle() == "--"] == [93.0]
+    # A narrow grid keeps its "2T" labels.
+    narrow = ds.isel(normal_load=slice(0, MAX_LABELLED_COLUMNS))
+    assert sum(t.get_text() == "2T" for t in regime_map(narrow).axes[0].texts) == 2

@@ -245,12 +245,17 @@ def regime_map(ds: xr.Dataset, *, x: str | None = None, y: str | None = None, fa
             k = np.where(np.isfinite(r), np.rint(r), 0)
             multi = k >= 2
             if multi.any():
-                present.add("multi_period")
                 xe, ye = _edges(ds[x].values), _edges(ds[y].values)
-                small = multi.size > 400
-                for j, i in zip(*np.nonzero(multi)):
-                    ax.text(0.5 * (xe[i] + xe[i + 1]), 0.5 * (ye[j] + ye[j + 1]), f"{int(k[j, i])}T", ha="center",
-                            va="center", fontsize=4 if small else 6, color="k")  # fmt: skip
+                if multi.shape[1] <= MAX_LABELLED_COLUMNS:
+                    present.add("multi_period")
+                    for j, i in zip(*np.nonzero(multi)):
+                        ax.text(0.5 * (xe[i] + xe[i + 1]), 0.5 * (ye[j] + ye[j + 1]), f"{int(k[j, i])}T",
+                                ha="center", va="center", fontsize=6, color="k")  # fmt: skip
+                else:  # too narrow a cell for a label: a mark (labels in neighbouring cells would run together)
+                    present.add("multi_period_mark")
+                    jj, ii = np.nonzero(multi)
+                    ax.scatter(0.5 * (xe[ii] + xe[ii + 1]), 0.5 * (ye[jj] + ye[jj + 1]), s=5, marker="x", c="k",
+                               linewidths=0.5, zorder=3)  # fmt: skip
         if fi is not None:
             ax.set_title(f"{facet} = {ds[facet].values[fi]:.4g} {ds[facet].attrs.get('units', '')}".strip(), fontsize=9)
         if "hopf_normal_load" in ds and {x, y} == {"normal_load", "arm_length"}:
@@ -258,14 +263,17 @@ def regime_map(ds: xr.Dataset, *, x: str | None = None, y: str | None = None, fa
         present.update(_draw_curves(ax, ds, x, y))
         for dim, line in ((x, ax.axvline), (y, ax.axhline)):
             if dim == "normal_load":
-                for bound in (22.0, 93.0):
-                    line(bound, color="k", lw=0.6, ls="--")
+                edges = _edges(ds[dim].values)
+                for bound in (22.0, 93.0):  # only inside the map: a bound outside would widen the axis
+                    if edges.min() <= bound <= edges.max():
+                        line(bound, color="k", lw=0.6, ls="--")
+                        present.add("law_range")
     handles = [Patch(facecolor=REGIME_COLORS[r], edgecolor="k", lw=0.3, label=r.replace("_", " "))
                for i, r in enumerate(REGIME_NAMES) if i in present]  # fmt: skip
     for key, hatch, label in _COEXISTING.values():
         if key in present:
             handles.append(Patch(facecolor="none", edgecolor="k", hatch=hatch, lw=0.3, label=label))
-    if "normal_load" in (x, y):
+    if "law_range" in present:
         from matplotlib.lines import Line2D
 
         handles.append(Line2D([], [], color="k", lw=0.6, ls="--", label="contact law identified\n(22-93 N)"))
@@ -277,6 +285,11 @@ def regime_map(ds: xr.Dataset, *, x: str | None = None, y: str | None = None, fa
     handles += _curve_handles(present)
     if "grid_points" in present:
         handles.append(_points_handle())
+    if "multi_period_mark" in present:
+        from matplotlib.lines import Line2D
+
+        handles.append(Line2D([], [], ls="none", marker="x", ms=3, mec="k", mew=0.6,
+                              label="a cycle of 2 or more mode periods\n(period doubling, subharmonic)"))
     if "multi_period" in present:
         handles.append(Patch(facecolor="none", edgecolor="none", label="nT: a cycle of n mode periods\n(period doubling, subharmonic)"))
     fig.legend(handles=handles, loc="outside right center", fontsize=8, frameon=False)
@@ -285,6 +298,11 @@ def regime_map(ds: xr.Dataset, *, x: str | None = None, y: str | None = None, fa
         title += "; " + ", ".join(fixed)
     fig.suptitle(title, fontsize=10)
     return fig
+
+
+#: Widest grid (cells along x per panel) whose multi-period cycles are labelled "nT" in the cell;
+#: a wider one gets a mark per cell (a 3.6-inch panel leaves under 0.2 inch per cell past this).
+MAX_LABELLED_COLUMNS: int = 16
 
 
 def _mark_points(ax, ds: xr.Dataset, x: str, y: str) -> str:
