@@ -15,7 +15,9 @@ costs only itself:
   **quarantined**: regime and status ``crashed``, with a reason, and the sweep goes on.
 - **dask**: the scheduler retries a task whose worker died (``distributed.scheduler.allowed-failures``
   times, 3 by default) and then reports ``KilledWorker``; such a chunk is split and its halves
-  sent to the cluster again, down to single points, which are quarantined.
+  sent to the cluster again, down to single points. The scheduler blames every task that was on
+  the dying worker, bystanders included, so a single point is then run alone in a fresh process on
+  the client's machine: it is quarantined only if it kills that process too.
 - **in-process** (no executor): a crash ends the process; the chunk it was computing stays marked
   in ``<output>.parts/running/``, and the resumed sweep runs it alone in a fresh process first,
   with the splitting above. A crash is survived across resumes, never repeated forever.
@@ -421,6 +423,7 @@ def _run_dask(plan: Plan, chunks: list[int], threads, client, asm: _Assembly) ->
     queue = collections.deque(Piece(k, *plan.chunk_range(k)) for k in chunks)
     window = min(EXECUTOR_WINDOW, 2 * total_threads(client) + 2)
     inflight: dict = {}
+    suspects: list[Piece] = []  # single points whose workers died: culprits or bystanders
     try:
         while queue or inflight:
             while queue and len(inflight) < window:
@@ -433,11 +436,26 @@ def _run_dask(plan: Plan, chunks: list[int], threads, client, asm: _Assembly) ->
                 try:
                     res = f.result()
                 except KilledWorker as e:
-                    piece.crashes = max(piece.crashes, MAX_CRASHES - 1)
-                    queue.extendleft(reversed(_after_crash(piece, f"its dask workers died ({e})", asm)))
+                    piece.how = f"its dask workers died ({e})"
+                    if piece.size > 1:
+                        piece.crashes += 1
+                        _log.warning("chunk %d, points %d-%d: %s; splitting it", piece.k, piece.start,
+                                     piece.stop - 1, piece.how)  # fmt: skip
+                        queue.extendleft(reversed(piece.halves()))
+                    else:
+                        suspects.append(piece)
                     continue
                 asm.add(piece, res)
     except BaseException:
         for f in inflight:
             f.cancel()
         raise
+    # The scheduler blames every task that was on a worker when it died, including those that only
+    # shared the worker with the culprit. A single point is therefore quarantined only if it kills
+    # a fresh process of its own here too; a bystander is computed there instead.
+    for piece in suspects:
+        try:
+            asm.add(piece, isolate(plan.task_range(piece.start, piece.stop, threads)))
+        except ProcessCrash as e:
+            piece.how = f"{piece.how}; alone in a fresh process: {e.how}"
+            asm.quarantine(piece)
