@@ -246,5 +246,30 @@ def test_bad_curve_input_raises_a_value_error_naming_it():
         ts.fold_curve(SEED, x=("normal_load", 1, 100), y=("mu", 0.25, 0.3), from_hopf=True)
     with pytest.raises(ValueError, match="y = "):
         ts.fold_curve(SEED, x=("normal_load", 1, 100), y="mu", from_hopf=True)
+    with pytest.raises(ValueError, match=r"must contain the model's own arm length 0.072 m"):
+        ts.fold_curve(SEED_U, x=("normal_load", 50, 300), y=("arm_length", 0.08, 0.1), orbit=(np.zeros(6), 0.01))
     with pytest.raises(ValueError, match="ds must be a tribosweep.branch Dataset"):
         ts.bifurcation_diagram(xr.Dataset())
+
+
+def test_the_bouncing_cycles_fold_over_the_arm_length_matches_fresh_branches_and_locates_its_jump(bouncing):
+    # The family of the seed's bouncing cycle is not born at a Hopf point: the orbit is carried from
+    # slice to slice. Independent check: at each arm length the cycle is found afresh (followed from
+    # mu = 0.30 by shooting) and its own branch run to its first fold.
+    curve = ts.fold_curve(SEED_U, x=("normal_load", 50.0, 300.0), y=("arm_length", 0.0705, 0.0725), n=3,
+                          orbit=bouncing)  # fmt: skip
+    assert ts.STATUS_NAMES[int(curve.status)] == "success", curve.attrs["reason"]
+    for arm in (0.0705, 0.0715, 0.0725):
+        model = SEED_U.replace(**ts.arm_frequencies(arm, SEED_U))
+        orb, _ = ts.follow_cycle(model)
+        fresh = ts.branch(model, "normal_load", 300.0, orbit=orb, stop_at="fold", bounds=(50.0, 300.0))
+        got = curve.sel(curve_point=np.flatnonzero(np.isclose(curve.arm_length.values, arm, rtol=0, atol=1e-12))[0])
+        # Both locate the fold to locate_tol (1e-8 of the scaled arclength); 1e-6 N is well above.
+        assert abs(float(got.normal_load) - float(fresh.parameter[-1])) < 1e-6, (arm, float(got.normal_load))
+    # Near 0.0712 m the first fold from the cycle jumps from about 105 N to about 140 N (the lower
+    # fold disappears): two segments, the jump bracketed to 1/16 of the 1 mm slice step.
+    seg, arms, loads = curve.segment.values, curve.arm_length.values, curve.normal_load.values
+    assert set(seg) == {0, 1} and np.all(np.diff(seg) >= 0)
+    last0, first1 = arms[seg == 0].max(), arms[seg == 1].min()
+    assert 0.0710 < last0 < first1 < 0.0715 and first1 - last0 <= 1e-3 / 16 + 1e-12
+    assert loads[seg == 0].max() < 110.0 and loads[seg == 1].min() > 135.0

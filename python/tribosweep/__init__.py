@@ -9,7 +9,7 @@ from __future__ import annotations
 from . import _core
 from ._apparatus import ARM_EXPONENTS, apparatus_model, arm_frequencies
 from ._boundary import boundary_curves
-from ._branch import BRANCH_FLAG_NAMES, bifurcation_diagram, branch, fold_curve, grazing_curve
+from ._branch import BRANCH_FLAG_NAMES, bifurcation_diagram, branch
 from ._branch import POINT_TYPE_NAMES as BRANCH_POINT_TYPE_NAMES
 from ._census import census
 from ._codes import (
@@ -25,6 +25,7 @@ from ._codes import (
     labels,
 )
 from ._core import InvalidArgumentError, TribosweepError
+from ._curves import fold_curve, grazing_curve
 from ._frequency import describing_function, follow_cycle, hopf_load, linear_stability, periodic_orbit
 from ._hopf import (
     CRITICALITY_NAMES,

@@ -23,7 +23,7 @@ import math
 import numpy as np
 import xarray as xr
 
-from . import _branch, _hopf
+from . import _curves, _hopf
 from ._model import SliderModel
 
 #: Variables of a Hopf curve stored on ``hopf_point``: :func:`hopf_curve`'s name -> the stored name.
@@ -143,7 +143,7 @@ def boundary_curves(
         out.attrs[f"hopf_curve_{k}"] = hopf.attrs[k]
     for kind in kinds[1:] if kinds[0] == "hopf" else kinds:
         parts, notes, calls = [], [], []
-        func = _branch.fold_curve if kind == "fold" else _branch.grazing_curve
+        func = _curves.fold_curve if kind == "fold" else _curves.grazing_curve
         for c in range(n_curves):
             on = hopf.curve.values == c
             arms, loads = hopf.arm_length.values[on], hopf.normal_load.values[on]
