@@ -186,11 +186,13 @@ def test_bad_input_exits_2_with_a_message(argv, message, tmp_path, monkeypatch, 
         ("normal_load = \n", "not valid TOML"),
         ("[wear_reference]\nload = 1\n", "config [wear_reference]"),
         ("[solver]\nt_max = 'long'\n", "t_max"),
+        (b"mu = 0.3 # \xe9t\xe9\n", "not UTF-8 text"),
+        ("model = 1\n", "[model] must be a table"),
     ],
 )
 def test_bad_config_exits_2(text, message, tmp_path, capsys):
     cfg = tmp_path / "c.toml"
-    cfg.write_text(text)
+    cfg.write_bytes(text) if isinstance(text, bytes) else cfg.write_text(text)
     code, _, err = run(["sweep", "--config", cfg, "-o", tmp_path / "x.nc", "--strategy", "linear"], capsys)
     assert code == 2
     assert message in err

@@ -279,11 +279,13 @@ def test_bad_input_exits_2_with_a_one_line_message(argv, message, tmp_path, monk
         ("branch", "range = 'x'\n", "config range"),
         ("boundary", "normal_load = 5\n", "config normal_load = 5"),
         ("boundary", "model = 1\n", "[model] must be a table"),
+        ("branch", b"mu = 0.3 # \xe9t\xe9\n", "not UTF-8 text"),
+        ("boundary", "normal_load = \n", "not valid TOML"),
     ],
 )
 def test_bad_config_exits_2(command, text, message, tmp_path, capsys):
     cfg = tmp_path / "c.toml"
-    cfg.write_text(text)
+    cfg.write_bytes(text) if isinstance(text, bytes) else cfg.write_text(text)
     code, _, err = run([command, "--config", cfg, "-o", tmp_path / "x.nc"], capsys)
     assert code == 2
     assert message in err

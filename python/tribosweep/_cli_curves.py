@@ -67,16 +67,22 @@ def _range_arg(text: str) -> tuple[float, float]:
     return lo, hi
 
 
-def _config(path: str | None, valid: set[str], tables: tuple[str, ...]) -> dict:
-    if path is None:
-        return {}
+def read_config(path: str, valid: set[str], tables: tuple[str, ...]) -> tuple[dict, str]:
+    """A ``--config`` TOML file as a dict (top-level keys in ``valid``, ``tables`` tables) and its text.
+
+    Every way the file can be wrong (missing, unreadable, not UTF-8, not TOML, an unknown key, a
+    table that is not one) raises ``ValueError`` naming the file; the CLI prints it in one line.
+    """
     import tomllib
 
     try:
         with open(path, "rb") as f:
-            cfg = tomllib.load(f)
+            text = f.read().decode("utf-8")
+        cfg = tomllib.loads(text)
     except OSError as e:
         raise ValueError(f"--config {path}: {e.strerror or e}") from None
+    except UnicodeDecodeError as e:
+        raise ValueError(f"--config {path}: not UTF-8 text ({e})") from None
     except tomllib.TOMLDecodeError as e:
         raise ValueError(f"--config {path}: not valid TOML ({e})") from None
     unknown = set(cfg) - valid
@@ -85,7 +91,11 @@ def _config(path: str | None, valid: set[str], tables: tuple[str, ...]) -> dict:
     for table in tables:
         if table in cfg and not isinstance(cfg[table], dict):
             raise ValueError(f"--config {path}: [{table}] must be a table")
-    return cfg
+    return cfg, text
+
+
+def _config(path: str | None, valid: set[str], tables: tuple[str, ...]) -> dict:
+    return {} if path is None else read_config(path, valid, tables)[0]
 
 
 def _pick(args, cfg: dict, name: str, default=None):

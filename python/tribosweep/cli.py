@@ -158,28 +158,10 @@ def _floats(text: str) -> float | list[float]:
 def _load_config(path: str) -> tuple[dict, str]:
     """The config file as a dict (checked) and its text (recorded in the output file)."""
     try:
-        import tomllib
-    except ImportError:  # Python 3.10
-        try:
-            import tomli as tomllib
-        except ImportError:
-            raise UsageError("--config needs Python >= 3.11 (tomllib) or the tomli package") from None
-    try:
-        with open(path, "rb") as f:
-            text = f.read().decode("utf-8")
-        cfg = tomllib.loads(text)
-    except OSError as e:
-        raise UsageError(f"--config {path}: {e.strerror or e}") from None
-    except UnicodeDecodeError as e:
-        raise UsageError(f"--config {path}: not UTF-8 text ({e})") from None
-    except tomllib.TOMLDecodeError as e:
-        raise UsageError(f"--config {path}: not valid TOML ({e})") from None
-    unknown = set(cfg) - _CONFIG_KEYS
-    if unknown:
-        raise UsageError(f"--config {path}: unknown keys {sorted(unknown)}; valid keys are {sorted(_CONFIG_KEYS)}")
-    for table in ("axes", "model", "solver", "census", "wear_reference", "dask"):
-        if table in cfg and not isinstance(cfg[table], dict):
-            raise UsageError(f"--config {path}: [{table}] must be a table")
+        tables = ("axes", "model", "solver", "census", "wear_reference", "dask")
+        cfg, text = _cli_curves.read_config(path, _CONFIG_KEYS, tables)
+    except ValueError as e:
+        raise UsageError(str(e)) from None
     unknown = set(cfg.get("solver", {})) - _SOLVER_KEYS
     if unknown:
         raise UsageError(f"--config {path}: unknown [solver] keys {sorted(unknown)}; valid: {sorted(_SOLVER_KEYS)}")
