@@ -216,6 +216,23 @@ impl<'a, const N: usize, S: OdeSystem<N>> Dop853Dense<'a, N, S> {
         Dop853Dense { sys, mode, k, y0, y1, t0, h, cont: OnceCell::new(), extra: Cell::new(0) }
     }
 
+    /// The interpolant of a step from its stages and its three extra stages `k14, k15, k16`
+    /// (computed on the lanes for the hidden-crossing check): no right-hand side is evaluated.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn from_all_stages(
+        sys: &'a S,
+        mode: S::Mode,
+        k: &'a [SVector<f64, N>; 13],
+        extra: &[SVector<f64, N>; 3],
+        y0: &'a SVector<f64, N>,
+        y1: &'a SVector<f64, N>,
+        t0: f64,
+        h: f64,
+    ) -> Self {
+        let cont = OnceCell::from(poly(k, extra, y0, y1, h));
+        Dop853Dense { sys, mode, k, y0, y1, t0, h, cont, extra: Cell::new(0) }
+    }
+
     fn coefficients(&self) -> [SVector<f64, N>; 7] {
         let k = self.k;
         let (t, h, y) = (self.t0, self.h, self.y0);
@@ -250,17 +267,29 @@ impl<'a, const N: usize, S: OdeSystem<N>> Dop853Dense<'a, N, S> {
             self.mode,
         );
         self.extra.set(3);
-        let dy = self.y1 - y;
-        let f1 = k[0] * h - dy;
-        let f2 = dy * 2.0 - (k[0] + k[12]) * h;
-        let stages = [&k[0], &k[5], &k[6], &k[7], &k[8], &k[9], &k[10], &k[11], &k[12], &k14, &k15, &k16];
-        let row = |d: [f64; 12]| weighted(d.map(|x| x * h), stages);
-        let f3 = row([D4_1, D4_6, D4_7, D4_8, D4_9, D4_10, D4_11, D4_12, D4_13, D4_14, D4_15, D4_16]);
-        let f4 = row([D5_1, D5_6, D5_7, D5_8, D5_9, D5_10, D5_11, D5_12, D5_13, D5_14, D5_15, D5_16]);
-        let f5 = row([D6_1, D6_6, D6_7, D6_8, D6_9, D6_10, D6_11, D6_12, D6_13, D6_14, D6_15, D6_16]);
-        let f6 = row([D7_1, D7_6, D7_7, D7_8, D7_9, D7_10, D7_11, D7_12, D7_13, D7_14, D7_15, D7_16]);
-        [dy, f1, f2, f3, f4, f5, f6]
+        poly(k, &[k14, k15, k16], y, self.y1, h)
     }
+}
+
+/// Hairer's `contd8` coefficients of a step of size `h` from `y0` to `y1`, from its stages `k`
+/// (`k[12]`: the derivative at `y1`) and the three extra stages.
+fn poly<const N: usize>(
+    k: &[SVector<f64, N>; 13],
+    [k14, k15, k16]: &[SVector<f64, N>; 3],
+    y0: &SVector<f64, N>,
+    y1: &SVector<f64, N>,
+    h: f64,
+) -> [SVector<f64, N>; 7] {
+    let dy = y1 - y0;
+    let f1 = k[0] * h - dy;
+    let f2 = dy * 2.0 - (k[0] + k[12]) * h;
+    let stages = [&k[0], &k[5], &k[6], &k[7], &k[8], &k[9], &k[10], &k[11], &k[12], k14, k15, k16];
+    let row = |d: [f64; 12]| weighted(d.map(|x| x * h), stages);
+    let f3 = row([D4_1, D4_6, D4_7, D4_8, D4_9, D4_10, D4_11, D4_12, D4_13, D4_14, D4_15, D4_16]);
+    let f4 = row([D5_1, D5_6, D5_7, D5_8, D5_9, D5_10, D5_11, D5_12, D5_13, D5_14, D5_15, D5_16]);
+    let f5 = row([D6_1, D6_6, D6_7, D6_8, D6_9, D6_10, D6_11, D6_12, D6_13, D6_14, D6_15, D6_16]);
+    let f6 = row([D7_1, D7_6, D7_7, D7_8, D7_9, D7_10, D7_11, D7_12, D7_13, D7_14, D7_15, D7_16]);
+    [dy, f1, f2, f3, f4, f5, f6]
 }
 
 impl<const N: usize, S: OdeSystem<N>> Dense<N> for Dop853Dense<'_, N, S> {

@@ -416,8 +416,9 @@ pub(crate) fn dopri5_dense<const C: usize>(comps: &[usize; C], y0: &V6, y1: &V6,
 }
 
 /// The DOP853 interpolant of each lane's step from `y` to `y1`, for the components `comps`: the
-/// three extra stages (three evaluations of `rhs`), then the seven coefficients of each component.
-/// `k1` and `kk` are the stages of [`dop853_step`].
+/// three extra stages (three evaluations of `rhs`, left in `extra` for the cold path's full
+/// interpolant), then the seven coefficients of each component. `k1` and `kk` are the stages of
+/// [`dop853_step`].
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn dop853_dense<F: LaneRhs, const C: usize>(
@@ -428,11 +429,10 @@ pub(crate) fn dop853_dense<F: LaneRhs, const C: usize>(
     k1: &V6,
     hh: &L,
     kk: &[V6; 16],
+    extra: &mut [V6; 3],
 ) -> LaneDense<C> {
     let mut ys = [[0.0; W]; 6];
-    let mut k14 = [[0.0; W]; 6];
-    let mut k15 = [[0.0; W]; 6];
-    let mut k16 = [[0.0; W]; 6];
+    let [k14, k15, k16] = extra;
     let k = |j: usize| &kk[j - 1];
     comb(
         y,
@@ -441,24 +441,24 @@ pub(crate) fn dop853_dense<F: LaneRhs, const C: usize>(
         [k1, k(7), k(8), k(9), k(10), k(11), k(12), k(13)],
         &mut ys,
     );
-    rhs.eval(&ys, &mut k14);
+    rhs.eval(&ys, k14);
     comb(
         y,
         hh,
         [A15_1, A15_6, A15_7, A15_8, A15_11, A15_12, A15_13, A15_14],
-        [k1, k(6), k(7), k(8), k(11), k(12), k(13), &k14],
+        [k1, k(6), k(7), k(8), k(11), k(12), k(13), &*k14],
         &mut ys,
     );
-    rhs.eval(&ys, &mut k15);
+    rhs.eval(&ys, k15);
     comb(
         y,
         hh,
         [A16_1, A16_6, A16_7, A16_8, A16_9, A16_13, A16_14, A16_15],
-        [k1, k(6), k(7), k(8), k(9), k(13), &k14, &k15],
+        [k1, k(6), k(7), k(8), k(9), k(13), &*k14, &*k15],
         &mut ys,
     );
-    rhs.eval(&ys, &mut k16);
-    let st = [k1, k(6), k(7), k(8), k(9), k(10), k(11), k(12), k(13), &k14, &k15, &k16];
+    rhs.eval(&ys, k16);
+    let st = [k1, k(6), k(7), k(8), k(9), k(10), k(11), k(12), k(13), &*k14, &*k15, &*k16];
     let rows = [
         [D4_1, D4_6, D4_7, D4_8, D4_9, D4_10, D4_11, D4_12, D4_13, D4_14, D4_15, D4_16],
         [D5_1, D5_6, D5_7, D5_8, D5_9, D5_10, D5_11, D5_12, D5_13, D5_14, D5_15, D5_16],

@@ -74,6 +74,8 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
     // Stages of the step: DP5's k2..k7, DOP853's (see `ode::lanes::dop853_step`).
     let mut k = [[zero; 6]; 6];
     let mut kk = [[zero; 6]; 16];
+    // DOP853's three extra stages of the interpolant (unilateral: built on the lanes every step).
+    let mut extra = [[zero; 6]; 3];
     let mut yn = [zero; 6];
     let mut fzl = zero;
     let mut fzl_scratch = zero;
@@ -182,7 +184,7 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
                     ln.n_extra[l] += 3 * ok[l] as u64;
                 }
                 let mut f = SliderRhs::<UNI, COUL> { c, contact: cm, fzl: &mut fzl_scratch };
-                dop853_dense(&mut f, &EV_COMPS, y, &yn, k1, &hh, &kk)
+                dop853_dense(&mut f, &EV_COMPS, y, &yn, k1, &hh, &kk, &mut extra)
             } else {
                 dopri5_dense(&EV_COMPS, y, &yn, [k1, &k[1], &k[2], &k[3], &k[4], &k[5]], &hh)
             };
@@ -313,28 +315,19 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
 
         // ---- the cold path: events, observers, the end of a run ----
         if attn.iter().any(|&a| a) {
-            let stages: [&V6; 13] = if M8 {
-                let mut a = [&ln.f; 13];
-                for j in 1..13 {
-                    a[j] = &kk[j];
-                }
-                a
-            } else {
-                [&ln.f, &k[0], &k[1], &k[2], &k[3], &k[4], &k[5], &k[5], &k[5], &k[5], &k[5], &k[5], &k[5]]
-            };
-            let ks: [[State; 13]; W] = std::array::from_fn(|l| {
-                if attn[l] {
-                    std::array::from_fn(|j| lane_state(stages[j], l))
-                } else {
-                    [State::zeros(); 13]
-                }
-            });
             for l in 0..W {
                 if !attn[l] {
                     continue;
                 }
                 let y0 = lane_state(&ln.y, l);
                 let y1 = lane_state(&yn, l);
+                // This lane's stages (DP5 uses the first seven): k1 = f(y0), then the attempt's.
+                let k1l = lane_state(&ln.f, l);
+                let ks: [State; 13] = std::array::from_fn(|j| match j {
+                    0 => k1l,
+                    _ if M8 => lane_state(&kk[j], l),
+                    _ => lane_state(&k[(j - 1).min(5)], l),
+                });
                 let g0: [f64; MAX_EVENTS] = std::array::from_fn(|e| if e < NE { ln.g0[e][l] } else { 0.0 });
                 let g1l: [f64; MAX_EVENTS] = std::array::from_fn(|e| if e < NE { g1[e][l] } else { 0.0 });
                 let ln_ref = &mut ln;
@@ -348,12 +341,19 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
                 }
                 let span = ((t_start[l], &y0), (t_new[l], &y1));
                 let ev: StepEnd<6, ContactMode> = if M8 {
-                    let dense = Dop853Dense::from_stages(sd.s, sd.mode, &ks[l], &y0, &y1, t_start[l], hh[l]);
+                    let dense = if UNI {
+                        // The lanes built the interpolant's extra stages for the hidden-crossing
+                        // check (and counted them): reuse them.
+                        let ext = [lane_state(&extra[0], l), lane_state(&extra[1], l), lane_state(&extra[2], l)];
+                        Dop853Dense::from_all_stages(sd.s, sd.mode, &ks, &ext, &y0, &y1, t_start[l], hh[l])
+                    } else {
+                        Dop853Dense::from_stages(sd.s, sd.mode, &ks, &y0, &y1, t_start[l], hh[l])
+                    };
                     let ev = cold_step(sd, &dense, busy[l], span, &g0, &g1l);
                     sd.stats.n_rhs += dense.extra_rhs();
                     ev
                 } else {
-                    let k7s: &[State; 7] = ks[l][..7].try_into().expect("seven stages");
+                    let k7s: &[State; 7] = ks[..7].try_into().expect("seven stages");
                     let dense = Dopri5Dense::from_stages(k7s, &y0, &y1, t_start[l], hh[l]);
                     cold_step(sd, &dense, busy[l], span, &g0, &g1l)
                 };
