@@ -1,5 +1,6 @@
 """Shared fixtures: the seed reference values of ../shared/reference/seed_values.json; the pixel size of a
-PNG file and the Figures behind the images a function saves (to check a chart's content, not its bytes)."""
+PNG file and the Figures behind the images a function saves (to check a chart's content, not its bytes);
+which of the seed census's first samples keep their fate under inputs moved by a few ulps."""
 
 from __future__ import annotations
 
@@ -12,6 +13,46 @@ import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 _CANDIDATES = [ROOT / "tests" / "data" / "seed_values.json", ROOT.parent / "shared" / "reference" / "seed_values.json"]
+
+
+#: Moves of the inputs under which a single-trajectory verdict must hold (tests/test_robustness.py).
+ULPS = (1, -1, 2, -2)
+RTOL_FACTORS = (1.01, 0.99)
+
+
+def moved(x, k: int) -> np.ndarray:
+    """``x`` moved by ``k`` ulps (every component, towards +inf for k > 0)."""
+    x = np.asarray(x, dtype=np.float64)
+    for _ in range(abs(k)):
+        x = np.nextafter(x, np.inf if k > 0 else -np.inf)
+    return x
+
+
+@pytest.fixture(scope="session")
+def seed_census_fates():
+    """The attractor each of the seed census's first 16 samples reaches, and whether that fate is robust.
+
+    A sample's fate is robust when it is the same with its start moved by +-1 and +-2 ulps and
+    with rtol moved by +-1 %. Some starts are not: their bouncing transient is chaotic, two runs
+    apart by rounding separate at about 75 1/s, and their fate is a coin toss that another CPU's
+    libm decides differently. Tests that compare fates one by one compare the robust ones only.
+    """
+    import tribosweep as ts
+    from tribosweep import _census
+
+    m, k = ts.SliderModel(contact="unilateral"), 16
+    ref = ts.census(m, samples=k).attractor_reached.values
+    robust = np.ones(k, dtype=bool)
+    orig = _census.starts
+    try:
+        for u in ULPS:
+            _census.starts = lambda *a, u=u, **kw: moved(orig(*a, **kw), u)
+            robust &= ts.census(m, samples=k).attractor_reached.values == ref
+    finally:
+        _census.starts = orig
+    for f in RTOL_FACTORS:
+        robust &= ts.census(m, samples=k, rtol=1e-8 * f).attractor_reached.values == ref
+    return ref, robust
 
 
 @pytest.fixture(scope="session")

@@ -14,17 +14,7 @@ import numpy as np
 import pytest
 
 import tribosweep as ts
-
-ULPS = (1, -1, 2, -2)
-RTOL_FACTORS = (1.01, 0.99)
-
-
-def moved(x, k: int) -> np.ndarray:
-    """``x`` moved by ``k`` ulps (every component, towards +inf for k > 0)."""
-    x = np.asarray(x, dtype=np.float64)
-    for _ in range(abs(k)):
-        x = np.nextafter(x, np.inf if k > 0 else -np.inf)
-    return x
+from conftest import RTOL_FACTORS, ULPS, moved
 
 
 def ulp_family(y0, mu):
@@ -112,23 +102,14 @@ def test_census_early_stop_point_returns_for_every_sample():
         assert ds.basin_stability.item() == 1.0
 
 
-def test_census_samples_compared_with_scipy_keep_their_fate():
+def test_most_census_samples_compared_with_scipy_keep_their_fate(seed_census_fates):
     # test_census.py::test_labels_agree_with_an_independent_scipy_classification compares the fates
-    # of the seed census's first 16 samples one by one, so each must be robust: the same attractor
-    # with every start moved by +-1 and +-2 ulps and with rtol moved by 1 %. (About 8 % of the seed's
-    # starts are not: their bouncing transient is chaotic, two runs apart by rounding separate at
-    # about 75 1/s, and their fate is a coin toss; samples 16, 36, 45, 48 and 61 of 64 when written.
-    # That is why the census reports fractions.)
-    from tribosweep import _census
-
-    m, k = ts.SliderModel(contact="unilateral"), 16
-    ref = ts.census(m, samples=k).attractor_reached.values
-    orig = _census.starts
-    try:
-        for u in ULPS:
-            _census.starts = lambda *a, u=u, **kw: moved(orig(*a, **kw), u)
-            np.testing.assert_array_equal(ts.census(m, samples=k).attractor_reached.values, ref, err_msg=f"{u} ulps")
-    finally:
-        _census.starts = orig
-    for f in RTOL_FACTORS:
-        np.testing.assert_array_equal(ts.census(m, samples=k, rtol=1e-8 * f).attractor_reached.values, ref)
+    # of the seed census's first 16 samples one by one, the robust ones only (conftest's
+    # seed_census_fates: the same attractor with every start moved by +-1 and +-2 ulps and rtol by
+    # 1 %). About 8 % of the seed's starts are not robust (a chaotic bouncing transient decides
+    # them; that is why the census reports fractions): 1 of the first 16 when written. The
+    # comparison needs most of them, and at least one start of each attractor among them.
+    ref, robust = seed_census_fates
+    assert robust.sum() >= 12, (ref, robust)
+    names = {ts.ATTRACTOR_NAMES[a] for a in ref[robust]}
+    assert {"sliding", "cycle"} <= names, (ref, robust)

@@ -91,6 +91,7 @@ def ensemble(
     max_steps: int | None = None,
     max_events: int | None = None,
     decay_amplitudes: npt.NDArray[np.float64] | None = None,
+    watch_x: bool = True,
 ) -> dict[str, Any]: ...
 def linear_stability(
     base: dict[str, float],

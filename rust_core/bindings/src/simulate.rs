@@ -107,12 +107,13 @@ fn with_reasons(out: Vec<Result<TrajectoryResult, String>>, steady: bool) -> Vec
 }
 
 /// Many trajectories in parallel (GIL released). `kind` is "final" (end state), "sampled"
-/// (states at `t_eval`) or "steady" (run to steady state and summarise; `t_end` is then `t_max`).
+/// (states at `t_eval`) or "steady" (run to steady state and summarise; `t_end` is then `t_max`;
+/// `watch_x=False`: the settling tests ignore `x, xd`, slaved under constant friction).
 /// The core picks the path (lane-batched or scalar) and the grouping; results do not depend on it
 /// beyond integration accuracy, nor on the thread count at all. Every non-success status has a
 /// reason; Ctrl-C stops every thread (`KeyboardInterrupt`, the results are dropped).
 #[pyfunction]
-#[pyo3(signature = (base, contact, friction_law, names, values, y0, t_end, method, rtol, *, atol=None, t_eval=None, threads=None, kind="final", periodic_tol=1e-5, decay_amplitude=None, n_fourier=512, max_steps=None, max_events=None, decay_amplitudes=None))]
+#[pyo3(signature = (base, contact, friction_law, names, values, y0, t_end, method, rtol, *, atol=None, t_eval=None, threads=None, kind="final", periodic_tol=1e-5, decay_amplitude=None, n_fourier=512, max_steps=None, max_events=None, decay_amplitudes=None, watch_x=true))]
 #[allow(clippy::too_many_arguments)]
 fn ensemble<'py>(
     py: Python<'py>,
@@ -135,6 +136,7 @@ fn ensemble<'py>(
     max_steps: Option<u64>,
     max_events: Option<u64>,
     decay_amplitudes: Option<PyReadonlyArray1<'py, f64>>,
+    watch_x: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let call = Call::rows(py, &base, contact, friction_law, &names, &values, threads)?;
     let n = call.len();
@@ -174,6 +176,7 @@ fn ensemble<'py>(
                 periodic_tol,
                 decay_amplitude,
                 n_fourier,
+                watch_x,
                 ..SteadyOptions::default()
             };
             let task = Task::Steady { opts: &opts, decay: decays.as_deref() };
