@@ -32,7 +32,11 @@ What each sample reaches (``ATTRACTOR_NAMES``)
     left out of the fractions.
 
 Early stops
-    A cycle stops once its section state has repeated to ``periodic_tol`` twice. A sample at a
+    A cycle stops once its section state has repeated to ``periodic_tol`` twice. Under constant
+    friction the test compares ``(z, zd, phi, phid)`` only: ``x`` and ``xd`` are slaved (nothing in
+    the ``z`` and ``phi`` equations depends on them), so they cannot change which attractor is
+    reached, while their own ring-down (``zeta_x omega_x``, about 1 1/s) would hold a cycle's
+    recognition back by some 10 s. The same holds for the decay test. A sample at a
     stable point with a saddle cycle of amplitude ``A1`` stops as ``sliding`` once its motion (every
     component, in units of its characteristic size) is below ``min(0.2 A1, 0.5 |z_st|)`` and
     shrinking: the pin is then on the disk, the law is the smooth bilateral one, and the motion
