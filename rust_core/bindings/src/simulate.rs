@@ -108,7 +108,7 @@ fn with_reasons(out: Vec<Result<TrajectoryResult, String>>, steady: bool) -> Vec
 
 /// Many trajectories in parallel (GIL released). `kind` is "final" (end state), "sampled"
 /// (states at `t_eval`) or "steady" (run to steady state and summarise; `t_end` is then `t_max`;
-/// `watch_x=False`: the settling tests ignore `x, xd`, slaved under constant friction).
+/// `watch_x=False`: the settling tests ignore `x, xd` where they are slaved, under constant friction).
 /// The core picks the path (lane-batched or scalar) and the grouping; results do not depend on it
 /// beyond integration accuracy, nor on the thread count at all. Every non-success status has a
 /// reason; Ctrl-C stops every thread (`KeyboardInterrupt`, the results are dropped).

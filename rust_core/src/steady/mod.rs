@@ -315,11 +315,12 @@ pub struct SteadyOptions {
     pub decay_window: usize,
     /// Uniform samples per period for the Fourier integrals.
     pub n_fourier: usize,
-    /// Whether the repetition and decay tests look at `x` and `xd`. Under constant friction they
-    /// are slaved: nothing in the `z` and `phi` equations depends on them, so the attractor of the
-    /// motion is decided in `(z, zd, phi, phid)` alone while `x` still rings down at its own light
-    /// damping (`zeta_x omega_x`, about 1 1/s: some 12 s to a 1e-5 repetition). The census, which
-    /// asks which attractor, turns this off there; runs that report `x`'s amplitude keep it.
+    /// Whether the repetition and decay tests look at `x` and `xd` where they are slaved. Under
+    /// constant friction nothing in the `z` and `phi` equations depends on them, so the attractor
+    /// of the motion is decided in `(z, zd, phi, phid)` alone while `x` still rings down at its own
+    /// light damping (`zeta_x omega_x`, about 1 1/s: some 12 s to a 1e-5 repetition). The census,
+    /// which asks which attractor, turns this off; runs that report `x`'s amplitude keep it. Under
+    /// a speed-dependent law `x` acts back through the sliding velocity and is always watched.
     pub watch_x: bool,
 }
 
@@ -466,7 +467,7 @@ impl SectionWatcher {
             decayed: false,
             matches_in_row: [0; MAX_MULTIPLICITY + 1],
             sizes: characteristic_sizes(s),
-            comps: if opts.watch_x { &ALL } else { &NOT_X },
+            comps: if opts.watch_x || s.p.friction_law != FrictionLaw::Constant { &ALL } else { &NOT_X },
         }
     }
 

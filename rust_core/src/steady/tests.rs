@@ -18,3 +18,16 @@ fn characteristic_sizes_follow_static_point() {
     assert!((c[4] - 16.5612e-6 / 0.065).abs() < 1e-8);
     let _ = Params::seed();
 }
+
+#[test]
+fn x_is_left_out_of_the_settling_tests_only_where_it_is_slaved() {
+    let off = SteadyOptions { watch_x: false, ..SteadyOptions::default() };
+    let constant = Slider::seed();
+    assert_eq!(SectionWatcher::new(&off, &constant).comps, &NOT_X[..]);
+    assert_eq!(SectionWatcher::new(&SteadyOptions::default(), &constant).comps, &ALL[..]);
+    // Speed-dependent friction: x acts back through the sliding velocity, so it is always watched.
+    for law in [FrictionLaw::Coulomb, FrictionLaw::Switch] {
+        let s = Slider::new(Params { friction_law: law, mu_static: 0.3, ..Params::seed() }).unwrap();
+        assert_eq!(SectionWatcher::new(&off, &s).comps, &ALL[..], "{law:?}");
+    }
+}
