@@ -16,6 +16,7 @@ import xarray as xr
 
 import tribosweep as ts
 from tribosweep import cli
+from tribosweep._curves import _ARM_END_BISECTIONS
 
 SEED = ts.SliderModel(contact="bilateral")
 SEED_U = ts.SliderModel(contact="unilateral")
@@ -176,16 +177,24 @@ def test_the_sweep_stores_the_fold_and_grazing_curves_of_the_api(unilateral_swee
         np.testing.assert_allclose(ds.fold_normal_load.values, api.normal_load.values, rtol=1e-12)
         np.testing.assert_allclose(ds.fold_arm_length.values, api.arm_length.values, rtol=1e-12)
         # The curve spans the Hopf curve's arm lengths in the box: from where it leaves the load
-        # window (above 0.05 m) to where the Hopf curve leaves the box at 10 N.
+        # window (above 0.05 m) to where the Hopf curve leaves the box at 10 N. At that arm length
+        # the Hopf point sits on the window's bound, so whether the last slice finds it is a matter
+        # of the last bit (it does on some CPUs, not on others); either way the end is located by
+        # bisection to 1/2^_ARM_END_BISECTIONS of a slice spacing, which is what is asserted.
         assert y_high == ds.hopf_arm_length.values.max()
-        assert ds.fold_normal_load.values[0] > 145.0 and ds.fold_arm_length.values[-1] == y_high
+        spacing = (y_high - 0.05) / (12 - 1)
+        assert ds.fold_normal_load.values[0] > 145.0
+        assert 0.0 <= y_high - ds.fold_arm_length.values[-1] <= spacing / 2**_ARM_END_BISECTIONS * (1 + 1e-9)
     # Plain shooting at two points of the stored grazing curve, bilateral law, from the orbit that the
     # one-parameter branch locates there: the top of the orbit touches the disk (shooting converges to
     # a scaled residual of 1e-9 of |z_st|; 1e-11 m is 1e-6 of |z_st|).
     with xr.open_dataset(unilateral_sweep) as ds:
         for i in (1, ds.sizes["grazing_point"] - 2):
             load, arm = float(ds.grazing_normal_load[i]), float(ds.grazing_arm_length[i])
-            m = ts.apparatus_model(84.46, arm, 0.46)
+            # The bilateral law, as the grazing curve is computed: at the grazing point the two laws'
+            # orbits coincide, and the bilateral flow has no grazing singularity (unilateral shooting
+            # converges there or not with the last bit: seen on an AMD EPYC at 146.9 N).
+            m = ts.apparatus_model(84.46, arm, 0.46).replace(contact="bilateral")
             b = ts.branch(m, "normal_load", 150.0, from_hopf=True, bounds=(10.0, 150.0), stop_at="grazing")
             assert abs(float(b.parameter[-1]) - load) < LOCATED_N
             m = m.replace(normal_load=load)
