@@ -173,15 +173,21 @@ pub(crate) fn cross(a: f64, b: f64) -> bool {
 /// `out = y + h (a_1 k_1 + ... + a_K k_K)` on the lanes.
 #[inline(always)]
 pub(crate) fn comb<const K: usize>(y: &V6, hh: &L, a: [f64; K], ks: [&V6; K], out: &mut V6) {
-    for i in 0..6 {
-        for l in 0..W {
-            let mut s = 0.0;
-            for j in 0..K {
-                s += a[j] * ks[j][i][l];
+    // Stage by stage over whole lane rows (the sum of each lane in the same order, `0 + a_1 k_1 +
+    // ... + a_K k_K`): with the stage loop innermost, LLVM vectorised the sum across stages with
+    // gathers, and DOP853's attempt cost 15x DP5's instead of about 2x.
+    each6!(i, {
+        let mut s = [0.0; W];
+        for j in 0..K {
+            let (aj, kj) = (a[j], &ks[j][i]);
+            for l in 0..W {
+                s[l] += aj * kj[l];
             }
-            out[i][l] = y[i][l] + hh[l] * s;
         }
-    }
+        for l in 0..W {
+            out[i][l] = y[i][l] + hh[l] * s[l];
+        }
+    });
 }
 
 /// One Dormand–Prince 5(4) attempt on the lanes from `y` with first stage `k1` and step sizes
@@ -314,22 +320,26 @@ pub(crate) fn dop853_step<F: LaneRhs>(
     comb(y, hh, [A13_1, A13_6, A13_7, A13_8, A13_9, A13_10, A13_11, A13_12], used, yn);
     let mut s5 = [0.0; W];
     let mut s3 = [0.0; W];
-    for i in 0..6 {
-        for l in 0..W {
-            let mut e5 = 0.0;
-            let mut e3 = 0.0;
-            let er = [ER_1, ER_6, ER_7, ER_8, ER_9, ER_10, ER_11, ER_12];
-            let e3c = [E3_1, A13_6, A13_7, A13_8, E3_9, A13_10, A13_11, E3_12];
-            for j in 0..8 {
-                e5 += er[j] * used[j][i][l];
-                e3 += e3c[j] * used[j][i][l];
+    let er = [ER_1, ER_6, ER_7, ER_8, ER_9, ER_10, ER_11, ER_12];
+    let e3c = [E3_1, A13_6, A13_7, A13_8, E3_9, A13_10, A13_11, E3_12];
+    each6!(i, {
+        // Row by row, as in `comb`.
+        let mut e5 = [0.0; W];
+        let mut e3 = [0.0; W];
+        for j in 0..8 {
+            let (a5, a3, kj) = (er[j], e3c[j], &used[j][i]);
+            for l in 0..W {
+                e5[l] += a5 * kj[l];
+                e3[l] += a3 * kj[l];
             }
+        }
+        for l in 0..W {
             let sk = atol[i][l] + rtol * y[i][l].abs().max(yn[i][l].abs());
-            let (q5, q3) = (e5 / sk, e3 / sk);
+            let (q5, q3) = (e5[l] / sk, e3[l] / sk);
             s5[l] += q5 * q5;
             s3[l] += q3 * q3;
         }
-    }
+    });
     rhs.eval(yn, &mut t);
     kk[12] = t;
     let mut err = [0.0; W];
@@ -474,13 +484,17 @@ pub(crate) fn dop853_dense<F: LaneRhs, const C: usize>(
             d.c[0][j][l] = dy;
             d.c[1][j][l] = k1[i][l] * h - dy;
             d.c[2][j][l] = dy * 2.0 - (k1[i][l] + k(13)[i][l]) * h;
-            for (r, row) in rows.iter().enumerate() {
-                let mut s = 0.0;
-                for m in 0..12 {
-                    s += (row[m] * h) * st[m][i][l];
+        }
+        // Row by row, as in `comb`.
+        for (r, row) in rows.iter().enumerate() {
+            let mut s = [0.0; W];
+            for m in 0..12 {
+                let (a, km) = (row[m], &st[m][i]);
+                for l in 0..W {
+                    s[l] += (a * hh[l]) * km[l];
                 }
-                d.c[3 + r][j][l] = s;
             }
+            d.c[3 + r][j] = s;
         }
     }
     d
