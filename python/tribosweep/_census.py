@@ -37,11 +37,13 @@ Early stops
     the ``z`` and ``phi`` equations depends on them), so they cannot change which attractor is
     reached, while their own ring-down (``zeta_x omega_x``, about 1 1/s) would hold a cycle's
     recognition back by some 10 s. The same holds for the decay test. A sample at a
-    stable point with a saddle cycle of amplitude ``A1`` stops as ``sliding`` once its motion (every
-    component, in units of its characteristic size) is below ``min(0.2 A1, 0.5 |z_st|)`` and
-    shrinking: the pin is then on the disk, the law is the smooth bilateral one, and the motion
-    is well inside the saddle cycle that bounds sliding's basin in the normal-form (centre-manifold)
-    picture of the subcritical Hopf point. This is not a proof for the full 6-D state; the strict
+    stable point with a saddle cycle stops as ``sliding`` once its motion is below
+    ``RETURN_FRACTION`` (0.2) of the saddle's own first-harmonic amplitude in every component
+    (``A1`` for z, ``omega A1`` for zd, ``phi1`` for phi...; capped at ``|z_st|/2`` in z) and
+    shrinking (the largest over a window of 8 sections below the 8 before): the pin is then on the
+    disk, the law is the smooth bilateral one, and the motion is well inside the saddle cycle that
+    bounds sliding's basin in the normal-form (centre-manifold) picture of the subcritical Hopf
+    point (:func:`return_thresholds`). This is not a proof for the full 6-D state; the strict
     quadratic-Lyapunov ball of the linearisation is about a thousand times smaller at the seed
     (the torsion mode's damping margin is 0.33 1/s against nonlinear rates of order
     ``K_a |z| / (m w)``), so it would not stop anything earlier.
@@ -315,7 +317,7 @@ def run(
     threads: int | None,
     eigenvalues: np.ndarray,
     linear_frequency: np.ndarray,
-    saddle_a1: np.ndarray | None = None,
+    saddle: np.ndarray | None = None,
     cycle_tol: float = CYCLE_TOL,
 ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
     """Census of the points ``sel`` of a chunk: one batched call for every sample of every point.
@@ -324,8 +326,9 @@ def run(
     ----------
     eigenvalues, linear_frequency : arrays over ``sel``
         The core's eigenvalues ``(m, 6)`` and the least stable mode's frequency of each point.
-    saddle_a1 : array over ``sel``, m, optional
-        The saddle cycle's A1 at stable points (NaN elsewhere): sets the early return to sliding.
+    saddle : array ``(m, 6)`` over ``sel``, optional
+        The saddle cycle's first-harmonic amplitude in each component (:func:`saddle_row`) at
+        stable points (NaN elsewhere): sets the early return to sliding (:func:`return_thresholds`).
 
     Returns
     -------
@@ -343,18 +346,13 @@ def run(
     sub = {k: np.asarray(full[k])[sel] for k in full}
     y0 = starts(sub, friction_law, samples, scale, eigenvalues)  # (m, K, 6)
     values = np.column_stack([np.asarray(point_params[k], dtype=np.float64)[sel] for k in names])
-    z_abs = np.abs(_static(sub)[0])
-    decay = 1e-3 * z_abs
-    if saddle_a1 is not None:
-        a1 = np.asarray(saddle_a1, dtype=np.float64)
-        known = np.isfinite(a1)
-        decay = np.where(known, np.maximum(decay, np.minimum(RETURN_FRACTION * np.where(known, a1, 0.0), 0.5 * z_abs)),
-                         decay)  # fmt: skip
+    decay = return_thresholds(sub, saddle)
     res = _core.ensemble(
         {k: float(v) for k, v in model_values.items()}, contact, friction_law, names,
         np.repeat(values, samples, axis=0), np.ascontiguousarray(y0.reshape(m * samples, 6)), float(t_max),
         integrator, float(rtol), atol=None if atol is None else np.asarray(atol, dtype=np.float64), threads=threads,
-        kind="steady", periodic_tol=float(periodic_tol), n_fourier=512, decay_amplitudes=np.repeat(decay, samples),
+        kind="steady", periodic_tol=float(periodic_tol), n_fourier=512,
+        decay_thresholds=np.ascontiguousarray(np.repeat(decay, samples, axis=0)),
         watch_x=False,  # x is left out only where it is slaved (constant friction); the core decides
     )  # fmt: skip
     outcome = np.asarray(res["outcome"]).reshape(m, samples)
@@ -406,6 +404,44 @@ def run(
     return out, per_sample
 
 
+def characteristic_sizes(v: Mapping[str, np.ndarray]) -> np.ndarray:
+    """The core's characteristic sizes ``(n, 6)`` of the state: ``|z_st|`` for z and x, ``|z_st|/L`` for phi, times ``omega_t`` for rates."""
+    z = np.abs(_static(v)[0])
+    phi = z / v["moment_arm"]
+    w = v["omega_torsion"]
+    return np.column_stack([z, z * w, z, z * w, phi, phi * w])
+
+
+def saddle_row(df: Mapping[str, np.ndarray], j: int, k: int) -> np.ndarray:
+    """First-harmonic amplitudes ``[A1, w A1, x1, w x1, phi1, w phi1]`` of root ``k`` of point ``j`` of a describing-function result."""
+    w, a1 = df["omega"][j, k], df["A1"][j, k]
+    x1, p1 = df["x1_amplitude"][j, k], df["phi1_amplitude"][j, k]
+    return np.array([a1, w * a1, x1, w * x1, p1, w * p1], dtype=np.float64)
+
+
+def return_thresholds(v: Mapping[str, np.ndarray], saddle: np.ndarray | None) -> np.ndarray:
+    """Per-component amplitudes ``(n, 6)`` below which a shrinking census sample counts as returned to sliding.
+
+    ``RETURN_FRACTION`` of the saddle cycle's own first-harmonic amplitude in every component
+    (capped so that ``|z|`` stays below ``|z_st|/2``: the pin on the disk), never below the plain
+    decay test (``1e-3`` of the characteristic sizes); the plain decay test where no saddle is known.
+    Measured in the saddle's own shape, not in characteristic sizes: at the seed the saddle's phi
+    amplitude is 9 ``|z_st|/L`` against A1 = 1.3 ``|z_st|``, so a common size scale demanded a
+    torsion motion 7x smaller than intended and kept returning samples running for about 5 s
+    longer (decaying at 0.33 1/s).
+    """
+    sizes = characteristic_sizes(v)
+    plain = 1e-3 * sizes
+    if saddle is None:
+        return plain
+    sad = np.asarray(saddle, dtype=np.float64).reshape(-1, 6)
+    known = np.all(np.isfinite(sad) & (sad > 0), axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        f = np.minimum(RETURN_FRACTION, 0.5 * sizes[:, 0] / np.where(known, sad[:, 0], 1.0))
+    thr = np.where(known[:, None], f[:, None] * np.where(known[:, None], sad, 0.0), 0.0)
+    return np.maximum(thr, plain)
+
+
 def failed_reason(per_sample: Mapping[str, np.ndarray], i: int) -> str:
     """Why every sample of point ``i`` failed (the first sample's status and reason)."""
     st = int(per_sample["status"][i, 0])
@@ -414,14 +450,14 @@ def failed_reason(per_sample: Mapping[str, np.ndarray], i: int) -> str:
     return f"census: every disturbance failed (status {name}{': ' + detail if detail else ''})"
 
 
-def saddle_amplitude(base: Mapping[str, float], friction_law: str, names, values: np.ndarray, stable: np.ndarray,
-                     threads: int | None, grid: int = 1000) -> np.ndarray:
-    """A1 [m] of the describing function's physical root (the saddle cycle) at the stable points, NaN elsewhere.
+def saddle_amplitudes(base: Mapping[str, float], friction_law: str, names, values: np.ndarray, stable: np.ndarray,
+                      threads: int | None, grid: int = 1000) -> np.ndarray:
+    """The describing function's physical root (the saddle cycle) at the stable points: :func:`saddle_row` ``(n, 6)``, NaN elsewhere.
 
     The same call as the sweep's describing-function stage, so a point's census is the same in a
     sweep and alone.
     """  # fmt: skip
-    a1 = np.full(values.shape[0], np.nan)
+    out = np.full((values.shape[0], 6), np.nan)
     sel = np.flatnonzero(stable)
     if sel.size:
         df = _core.describing_function(dict(base), "bilateral", friction_law, list(names), values[sel],
@@ -429,8 +465,8 @@ def saddle_amplitude(base: Mapping[str, float], friction_law: str, names, values
         for j, i in enumerate(sel):
             k = np.flatnonzero(df["physical"][j] == 1)
             if df["status"][j] == STATUS["success"] and k.size:
-                a1[i] = df["A1"][j, k[0]]
-    return a1
+                out[i] = saddle_row(df, j, k[0])
+    return out
 
 
 def census(
@@ -509,12 +545,12 @@ def census(
     values = np.array([[base["normal_load"]]])
     lin = _core.linear_stability(base, model.contact, model.friction_law, names, values, threads=threads)
     stable = np.asarray(lin["stable"], dtype=bool)
-    a1 = saddle_amplitude(base, model.friction_law, names, values, stable, threads)
+    sad = saddle_amplitudes(base, model.friction_law, names, values, stable, threads)
     res, per = run(
         base, model.contact, model.friction_law, {"normal_load": values[:, 0]}, np.array([0]), samples=int(samples),
         scale=scale, t_max=t_max, integrator=integrator, rtol=rtol, atol=None, periodic_tol=periodic_tol,
         threads=threads, eigenvalues=np.asarray(lin["eigenvalues"]), linear_frequency=lin["linear_frequency"],
-        saddle_a1=a1, cycle_tol=cycle_tol,
+        saddle=sad, cycle_tol=cycle_tol,
     )  # fmt: skip
     from ._simulate import STATE_VARS
 
@@ -544,7 +580,8 @@ def census(
     attrs = {f"model_{k}": v for k, v in base.items()}
     attrs.update(model_contact=model.contact, model_friction_law=model.friction_law, samples=int(samples),
                  disturbance_scale=scale, t_max=t_max, integrator=integrator, rtol=rtol, periodic_tol=periodic_tol,
-                 cycle_tol=cycle_tol, sliding_stable=int(stable[0]), saddle_a1=float(a1[0]),
+                 cycle_tol=cycle_tol, sliding_stable=int(stable[0]), saddle_a1=float(sad[0, 0]),
+                 saddle_phi1=float(sad[0, 4]),
                  disturbances="y0 = Re(a_t e^(i theta_t) v_t + a_n e^(i theta_n) v_n), v_t, v_n the torsion and normal "
                  "modes with z = 1, a uniform in [0, disturbance_scale |z_st|), theta uniform in [0, 2 pi); a Halton "
                  "sequence shifted by a hash of the model's parameters")  # fmt: skip

@@ -92,6 +92,7 @@ def ensemble(
     max_events: int | None = None,
     decay_amplitudes: npt.NDArray[np.float64] | None = None,
     watch_x: bool = True,
+    decay_thresholds: npt.NDArray[np.float64] | None = None,
 ) -> dict[str, Any]: ...
 def linear_stability(
     base: dict[str, float],

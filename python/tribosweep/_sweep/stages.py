@@ -73,6 +73,9 @@ class Points:
         self.wall = np.zeros(self.n)
         self.to_transient = np.zeros(self.n, dtype=bool)
         self.disturbance = float(np.abs(self.settings.y0[0]))
+        # The physical describing-function root's first-harmonic amplitudes per component
+        # (`_census.saddle_row`): the census's early return to sliding is measured in them.
+        self.saddle = np.full((self.n, 6), np.nan)
 
     @property
     def threads(self) -> int | None:
@@ -187,6 +190,7 @@ def describing_function(p: Points, *, unstable_too: bool, predict_cycles: bool, 
             out["tidf_omega"][i] = df["omega"][j, k[0]]
             out["tidf_a1"][i] = df["A1"][j, k[0]]
             out["tidf_contact_opens"][i] = df["contact_opens"][j, k[0]]
+            p.saddle[i] = _census.saddle_row(df, j, k[0])
         if stable[i]:
             out["decided_by"][i] = DECIDED_BY["tidf"]
             if k.size and p.disturbance * SHOOT_MARGIN >= out["tidf_a1"][i] and escalate:
@@ -428,7 +432,7 @@ def census(p: Points) -> None:
         integrator=it.integrator, rtol=it.rtol, atol=None if it.atol is None else list(it.atol),
         periodic_tol=p.settings.steady.periodic_tol, threads=p.threads,
         eigenvalues=p.eigenvalues[cand], linear_frequency=out["linear_frequency"][cand],
-        saddle_a1=out["tidf_a1"][cand],
+        saddle=p.saddle[cand],
     )  # fmt: skip
     p.charge(cand, t1)
     out["n_rhs"][cand] += per["n_rhs"].sum(axis=1)

@@ -10,7 +10,7 @@ use std::collections::HashMap;
 use tribosweep_core::ensemble::{run as run_ensemble, Settings, Task, TrajectoryResult};
 use tribosweep_core::model::State;
 use tribosweep_core::status::Status;
-use tribosweep_core::steady::{self, RunResult, SteadyOptions, Summary};
+use tribosweep_core::steady::{self, DecayTest, RunResult, SteadyOptions, Summary};
 
 /// One trajectory. Returns a dict: `t` (n,), `y` (n, 6), and the run's status, reason (why the
 /// status is not success, with its numbers; empty for success), counters, extremes. With `t_eval`
@@ -78,18 +78,44 @@ impl Kind {
     }
 }
 
-/// Per-trajectory decay thresholds of the steady kind (they override `decay_amplitude`).
-fn decays(a: Option<PyReadonlyArray1<'_, f64>>, n: usize) -> PyResult<Option<Vec<f64>>> {
-    let Some(a) = a else { return Ok(None) };
-    let v = a.as_slice()?.to_vec();
-    if v.len() != n || v.iter().any(|x| !(x.is_finite() && *x > 0.0)) {
-        return Err(CoreError(format!(
-            "decay_amplitudes must hold {n} finite values > 0 (one per trajectory); got {} values",
-            v.len()
-        ))
-        .into());
+/// Per-trajectory decay tests of the steady kind (they override `decay_amplitude`): an amplitude
+/// of `z` each (`decay_amplitudes`, shape `(n,)`) or thresholds of every component each
+/// (`decay_thresholds`, shape `(n, 6)`), not both.
+fn decays(
+    amplitudes: Option<PyReadonlyArray1<'_, f64>>,
+    thresholds: Option<PyReadonlyArray2<'_, f64>>,
+    n: usize,
+) -> PyResult<Option<Vec<DecayTest>>> {
+    let bad = |x: &f64| !(x.is_finite() && *x > 0.0);
+    match (amplitudes, thresholds) {
+        (None, None) => Ok(None),
+        (Some(_), Some(_)) => {
+            Err(CoreError("decay_amplitudes and decay_thresholds: give one of them, not both".into()).into())
+        }
+        (Some(a), None) => {
+            let v = a.as_slice()?.to_vec();
+            if v.len() != n || v.iter().any(bad) {
+                return Err(CoreError(format!(
+                    "decay_amplitudes must hold {n} finite values > 0 (one per trajectory); got {} values",
+                    v.len()
+                ))
+                .into());
+            }
+            Ok(Some(v.into_iter().map(DecayTest::Amplitude).collect()))
+        }
+        (None, Some(t)) => {
+            let t = t.as_array();
+            if t.shape() != [n, 6] || t.iter().any(bad) {
+                return Err(CoreError(format!(
+                    "decay_thresholds must be an ({n}, 6) array of finite values > 0 (one row per trajectory); \
+                     got shape {:?}",
+                    t.shape()
+                ))
+                .into());
+            }
+            Ok(Some(t.rows().into_iter().map(|r| DecayTest::Thresholds(std::array::from_fn(|c| r[c]))).collect()))
+        }
     }
-    Ok(Some(v))
 }
 
 /// Results with their reasons (the run's failure, or for `steady` the summary's): a trajectory
@@ -113,7 +139,7 @@ fn with_reasons(out: Vec<Result<TrajectoryResult, String>>, steady: bool) -> Vec
 /// beyond integration accuracy, nor on the thread count at all. Every non-success status has a
 /// reason; Ctrl-C stops every thread (`KeyboardInterrupt`, the results are dropped).
 #[pyfunction]
-#[pyo3(signature = (base, contact, friction_law, names, values, y0, t_end, method, rtol, *, atol=None, t_eval=None, threads=None, kind="final", periodic_tol=1e-5, decay_amplitude=None, n_fourier=512, max_steps=None, max_events=None, decay_amplitudes=None, watch_x=true))]
+#[pyo3(signature = (base, contact, friction_law, names, values, y0, t_end, method, rtol, *, atol=None, t_eval=None, threads=None, kind="final", periodic_tol=1e-5, decay_amplitude=None, n_fourier=512, max_steps=None, max_events=None, decay_amplitudes=None, watch_x=true, decay_thresholds=None))]
 #[allow(clippy::too_many_arguments)]
 fn ensemble<'py>(
     py: Python<'py>,
@@ -137,11 +163,12 @@ fn ensemble<'py>(
     max_events: Option<u64>,
     decay_amplitudes: Option<PyReadonlyArray1<'py, f64>>,
     watch_x: bool,
+    decay_thresholds: Option<PyReadonlyArray2<'py, f64>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let call = Call::rows(py, &base, contact, friction_law, &names, &values, threads)?;
     let n = call.len();
     let y0s = y0_rows(&y0.as_array(), n)?;
-    let decays = decays(decay_amplitudes, n)?;
+    let decays = decays(decay_amplitudes, decay_thresholds, n)?;
     let settings =
         Settings { t_end, method: method_from(method)?, tol: tolerances(rtol, atol, max_steps, max_events)?, threads };
     let t_eval: Option<Vec<f64>> = t_eval.map(|a| a.as_slice().map(|s| s.to_vec())).transpose()?;

@@ -34,7 +34,7 @@ use crate::parallel::par_map_or;
 use crate::model::{ContactMode, ContactModel, FrictionLaw, Slider, State};
 use crate::ode::{Control, Method, Observer};
 use crate::status::{Failure, Status};
-use crate::steady::{self, RunResult, SteadyOptions, Summary, Tolerances};
+use crate::steady::{self, DecayTest, RunResult, SteadyOptions, Summary, Tolerances};
 
 /// What each trajectory of an ensemble computes.
 #[derive(Clone, Copy, Debug)]
@@ -46,8 +46,8 @@ pub enum Task<'a> {
     Sampled(&'a [f64]),
     /// A run to a steady state and its summary, as `steady::run_to_steady`: `opts` carries the
     /// method, the tolerances and `t_max` (the settings' `t_end`, `method` and `tol` are not
-    /// used). `decay`: a decay amplitude per trajectory that overrides `opts.decay_amplitude`.
-    Steady { opts: &'a SteadyOptions, decay: Option<&'a [f64]> },
+    /// used). `decay`: a decay test per trajectory that overrides `opts`' (`DecayTest`).
+    Steady { opts: &'a SteadyOptions, decay: Option<&'a [DecayTest]> },
     /// The end state and every located event `(index, time)`: for tests and diagnostics.
     Events,
 }
@@ -251,7 +251,7 @@ fn scalar(
         }
         Task::Steady { opts, decay } => {
             let o = match decay {
-                Some(d) => SteadyOptions { decay_amplitude: Some(d[i]), ..*opts },
+                Some(d) => d[i].apply(opts),
                 None => *opts,
             };
             let sum = steady::run_to_steady(s, y0, &o);

@@ -226,7 +226,7 @@ fn results_are_bitwise_the_same_for_any_thread_count_and_through_the_entry_point
     let mus: Vec<f64> = (0..40).map(|k| 0.18 + 0.004 * k as f64).collect();
     let te: Vec<f64> = (0..=20).map(|k| k as f64 * 5e-3).collect();
     let opts = SteadyOptions { t_max: 0.3, tol: tol(1e-7), ..SteadyOptions::default() };
-    let decay: Vec<f64> = (0..40).map(|k| 1e-8 * (1 + k % 3) as f64).collect();
+    let decay: Vec<DecayTest> = (0..40).map(|k| DecayTest::Amplitude(1e-8 * (1 + k % 3) as f64)).collect();
     let tasks = [Task::Final, Task::Sampled(&te), Task::Steady { opts: &opts, decay: Some(&decay) }, Task::Events];
     for (base, z0) in [(seed_bilateral(), 1e-6), (unilateral(), 30e-6)] {
         let s = sliders(base, &mus);

@@ -311,6 +311,10 @@ pub struct SteadyOptions {
     /// compared in units of its characteristic size times `decay_amplitude / |z_st|`.
     /// `None`: `1e-3 |z_st|`.
     pub decay_amplitude: Option<f64>,
+    /// Amplitudes of each component [m, m/s, m, m/s, rad, rad/s] below which a shrinking motion
+    /// counts as decayed: the motion's shape, not only its size. Overrides `decay_amplitude` (the
+    /// census sets it to a fraction of the saddle cycle's own amplitude in every component).
+    pub decay_thresholds: Option<[f64; 6]>,
     /// Sections per window of the decay test.
     pub decay_window: usize,
     /// Uniform samples per period for the Fourier integrals.
@@ -332,6 +336,7 @@ impl Default for SteadyOptions {
             tol: Tolerances::new(1e-8),
             periodic_tol: 1e-5,
             decay_amplitude: None,
+            decay_thresholds: None,
             decay_window: 8,
             n_fourier: 512,
             watch_x: true,
@@ -434,6 +439,10 @@ pub(crate) struct SectionWatcher {
     pub(crate) peak_since: f64,
     pub(crate) peaks_since: State,
     tol: f64,
+    /// The decay test: the largest `peaks[c] / decay_scale[c]` over the compared components,
+    /// times `decay_unit`, below `decay_amp`.
+    decay_scale: [f64; 6],
+    decay_unit: f64,
     decay_amp: f64,
     window: usize,
     found: Option<(usize, f64)>,
@@ -455,18 +464,21 @@ pub const REDUCE_TOL: f64 = 1e-2;
 
 impl SectionWatcher {
     fn new(opts: &SteadyOptions, s: &Slider) -> Self {
+        let sizes = characteristic_sizes(s);
         SectionWatcher {
             ring: Vec::with_capacity(RING),
             n_seen: 0,
             peak_since: 0.0,
             peaks_since: State::zeros(),
             tol: opts.periodic_tol,
-            decay_amp: opts.decay_amplitude.unwrap_or(1e-3 * s.z_st.abs()),
+            decay_scale: opts.decay_thresholds.unwrap_or(sizes),
+            decay_unit: if opts.decay_thresholds.is_some() { 1.0 } else { sizes[0] },
+            decay_amp: if opts.decay_thresholds.is_some() { 1.0 } else { decay_amplitude(opts, s) },
             window: opts.decay_window.max(2),
             found: None,
             decayed: false,
             matches_in_row: [0; MAX_MULTIPLICITY + 1],
-            sizes: characteristic_sizes(s),
+            sizes,
             comps: if opts.watch_x || s.p.friction_law != FrictionLaw::Constant { &ALL } else { &NOT_X },
         }
     }
@@ -532,17 +544,17 @@ impl SectionWatcher {
             }
         }
         // Decay: the motion, measured on every component in units of its characteristic size
-        // (so that a torsion oscillation with little z is not missed), is small over the newest
-        // window and below the window before it.
+        // (so that a torsion oscillation with little z is not missed) or of its own threshold,
+        // is small over the newest window and below the window before it.
         let w = self.window;
         if n >= 2 * w {
             let rel = |b: usize| {
                 let c = self.get(b);
-                self.comps.iter().map(|&k| c.peaks[k] / self.sizes[k]).fold(0.0, f64::max)
+                self.comps.iter().map(|&k| c.peaks[k] / self.decay_scale[k]).fold(0.0, f64::max)
             };
             let recent = (0..w).map(rel).fold(0.0, f64::max);
             let before = (w..2 * w).map(rel).fold(0.0, f64::max);
-            if recent * self.sizes[0] < self.decay_amp && recent < before {
+            if recent * self.decay_unit < self.decay_amp && recent < before {
                 self.decayed = true;
             }
         }
@@ -558,6 +570,30 @@ impl SectionWatcher {
     }
 }
 
+/// The decay amplitude of `z` that `opts` sets for `s` (without per-component thresholds).
+fn decay_amplitude(opts: &SteadyOptions, s: &Slider) -> f64 {
+    opts.decay_amplitude.unwrap_or(1e-3 * s.z_st.abs())
+}
+
+/// A per-trajectory override of the decay test of a run to steady state (an ensemble's
+/// `Task::Steady`): a decay amplitude of `z` (every component in units of its characteristic
+/// size), or thresholds per component (`SteadyOptions::decay_thresholds`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum DecayTest {
+    Amplitude(f64),
+    Thresholds([f64; 6]),
+}
+
+impl DecayTest {
+    /// `opts` with this decay test.
+    pub fn apply(self, opts: &SteadyOptions) -> SteadyOptions {
+        match self {
+            DecayTest::Amplitude(a) => SteadyOptions { decay_amplitude: Some(a), decay_thresholds: None, ..*opts },
+            DecayTest::Thresholds(t) => SteadyOptions { decay_thresholds: Some(t), ..*opts },
+        }
+    }
+}
+
 pub(crate) struct SteadyObserver {
     pub(crate) w: SectionWatcher,
     pub(crate) decay_floor: f64,
@@ -568,7 +604,7 @@ impl SteadyObserver {
     pub(crate) fn new(s: &Slider, opts: &SteadyOptions) -> Self {
         SteadyObserver {
             w: SectionWatcher::new(opts, s),
-            decay_floor: 1e-6 * opts.decay_amplitude.unwrap_or(1e-3 * s.z_st.abs()),
+            decay_floor: 1e-6 * opts.decay_thresholds.map_or_else(|| decay_amplitude(opts, s), |t| t[idx::Z]),
         }
     }
 }

@@ -31,3 +31,33 @@ fn x_is_left_out_of_the_settling_tests_only_where_it_is_slaved() {
         assert_eq!(SectionWatcher::new(&off, &s).comps, &ALL[..], "{law:?}");
     }
 }
+
+#[test]
+fn per_component_decay_thresholds_set_the_decay_test() {
+    // A small torsion-mode motion of the seed (sliding stable, decaying at 0.33 1/s).
+    let s = Slider::seed();
+    let y0 = State::new(1e-6, 0.0, 0.0, 0.0, 1e-4, 0.0);
+    let sizes = characteristic_sizes(&s);
+    let d = 1e-2 * s.z_st.abs();
+    let base = SteadyOptions { t_max: 60.0, ..SteadyOptions::default() };
+    let plain = run_to_steady(&s, &y0, &SteadyOptions { decay_amplitude: Some(d), ..base });
+    // Thresholds in the shape of the characteristic sizes are the same test.
+    let same = sizes.map(|c| c * d / sizes[0]);
+    let shaped = run_to_steady(&s, &y0, &DecayTest::Thresholds(same).apply(&base));
+    assert_eq!(plain.outcome, SteadyOutcome::Decayed);
+    assert_eq!(shaped.outcome, SteadyOutcome::Decayed);
+    assert_eq!(plain.t_end, shaped.t_end);
+    // The torsion motion dominates the measure (phi is 1e-4 rad against |z_st|/L = 2.5e-4 rad for
+    // z = 1e-6 m against 1.7e-5 m): thresholds 10x larger in phi and phid alone stop it earlier,
+    // by about ln(10) / 0.33 = 7 s.
+    let mut wide = same;
+    wide[idx::PHI] *= 10.0;
+    wide[idx::PHID] *= 10.0;
+    let early = run_to_steady(&s, &y0, &DecayTest::Thresholds(wide).apply(&base));
+    assert_eq!(early.outcome, SteadyOutcome::Decayed);
+    assert!(early.t_end < plain.t_end - 5.0, "{} vs {}", early.t_end, plain.t_end);
+    // An amplitude override replaces thresholds.
+    let back = DecayTest::Amplitude(d).apply(&DecayTest::Thresholds(wide).apply(&base));
+    assert_eq!(back.decay_thresholds, None);
+    assert_eq!(run_to_steady(&s, &y0, &back).t_end, plain.t_end);
+}

@@ -215,7 +215,7 @@ pub(super) fn refill<'a>(ln: &mut Lanes<'a>, l: usize, inp: &Input<'a, '_>, out:
             Task::Sampled(te) => Watch::Sample(Sampler::new(te)),
             Task::Steady { opts, decay } => {
                 let o = match decay {
-                    Some(d) => SteadyOptions { decay_amplitude: Some(d[i]), ..*opts },
+                    Some(d) => d[i].apply(opts),
                     None => *opts,
                 };
                 Watch::Steady(Box::new(SteadyObserver::new(s, &o)), o)
