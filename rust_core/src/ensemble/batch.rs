@@ -1,5 +1,5 @@
-//! Lane-batched Dormand–Prince 5(4) for the bilateral, constant-`mu` slider: the fast path of
-//! ensembles that only need the end state.
+//! Lane-batched Dormand–Prince 5(4) and DOP853 for the bilateral, constant-`mu` slider: the fast
+//! path of ensembles that only need the end state.
 //!
 //! [`run_bilateral_batch`] integrates many trajectories at once, `W` = 8 at a time in
 //! structure-of-arrays form (`[f64; 8]` per state component and per parameter), so that the
@@ -9,9 +9,10 @@
 //! decision; when a lane's trajectory ends the lane is refilled at once with the next trajectory of
 //! the input, so no lane idles while others run long.
 //!
-//! # Semantics (those of `steady::run(s, y0, t_end, Method::Dopri5, tol)`, to integration accuracy)
+//! # Semantics (those of `steady::run(s, y0, t_end, method, tol)`, to integration accuracy)
 //! - Same tolerances (`atol` per component from [`characteristic_sizes`] when `tol.atol` is
-//!   `None`), same error norm (Hairer's RMS), same PI controller (`beta = 0.04`, safety 0.9,
+//!   `None`), same error norm (Hairer's RMS; DOP853's combined 5th/3rd-order one), same PI
+//!   controller (`beta = 0.04`, safety 0.9,
 //!   factors in `[0.2, 10]`, no growth right after a rejection), same starting step (the scalar
 //!   [`initial_step`] on the same right-hand side, so the first step is bitwise the scalar one), same
 //!   landing rule on `t_end` (the last step is stretched by up to 1 %), same step floor
@@ -49,12 +50,15 @@ use super::lanes::Coef;
 use crate::cancel;
 use crate::model::{idx, ContactMode, ContactModel, FrictionLaw, Slider, State};
 use crate::ode::controller::{initial_step, FAC_MAX, FAC_MIN, SAFETY};
+use crate::ode::dop853::Dop853Dense;
 use crate::ode::dopri5::Dopri5Dense;
 use crate::ode::events::locate;
 use crate::ode::lanes::{
-    dopri5_step, each6, exp_lanes, lane_state, ln_lanes, splat, LaneRhs, ALPHA, BETA, L, LN_ERR_FLOOR, LN_SAFETY, V6, W,
+    dop853_step, dopri5_step, each6, exp_lanes, lane_state, ln_lanes, splat, LaneRhs, ALPHA, ALPHA8, BETA, L,
+    LN_ERR_FLOOR, LN_SAFETY, V6, W,
 };
-use crate::ode::{Dense, Options, Stats};
+use crate::ode::stepper::StepDense;
+use crate::ode::{Dense, Method, Options, Stats};
 use crate::status::{Failure, Status};
 use crate::steady::{characteristic_sizes, options_for, run_failure, Extremes, RunResult, Tolerances};
 
@@ -70,6 +74,8 @@ struct Lanes {
     rejected: [bool; W],
     n_acc: [u64; W],
     n_rej: [u64; W],
+    /// Right-hand sides of DOP853 interpolants built to locate an escape.
+    n_extra: [u64; W],
     min_n: L,
     max_gap: L,
     min_vr: L,
@@ -108,49 +114,76 @@ impl LaneRhs for BatchRhs<'_> {
     }
 }
 
-/// Integrate each `sliders[i]` from `y0s[i]` at `t = 0` to `t_end` with Dormand–Prince 5(4),
-/// eight trajectories at a time; the result for each trajectory, in input order.
+/// Integrate each `sliders[i]` from `y0s[i]` at `t = 0` to `t_end` with `method` (Dormand–Prince
+/// 5(4) or DOP853), eight trajectories at a time; the result for each trajectory, in input order.
 ///
 /// Precondition (the caller checks): every slider has `ContactModel::Bilateral` and
-/// `FrictionLaw::Constant`; `sliders.len() == y0s.len()`. Panics otherwise. See the module
-/// documentation for how the results relate to `steady::run(s, y0, t_end, Method::Dopri5, tol)`.
-pub fn run_bilateral_batch(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances) -> Vec<RunResult> {
+/// `FrictionLaw::Constant`; [`supports_method`] accepts `method`; `sliders.len() == y0s.len()`.
+/// Panics otherwise. See the module documentation for how the results relate to
+/// `steady::run(s, y0, t_end, method, tol)`.
+pub fn run_bilateral_batch(
+    sliders: &[Slider],
+    y0s: &[State],
+    t_end: f64,
+    method: Method,
+    tol: &Tolerances,
+) -> Vec<RunResult> {
     assert_eq!(sliders.len(), y0s.len(), "run_bilateral_batch: one initial state per slider");
+    assert!(supports_method(method), "run_bilateral_batch: method {method:?} is not batched");
     for s in sliders {
         assert!(
             s.p.contact == ContactModel::Bilateral && s.p.friction_law == FrictionLaw::Constant,
             "run_bilateral_batch: only bilateral contact with constant friction"
         );
     }
+    if method == Method::Dop853 {
+        dispatch::<true>(sliders, y0s, t_end, tol)
+    } else {
+        dispatch::<false>(sliders, y0s, t_end, tol)
+    }
+}
+
+/// Whether [`run_bilateral_batch`] integrates with this method.
+pub fn supports_method(m: Method) -> bool {
+    matches!(m, Method::Dopri5 | Method::Dop853)
+}
+
+fn dispatch<const M8: bool>(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances) -> Vec<RunResult> {
     #[cfg(target_arch = "x86_64")]
     {
         if std::is_x86_feature_detected!("avx512f") {
             // SAFETY: the CPU supports the features the function is compiled for.
-            return unsafe { run_avx512(sliders, y0s, t_end, tol) };
+            return unsafe { run_avx512::<M8>(sliders, y0s, t_end, tol) };
         }
         if std::is_x86_feature_detected!("avx2") {
             // SAFETY: as above.
-            return unsafe { run_avx2(sliders, y0s, t_end, tol) };
+            return unsafe { run_avx2::<M8>(sliders, y0s, t_end, tol) };
         }
     }
-    run_impl(sliders, y0s, t_end, tol)
+    run_impl::<M8>(sliders, y0s, t_end, tol)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
-unsafe fn run_avx512(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances) -> Vec<RunResult> {
-    run_impl(sliders, y0s, t_end, tol)
+unsafe fn run_avx512<const M8: bool>(
+    sliders: &[Slider],
+    y0s: &[State],
+    t_end: f64,
+    tol: &Tolerances,
+) -> Vec<RunResult> {
+    run_impl::<M8>(sliders, y0s, t_end, tol)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn run_avx2(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances) -> Vec<RunResult> {
-    run_impl(sliders, y0s, t_end, tol)
+unsafe fn run_avx2<const M8: bool>(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances) -> Vec<RunResult> {
+    run_impl::<M8>(sliders, y0s, t_end, tol)
 }
 
 /// The portable path (also used by the tests to check that the SIMD copies agree bitwise).
+/// `M8`: DOP853, else Dormand–Prince 5(4).
 #[inline(always)]
-fn run_impl(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances) -> Vec<RunResult> {
+fn run_impl<const M8: bool>(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances) -> Vec<RunResult> {
     let n = sliders.len();
     let opts = Options::<6>::new(tol.rtol, 1.0);
     let rtol = tol.rtol;
@@ -169,6 +202,7 @@ fn run_impl(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances) -> 
         rejected: [false; W],
         n_acc: [0; W],
         n_rej: [0; W],
+        n_extra: [0; W],
         min_n: zero,
         max_gap: zero,
         min_vr: zero,
@@ -177,13 +211,14 @@ fn run_impl(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances) -> 
     };
     let mut next = 0usize;
     for l in 0..W {
-        refill(&mut ln, l, &mut next, sliders, y0s, t_end, tol, &mut out);
+        refill(&mut ln, l, &mut next, sliders, y0s, t_end, tol, M8, &mut out);
     }
-    let end = End { sliders, t_end, opts: &opts };
+    let end = End { sliders, t_end, opts: &opts, m8: M8 };
     let mut rounds = 0u64;
 
-    // Scratch of the step: the stages k2..k7 and the new state.
+    // Scratch of the step: DP5's stages k2..k7, DOP853's (see `ode::lanes::dop853_step`), the new state.
     let mut k = [[zero; 6]; 6];
+    let mut kk = [[zero; 6]; 16];
     let mut yn = [zero; 6];
     let mut fz = zero;
 
@@ -226,18 +261,24 @@ fn run_impl(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances) -> 
                     continue;
                 };
                 finish(&mut ln, l, status, hh[l], &end, &mut out);
-                refill(&mut ln, l, &mut next, sliders, y0s, t_end, tol, &mut out);
+                refill(&mut ln, l, &mut next, sliders, y0s, t_end, tol, M8, &mut out);
             }
             continue;
         }
 
-        // ---- the step: six new right-hand sides per lane, the error norm and finiteness ----
+        // ---- the step: six (DOP853: twelve) new right-hand sides per lane, the error norm and
+        // finiteness ----
         let c = &ln.c;
         let y = &ln.y;
         let k1 = &ln.f;
-        // The squared RMS norm: `err <= 1` iff `err^2 <= 1`, and ln err = ln(err^2) / 2, so no
-        // square root is needed.
-        let (err, fin) = dopri5_step(&mut BatchRhs { c, fz: &mut fz }, y, k1, &hh, rtol, &c.atol, &mut k, &mut yn);
+        // DP5: the squared RMS norm (`err <= 1` iff `err^2 <= 1`, and ln err = ln(err^2) / 2, so
+        // no square root is needed); DOP853: Hairer's combined norm.
+        let (err, fin) = if M8 {
+            dop853_step(&mut BatchRhs { c, fz: &mut fz }, y, k1, &hh, rtol, &c.atol, &mut kk, &mut yn)
+        } else {
+            dopri5_step(&mut BatchRhs { c, fz: &mut fz }, y, k1, &hh, rtol, &c.atol, &mut k, &mut yn)
+        };
+        let fnew: &V6 = if M8 { &kk[12] } else { &k[5] };
 
         // ---- accept or reject, the controller, extremes, the end tests (branch-free) ----
         let mut ok = [false; W];
@@ -249,15 +290,18 @@ fn run_impl(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances) -> 
             lnx[l] = err[l].max(1e-300);
         }
         let mut ln_err = ln_lanes(&lnx);
-        for v in ln_err.iter_mut() {
-            *v *= 0.5;
+        if !M8 {
+            for v in ln_err.iter_mut() {
+                *v *= 0.5;
+            }
         }
+        let alpha = if M8 { ALPHA8 } else { ALPHA };
         let mut arg = zero;
         for l in 0..W {
             // One exp per lane: the accept factor err^-alpha err_old^beta / safety, or the reject
             // factor err^-alpha (times safety), as in `Controller::accept` / `Controller::reject`.
             arg[l] =
-                if ok[l] { -(ALPHA * ln_err[l] - BETA * ln.ln_err_old[l] - LN_SAFETY) } else { -ALPHA * ln_err[l] };
+                if ok[l] { -(alpha * ln_err[l] - BETA * ln.ln_err_old[l] - LN_SAFETY) } else { -alpha * ln_err[l] };
         }
         let r = exp_lanes(&arg);
         // Kept as several simple loops over the lanes: each vectorises on its own.
@@ -287,9 +331,14 @@ fn run_impl(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances) -> 
         // Off the common path: only when some lane ends this step.
         let attention = ended.iter().fold(false, |a, &b| a | b);
         if attention && (0..W).any(|l| ok[l] && ended[l] && yn[idx::Z][l].abs() >= c.esc[l]) {
-            let stages = [&ln.f, &k[0], &k[1], &k[2], &k[3], &k[4], &k[5]];
             let step = Step { t0: &t_start, h: &hh, ok: &ok };
-            locate_escapes(c, &ln.who, &ln.y, &stages, &step, &mut yn, &mut fz, &mut ln.t, sliders, event_tol);
+            let stages: [&V6; 13] = if M8 {
+                std::array::from_fn(|j| if j == 0 { &ln.f } else { &kk[j] })
+            } else {
+                std::array::from_fn(|j| if j == 0 { &ln.f } else { &k[(j - 1).min(5)] })
+            };
+            let esc = Escapes { c, who: &ln.who, y: &ln.y, stages: &stages, step: &step, sliders, event_tol, m8: M8 };
+            locate_escapes(&esc, &mut yn, &mut fz, &mut ln.t, &mut ln.n_extra);
         }
         for l in 0..W {
             ln.n_acc[l] += ok[l] as u64;
@@ -298,7 +347,7 @@ fn run_impl(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances) -> 
         each6!(i, {
             for l in 0..W {
                 ln.y[i][l] = if ok[l] { yn[i][l] } else { ln.y[i][l] };
-                ln.f[i][l] = if ok[l] { k[5][i][l] } else { ln.f[i][l] };
+                ln.f[i][l] = if ok[l] { fnew[i][l] } else { ln.f[i][l] };
             }
         });
         for l in 0..W {
@@ -332,7 +381,7 @@ fn run_impl(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances) -> 
                 // After a rejection the step that fell below the floor is the new one.
                 let h = if ln.rejected[l] { ln.h[l] } else { hh[l] };
                 finish(&mut ln, l, status, h, &end, &mut out);
-                refill(&mut ln, l, &mut next, sliders, y0s, t_end, tol, &mut out);
+                refill(&mut ln, l, &mut next, sliders, y0s, t_end, tol, M8, &mut out);
             }
         }
     }
@@ -354,11 +403,13 @@ fn stop_all(ln: &mut Lanes, end: &End<'_>, out: &mut [Option<RunResult>]) {
     }
 }
 
-/// What [`finish`] needs to say why a run failed.
+/// What [`finish`] needs to say why a run failed and count its work.
 struct End<'a> {
     sliders: &'a [Slider],
     t_end: f64,
     opts: &'a Options<6>,
+    /// DOP853 (else DP5).
+    m8: bool,
 }
 
 /// Lanes whose accepted step ends at `|z| >= escape_limit`: locate the crossing on the step's
@@ -374,39 +425,52 @@ struct Step<'a> {
     ok: &'a [bool; W],
 }
 
+/// One batch step's lanes, for [`locate_escapes`]: the stages (DP5: `k1..k7` in the first seven,
+/// DOP853: `k1..k13`), the step, the method.
+struct Escapes<'a> {
+    c: &'a Coef,
+    who: &'a [usize; W],
+    y: &'a V6,
+    stages: &'a [&'a V6; 13],
+    step: &'a Step<'a>,
+    sliders: &'a [Slider],
+    event_tol: f64,
+    m8: bool,
+}
+
 #[cold]
 #[inline(never)]
-#[allow(clippy::too_many_arguments)]
-fn locate_escapes(
-    c: &Coef,
-    who: &[usize; W],
-    y: &V6,
-    stages: &[&V6; 7],
-    step: &Step<'_>,
-    yn: &mut V6,
-    fz: &mut L,
-    t: &mut L,
-    sliders: &[Slider],
-    event_tol: f64,
-) {
+fn locate_escapes(e: &Escapes<'_>, yn: &mut V6, fz: &mut L, t: &mut L, n_extra: &mut [u64; W]) {
+    let c = e.c;
     for l in 0..W {
-        if who[l] == usize::MAX || !step.ok[l] || yn[idx::Z][l].abs() < c.esc[l] {
+        if e.who[l] == usize::MAX || !e.step.ok[l] || yn[idx::Z][l].abs() < c.esc[l] {
             continue;
         }
         let esc = c.esc[l];
-        let k: [State; 7] = std::array::from_fn(|j| lane_state(stages[j], l));
-        let (y0, y1) = (lane_state(y, l), lane_state(yn, l));
+        let s = &e.sliders[e.who[l]];
+        let k: [State; 13] = std::array::from_fn(|j| lane_state(e.stages[j], l));
+        let (y0, y1) = (lane_state(e.y, l), lane_state(yn, l));
         // `t` already holds the accepted step's end.
-        let (t0, t1) = (step.t0[l], t[l]);
-        let dense = Dopri5Dense::from_stages(&k, &y0, &y1, t0, step.h[l]);
-        let g = |tt: f64| esc - dense.eval(tt)[idx::Z].abs();
+        let (t0, t1) = (e.step.t0[l], t[l]);
         let (g0, g1) = (esc - y0[idx::Z].abs(), esc - y1[idx::Z].abs());
-        let te = if g0 > 0.0 { locate(g, t0, g0, t1, g1, event_tol) } else { t1 };
-        let ye = if te == t1 { y1 } else { dense.eval(te) };
+        let at = |dense: &dyn Dense<6>| {
+            let g = |tt: f64| esc - dense.eval(tt)[idx::Z].abs();
+            let te = if g0 > 0.0 { locate(g, t0, g0, t1, g1, e.event_tol) } else { t1 };
+            (te, if te == t1 { y1 } else { dense.eval(te) })
+        };
+        let (te, ye) = if e.m8 {
+            let dense = Dop853Dense::from_stages(s, ContactMode::Contact, &k, &y0, &y1, t0, e.step.h[l]);
+            let r = at(&dense);
+            n_extra[l] += dense.extra_rhs();
+            r
+        } else {
+            let k7: &[State; 7] = k[..7].try_into().expect("seven stages");
+            at(&Dopri5Dense::from_stages(k7, &y0, &y1, t0, e.step.h[l]))
+        };
         for i in 0..6 {
             yn[i][l] = ye[i];
         }
-        fz[l] = sliders[who[l]].forces(&ye, ContactMode::Contact).normal - c.fst[l];
+        fz[l] = s.forces(&ye, ContactMode::Contact).normal - c.fst[l];
         t[l] = te;
     }
 }
@@ -418,6 +482,7 @@ fn finish(ln: &mut Lanes, l: usize, status: Status, h: f64, end: &End<'_>, out: 
     let steps = ln.n_acc[l] + ln.n_rej[l];
     let (t, y) = (ln.t[l], lane_state(&ln.y, l));
     let failure = run_failure(status, &end.sliders[i], t, &y, h, steps, end.t_end, end.opts);
+    let work = if end.m8 { 11 * steps + ln.n_acc[l] + ln.n_extra[l] } else { 6 * steps };
     out[i] = Some(RunResult {
         status,
         t,
@@ -428,7 +493,9 @@ fn finish(ln: &mut Lanes, l: usize, status: Status, h: f64, end: &End<'_>, out: 
             min_slip_velocity: ln.min_vr[l],
             max_abs_z: ln.max_z[l],
         },
-        stats: Stats { n_rhs: 2 + 6 * steps, n_accept: ln.n_acc[l], n_reject: ln.n_rej[l], ..Stats::default() },
+        // DP5: six new stages per attempt (FSAL); DOP853: eleven per attempt and the derivative at
+        // each accepted step's end, and any interpolant's extra stages; both: the start's two.
+        stats: Stats { n_rhs: 2 + work, n_accept: ln.n_acc[l], n_reject: ln.n_rej[l], ..Stats::default() },
         failure,
     });
     ln.who[l] = usize::MAX;
@@ -446,6 +513,7 @@ fn refill(
     y0s: &[State],
     t_end: f64,
     tol: &Tolerances,
+    m8: bool,
     out: &mut [Option<RunResult>],
 ) {
     while *next < sliders.len() {
@@ -493,7 +561,7 @@ fn refill(
             &y0,
             &f0,
             t_end,
-            5,
+            if m8 { 8 } else { 5 },
             &opts.atol,
             tol.rtol,
             f64::INFINITY,
@@ -511,6 +579,7 @@ fn refill(
         ln.rejected[l] = false;
         ln.n_acc[l] = 0;
         ln.n_rej[l] = 0;
+        ln.n_extra[l] = 0;
         ln.min_n[l] = ext.min_normal_force;
         ln.max_gap[l] = ext.max_gap;
         ln.min_vr[l] = ext.min_slip_velocity;

@@ -1,7 +1,7 @@
 //! Ensembles of slider trajectories: one entry point, [`run`], and the policy that routes an
 //! ensemble to one of three paths.
 //!
-//! - [`Route::Batch`]: [`batch::run_bilateral_batch`], lane-batched Dormand–Prince 5(4) for the end
+//! - [`Route::Batch`]: [`batch::run_bilateral_batch`], lane-batched Dormand–Prince 5(4) or DOP853 for the end
 //!   state of the bilateral constant-`mu` slider (the fastest path; only the escape is located).
 //! - [`Route::Lanes`]: [`lanes::run_lanes_threads`], lane-batched Dormand–Prince 5(4) and DOP853 for
 //!   everything else the lanes support (unilateral contact, the Coulomb/Stribeck law, samples at
@@ -128,7 +128,7 @@ fn method_tol(settings: &Settings, task: &Task<'_>) -> (Method, Tolerances) {
 }
 
 /// Whether `route` can compute `task` for these sliders with these settings: the batch only the
-/// end state of bilateral constant-`mu` sliders with DOPRI5 and the default step and event
+/// end state of bilateral constant-`mu` sliders with DOPRI5 or DOP853 and the default step and event
 /// budgets (it counts no events); the lanes only DOPRI5 or DOP853 and the friction laws they know,
 /// with one contact model and one law for all sliders; the scalar route everything.
 pub fn supports(route: Route, sliders: &[Slider], settings: &Settings, task: &Task<'_>) -> bool {
@@ -139,7 +139,7 @@ pub fn supports(route: Route, sliders: &[Slider], settings: &Settings, task: &Ta
         Route::Batch => {
             matches!(task, Task::Final)
                 && !tol.has_limits()
-                && method == Method::Dopri5
+                && batch::supports_method(method)
                 && shared
                 && first.p.contact == ContactModel::Bilateral
                 && first.p.friction_law == FrictionLaw::Constant
@@ -205,7 +205,15 @@ pub fn run_on(
             let parts = par_map_or(
                 &ranges,
                 threads,
-                |r| Some(Ok(batch::run_bilateral_batch(&sliders[r.clone()], &y0s[r.clone()], settings.t_end, &tol))),
+                |r| {
+                    Some(Ok(batch::run_bilateral_batch(
+                        &sliders[r.clone()],
+                        &y0s[r.clone()],
+                        settings.t_end,
+                        method,
+                        &tol,
+                    )))
+                },
                 |msg| Some(Err(msg)),
                 || None,
             );

@@ -66,11 +66,11 @@ fn agrees_with_the_scalar_path() {
     let (s, y0) = ensemble(50, 1);
     let t_end = 0.5;
     let refs: Vec<RunResult> = s.iter().zip(&y0).map(|(s, y)| run(s, y, t_end, Method::Dop853, &tol(1e-13))).collect();
-    for rtol in [1e-6, 1e-9] {
-        let b = run_bilateral_batch(&s, &y0, t_end, &tol(rtol));
+    for (m, rtol) in [(Method::Dopri5, 1e-6), (Method::Dopri5, 1e-9), (Method::Dop853, 1e-6), (Method::Dop853, 1e-9)] {
+        let b = run_bilateral_batch(&s, &y0, t_end, m, &tol(rtol));
         let (mut worst, mut steps_b, mut steps_s) = (0.0f64, 0u64, 0u64);
         for i in 0..s.len() {
-            let sc = run(&s[i], &y0[i], t_end, Method::Dopri5, &tol(rtol));
+            let sc = run(&s[i], &y0[i], t_end, m, &tol(rtol));
             let r = &refs[i];
             assert_eq!(r.status, Status::Success);
             assert_eq!(sc.status, Status::Success);
@@ -87,7 +87,10 @@ fn agrees_with_the_scalar_path() {
             }
             let (nb, ns) = (b[i].stats.n_accept + b[i].stats.n_reject, sc.stats.n_accept + sc.stats.n_reject);
             assert!((nb as f64 - ns as f64).abs() <= 0.03 * ns as f64 + 2.0, "#{i}: {nb} vs {ns} steps");
-            assert_eq!(b[i].stats.n_rhs, 2 + 6 * nb);
+            // DP5: six new stages per attempt; DOP853: eleven, and the derivative at each
+            // accepted step's end (the scalar driver's count).
+            let work = if m == Method::Dop853 { 11 * nb + b[i].stats.n_accept } else { 6 * nb };
+            assert_eq!(b[i].stats.n_rhs, 2 + work);
             let (eb, es) = (b[i].extremes, sc.extremes);
             assert!((eb.max_abs_z - es.max_abs_z).abs() <= 1e-3 * es.max_abs_z);
             assert!((eb.min_normal_force - es.min_normal_force).abs() <= 1e-3 * s[i].p.normal_load);
@@ -96,46 +99,59 @@ fn agrees_with_the_scalar_path() {
             steps_b += nb;
             steps_s += ns;
         }
-        println!("rtol {rtol:e}: max |z - z_ref|/max|z| = {worst:.2e}; steps batch {steps_b}, scalar {steps_s}");
+        println!("{m:?} rtol {rtol:e}: max |z - z_ref|/max|z| = {worst:.2e}; steps batch {steps_b}, scalar {steps_s}");
     }
 }
 
 #[test]
 fn results_do_not_depend_on_the_batch() {
+    for m in [Method::Dopri5, Method::Dop853] {
+        independent_of_the_batch(m);
+    }
+}
+
+fn independent_of_the_batch(m: Method) {
     let (s, y0) = ensemble(37, 2);
     let t = tol(1e-7);
-    let all = run_bilateral_batch(&s, &y0, 0.2, &t);
+    let all = run_bilateral_batch(&s, &y0, 0.2, m, &t);
     // Each alone.
     for i in (0..s.len()).step_by(5) {
-        let one = run_bilateral_batch(&s[i..i + 1], &y0[i..i + 1], 0.2, &t);
+        let one = run_bilateral_batch(&s[i..i + 1], &y0[i..i + 1], 0.2, m, &t);
         assert!(same(&one[0], &all[i]), "#{i} alone");
     }
     // Permuted and in other groupings.
     let perm: Vec<usize> = (0..s.len()).map(|k| (k * 11 + 3) % s.len()).collect();
     let sp: Vec<Slider> = perm.iter().map(|&k| s[k]).collect();
     let yp: Vec<State> = perm.iter().map(|&k| y0[k]).collect();
-    let rp = run_bilateral_batch(&sp, &yp, 0.2, &t);
+    let rp = run_bilateral_batch(&sp, &yp, 0.2, m, &t);
     for (j, &k) in perm.iter().enumerate() {
         assert!(same(&rp[j], &all[k]), "permuted #{k}");
     }
     for chunk in [3, 8, 13] {
         let mut k = 0;
         for (cs, cy) in s.chunks(chunk).zip(y0.chunks(chunk)) {
-            for r in run_bilateral_batch(cs, cy, 0.2, &t) {
+            for r in run_bilateral_batch(cs, cy, 0.2, m, &t) {
                 assert!(same(&r, &all[k]), "chunk {chunk} #{k}");
                 k += 1;
             }
         }
     }
     // The portable code path gives the same bits as the SIMD copy picked at run time.
-    let portable = run_impl(&s, &y0, 0.2, &t);
+    let portable =
+        if m == Method::Dop853 { run_impl::<true>(&s, &y0, 0.2, &t) } else { run_impl::<false>(&s, &y0, 0.2, &t) };
     for i in 0..s.len() {
-        assert!(same(&portable[i], &all[i]), "portable #{i}");
+        assert!(same(&portable[i], &all[i]), "{m:?} portable #{i}");
     }
 }
 
 #[test]
 fn escape_stops_with_diverged() {
+    for m in [Method::Dopri5, Method::Dop853] {
+        escape_is_located(m);
+    }
+}
+
+fn escape_is_located(m: Method) {
     let s = Slider::new(Params { mu: 0.35, normal_load: 84.46, ..Params::seed() }).unwrap();
     let y0 = State::new(1e-6, 0.0, 0.0, 0.0, 0.0, 0.0);
     let (ens, ey) = ensemble(5, 3);
@@ -143,12 +159,12 @@ fn escape_stops_with_diverged() {
     let mut ys = ey.clone();
     sl.insert(2, s);
     ys.insert(2, y0);
-    let r = run_bilateral_batch(&sl, &ys, 20.0, &tol(1e-6));
+    let r = run_bilateral_batch(&sl, &ys, 20.0, m, &tol(1e-6));
     let d = &r[2];
     assert_eq!(d.status, Status::Diverged);
     assert!(d.y[0].abs() >= s.p.escape_limit && d.extremes.max_abs_z >= s.p.escape_limit);
     assert!(d.t < 20.0 && d.y.iter().all(|v| v.is_finite()));
-    let sc = run(&s, &y0, 20.0, Method::Dopri5, &tol(1e-6));
+    let sc = run(&s, &y0, 20.0, m, &tol(1e-6));
     assert_eq!(sc.status, Status::Diverged);
     // The escape is located inside the step, as the scalar path's event: the same time and
     // state to the paths' rounding-level differences (amplified over a growing run).
@@ -169,20 +185,26 @@ fn escape_stops_with_diverged() {
 
 #[test]
 fn failures_and_trivial_runs() {
+    for m in [Method::Dopri5, Method::Dop853] {
+        failures(m);
+    }
+}
+
+fn failures(m: Method) {
     let (s, mut y0) = ensemble(4, 4);
     y0[1][3] = f64::NAN;
-    let r = run_bilateral_batch(&s, &y0, 0.1, &tol(1e-6));
+    let r = run_bilateral_batch(&s, &y0, 0.1, m, &tol(1e-6));
     assert_eq!(r[1].status, Status::NonFinite);
     assert!([0, 2, 3].iter().all(|&i| r[i].status == Status::Success && r[i].t == 0.1));
-    let r = run_bilateral_batch(&s[..1], &y0[..1], 0.0, &tol(1e-6));
+    let r = run_bilateral_batch(&s[..1], &y0[..1], 0.0, m, &tol(1e-6));
     assert_eq!((r[0].status, r[0].stats.n_rhs), (Status::Success, 0));
-    assert!(run_bilateral_batch(&[], &[], 1.0, &tol(1e-6)).is_empty());
+    assert!(run_bilateral_batch(&[], &[], 1.0, m, &tol(1e-6)).is_empty());
     // Past the escape limit the quadratic contact law blows up in finite time: both paths end
     // with the same failure, never with NaN in the state.
     let s = Slider::new(Params { mu: 0.35, escape_limit: 1e300, ..Params::seed() }).unwrap();
     let y0 = State::new(1e-6, 0.0, 0.0, 0.0, 0.0, 0.0);
-    let r = run_bilateral_batch(&[s], &[y0], 20.0, &tol(1e-6));
-    let sc = run(&s, &y0, 20.0, Method::Dopri5, &tol(1e-6));
+    let r = run_bilateral_batch(&[s], &[y0], 20.0, m, &tol(1e-6));
+    let sc = run(&s, &y0, 20.0, m, &tol(1e-6));
     println!("{:?} {:?} {:?} | {:?} {:?} {:?}", r[0].status, r[0].t, r[0].stats, sc.status, sc.t, sc.stats);
     assert_eq!(r[0].status, sc.status);
     assert!(r[0].status != Status::Success && (r[0].t - sc.t).abs() < 1e-3 * sc.t);
@@ -206,10 +228,10 @@ fn one_path() {
                 }
             }
             "portable" => {
-                std::hint::black_box(run_impl(&s, &y0, 0.5, &t));
+                std::hint::black_box(run_impl::<false>(&s, &y0, 0.5, &t));
             }
             _ => {
-                std::hint::black_box(run_bilateral_batch(&s, &y0, 0.5, &t));
+                std::hint::black_box(run_bilateral_batch(&s, &y0, 0.5, Method::Dopri5, &t));
             }
         }
     }
@@ -234,7 +256,7 @@ fn throughput() {
         let mut best = [f64::INFINITY; 3];
         for _ in 0..5 {
             best[0] = best[0].min(time(&|| {
-                std::hint::black_box(run_bilateral_batch(&s, &y0, 0.5, &t));
+                std::hint::black_box(run_bilateral_batch(&s, &y0, 0.5, Method::Dopri5, &t));
             }));
             best[1] = best[1].min(time(&|| {
                 for i in 0..n {
@@ -242,10 +264,10 @@ fn throughput() {
                 }
             }));
             best[2] = best[2].min(time(&|| {
-                std::hint::black_box(run_impl(&s, &y0, 0.5, &t));
+                std::hint::black_box(run_impl::<false>(&s, &y0, 0.5, &t));
             }));
         }
-        let r = run_bilateral_batch(&s, &y0, 0.5, &t);
+        let r = run_bilateral_batch(&s, &y0, 0.5, Method::Dopri5, &t);
         let steps: u64 = r.iter().map(|x| x.stats.n_accept + x.stats.n_reject).sum();
         println!(
             "rtol {rtol:e}: batch {:.0} traj/s, scalar steady::run {:.0} traj/s ({:.2}x), portable (no AVX) batch {:.0} traj/s; {:.0} steps/traj, {:.1} ns/step/traj",
@@ -255,6 +277,41 @@ fn throughput() {
             n as f64 / best[2],
             steps as f64 / n as f64,
             best[0] / steps as f64 * 1e9
+        );
+    }
+}
+
+/// The batch route against the lane route on the issue-2 ensemble, interleaved, best of five, one
+/// thread: `cargo test --release -p tribosweep-core batch::tests::against_the_lanes -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn against_the_lanes() {
+    use crate::ensemble::lanes::run_lanes;
+    use crate::ensemble::Task;
+    use std::time::Instant;
+    let n = 1000;
+    let (s, y0) = ensemble(n, 7);
+    for (m, rtol) in [(Method::Dopri5, 1e-6), (Method::Dop853, 1e-6), (Method::Dopri5, 1e-9), (Method::Dop853, 1e-9)] {
+        let t = tol(rtol);
+        let time = |f: &dyn Fn()| {
+            let t0 = Instant::now();
+            f();
+            t0.elapsed().as_secs_f64()
+        };
+        let mut best = [f64::INFINITY; 2];
+        for _ in 0..5 {
+            best[0] = best[0].min(time(&|| {
+                std::hint::black_box(run_bilateral_batch(&s, &y0, 0.5, m, &t));
+            }));
+            best[1] = best[1].min(time(&|| {
+                std::hint::black_box(run_lanes(&s, &y0, 0.5, m, &t, Task::Final));
+            }));
+        }
+        println!(
+            "{m:?} rtol {rtol:e}: batch {:.0} traj/s, lanes {:.0} traj/s ({:.2}x)",
+            n as f64 / best[0],
+            n as f64 / best[1],
+            best[1] / best[0]
         );
     }
 }

@@ -440,11 +440,42 @@ fn steady_throughput() {
     );
 }
 
-/// Microbenchmark of the lane steps alone (no events, no controller): ns per 8-lane attempt.
+/// Microbenchmark of the lane kernels alone (no events, no controller), on the bilateral seed:
+/// ns per 8-lane DP5 attempt, DOP853 attempt and DOP853 interpolant of the event components,
+/// portable and in the AVX2 / AVX-512 copies the lane driver dispatches to:
+/// `cargo test --release -p tribosweep-core lanes::tests::step_kernels -- --ignored --nocapture`.
 #[test]
 #[ignore]
 fn step_kernels() {
-    use crate::ode::lanes::{dop853_step, dopri5_step, V6};
+    println!("portable: {}", kernels());
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has the features.
+            println!("avx2:     {}", unsafe { kernels_avx2() });
+        }
+        if std::is_x86_feature_detected!("avx512f") {
+            // SAFETY: as above.
+            println!("avx512f:  {}", unsafe { kernels_avx512() });
+        }
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn kernels_avx2() -> String {
+    kernels()
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+unsafe fn kernels_avx512() -> String {
+    kernels()
+}
+
+#[inline(always)]
+fn kernels() -> String {
+    use crate::ode::lanes::{dop853_dense, dop853_step, dopri5_step, V6};
     use std::time::Instant;
     let s = Slider::new(Params::seed()).unwrap();
     let mut c = Coef::zero();
@@ -462,42 +493,61 @@ fn step_kernels() {
     let mut k1: V6 = [[0.0; W]; 6];
     super::slider::rhs::<false, false>(&c, &contact, &y, &mut k1, &mut fzl);
     let mut yn: V6 = [[0.0; W]; 6];
-    let t0 = Instant::now();
-    let mut k = [[[0.0; W]; 6]; 6];
     let mut acc = 0.0;
+    let mut k = [[[0.0; W]; 6]; 6];
+    let t0 = Instant::now();
     for _ in 0..n {
-        let (e, _) = dopri5_step(
-            &mut super::slider::SliderRhs::<false, false> { c: &c, contact: &contact, fzl: &mut fzl },
-            &y,
-            &k1,
-            &hh,
-            1e-8,
-            &c.atol,
-            &mut k,
-            &mut yn,
-        );
+        let mut f = super::slider::SliderRhs::<false, false> { c: &c, contact: &contact, fzl: &mut fzl };
+        let (e, _) = dopri5_step(&mut f, &y, &k1, &hh, 1e-8, &c.atol, &mut k, &mut yn);
         acc += e[0];
         y = yn;
         k1 = k[5];
     }
     let d5 = t0.elapsed().as_secs_f64() / n as f64 * 1e9;
-    let t0 = Instant::now();
     let mut kk = [[[0.0; W]; 6]; 16];
+    let t0 = Instant::now();
     for _ in 0..n {
-        let (e, _) = dop853_step(
-            &mut super::slider::SliderRhs::<false, false> { c: &c, contact: &contact, fzl: &mut fzl },
-            &y,
-            &k1,
-            &hh,
-            1e-8,
-            &c.atol,
-            &mut kk,
-            &mut yn,
-        );
+        let mut f = super::slider::SliderRhs::<false, false> { c: &c, contact: &contact, fzl: &mut fzl };
+        let (e, _) = dop853_step(&mut f, &y, &k1, &hh, 1e-8, &c.atol, &mut kk, &mut yn);
         acc += e[0];
         y = yn;
         k1 = kk[12];
     }
     let d8 = t0.elapsed().as_secs_f64() / n as f64 * 1e9;
-    println!("dopri5_step {d5:.1} ns, dop853_step {d8:.1} ns per 8-lane attempt ({acc:e})");
+    let mut extra = [[[0.0; W]; 6]; 3];
+    let t0 = Instant::now();
+    for _ in 0..n {
+        let mut f = super::slider::SliderRhs::<false, false> { c: &c, contact: &contact, fzl: &mut fzl };
+        let d = dop853_dense(&mut f, &super::slider::EV_COMPS, &y, &yn, &k1, &hh, &kk, &mut extra);
+        acc += d.eval(0.5)[0][0];
+        y[0][0] += 1e-30;
+    }
+    let dd = t0.elapsed().as_secs_f64() / n as f64 * 1e9;
+    format!("dopri5_step {d5:.1} ns, dop853_step {d8:.1} ns, dop853_dense {dd:.1} ns per 8 lanes ({acc:e})")
+}
+
+/// The lane driver on the bilateral seed, end state after 5 s from z = 1-10 um (no contact opens), DP5 and DOP853 at
+/// rtol 1e-8, one thread: ns per lane-step (against `step_kernels`, the driver's own cost):
+/// `cargo test --release -p tribosweep-core lanes::tests::driver_cost -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn driver_cost() {
+    use std::time::Instant;
+    let n = 512;
+    let s = Slider::new(Params::seed()).unwrap();
+    let sliders = vec![s; n];
+    let y0: Vec<State> =
+        (0..n).map(|k| State::new(1e-6 + 9e-6 * k as f64 / n as f64, 0.0, 0.0, 0.0, 0.0, 0.0)).collect();
+    for (name, m) in [("dopri5", Method::Dopri5), ("dop853", Method::Dop853)] {
+        let mut best = f64::INFINITY;
+        let (mut steps, mut events) = (0, 0);
+        for _ in 0..3 {
+            let t0 = Instant::now();
+            let r = run_lanes(&sliders, &y0, 5.0, m, &tol(1e-8), Task::Final);
+            best = best.min(t0.elapsed().as_secs_f64());
+            steps = r.iter().map(|x| x.run.stats.n_accept + x.run.stats.n_reject).sum::<u64>();
+            events = r.iter().map(|x| x.run.stats.n_events).sum::<u64>();
+        }
+        println!("{name}: {:.1} ns per lane-step ({steps} steps, {events} events)", best / steps as f64 * 1e9);
+    }
 }
