@@ -2,7 +2,7 @@
 //! the controller, the common accepted step on the lanes, and the cold path for lanes that need
 //! their scalar side (the scalar driver's event code, observers, the end of a run).
 
-use super::slider::{events_lanes, hidden_crossings, Coef, SliderRhs, EV_COMPS, NE};
+use super::slider::{events_lanes, hidden_crossings, Coef, SliderRhs, EV_COMPS, EV_COMPS_CONST, NE};
 use super::state::{finish, refill, sync_from_side, sync_to_side, Input, Lanes, Side, Watch};
 use crate::cancel;
 use crate::ensemble::{Task, TrajectoryResult};
@@ -178,17 +178,30 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
         let mut hidden = zero; // theta of the interior point to end a redone step at (0: none)
         if UNI {
             // The interpolant at three interior points: DP5's from its stages, DOP853's needs
-            // three more right-hand sides (its 7th-order dense output), counted as work.
-            let dense = if M8 {
+            // three more right-hand sides (its 7th-order dense output), counted as work. Only the
+            // components the event functions read: under constant friction z, zd and phi.
+            if M8 {
                 for l in 0..W {
                     ln.n_extra[l] += 3 * ok[l] as u64;
                 }
-                let mut f = SliderRhs::<UNI, COUL> { c, contact: cm, fzl: &mut fzl_scratch };
-                dop853_dense(&mut f, &EV_COMPS, y, &yn, k1, &hh, &kk, &mut extra)
+            }
+            let mut f = SliderRhs::<UNI, COUL> { c, contact: cm, fzl: &mut fzl_scratch };
+            let st = [k1, &k[1], &k[2], &k[3], &k[4], &k[5]];
+            if COUL {
+                let dense = if M8 {
+                    dop853_dense(&mut f, &EV_COMPS, y, &yn, k1, &hh, &kk, &mut extra)
+                } else {
+                    dopri5_dense(&EV_COMPS, y, &yn, st, &hh)
+                };
+                hidden_crossings::<COUL, 5>(c, &dense, &ln.g0, &g1, &ln.pend, &ok, &mut hidden);
             } else {
-                dopri5_dense(&EV_COMPS, y, &yn, [k1, &k[1], &k[2], &k[3], &k[4], &k[5]], &hh)
-            };
-            hidden_crossings::<COUL>(c, &dense, &ln.g0, &g1, &ln.pend, &ok, &mut hidden);
+                let dense = if M8 {
+                    dop853_dense(&mut f, &EV_COMPS_CONST, y, &yn, k1, &hh, &kk, &mut extra)
+                } else {
+                    dopri5_dense(&EV_COMPS_CONST, y, &yn, st, &hh)
+                };
+                hidden_crossings::<COUL, 3>(c, &dense, &ln.g0, &g1, &ln.pend, &ok, &mut hidden);
+            }
         }
 
         // ---- accept or reject, the controller (branch-free) ----

@@ -12,6 +12,9 @@ pub(super) const NE: usize = 4;
 /// The components the event functions read (z, zd, xd, phi, phid): the lane interpolants are
 /// built for these only.
 pub(super) const EV_COMPS: [usize; 5] = [idx::Z, idx::ZD, idx::XD, idx::PHI, idx::PHID];
+/// Under constant friction the sliding velocity is no event (`Slider::events`): the contact and
+/// escape functions read z, zd and phi only, and the interpolants need no more.
+pub(super) const EV_COMPS_CONST: [usize; 3] = [idx::Z, idx::ZD, idx::PHI];
 
 /// Per-lane coefficients of the right-hand side and the tolerances (shared with `batch`).
 #[derive(Clone, Copy)]
@@ -190,9 +193,9 @@ pub(super) fn events_lanes<const COUL: bool>(c: &Coef, y: &V6, fzl: &L, g: &mut 
 /// first such `x` (0 where none).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-pub(super) fn hidden_crossings<const COUL: bool>(
+pub(super) fn hidden_crossings<const COUL: bool, const C: usize>(
     c: &Coef,
-    dense: &LaneDense<5>,
+    dense: &LaneDense<C>,
     g0: &[L; NE],
     g1: &[L; NE],
     pend: &[[bool; W]; NE],
@@ -204,12 +207,15 @@ pub(super) fn hidden_crossings<const COUL: bool>(
         let th = q as f64 / 4.0;
         let v = dense.eval(th);
         let mut g = [[0.0; W]; NE];
+        // The interpolant's components: EV_COMPS (C = 5) or EV_COMPS_CONST (C = 3).
+        let at = |k: usize, l: usize| if k < C { v[k][l] } else { 0.0 };
+        let (ip, ixd, iphd) = if C == 5 { (3, 2, 4) } else { (2, usize::MAX, usize::MAX) };
         for l in 0..W {
-            let (z, zd, xd, ph, phd) = (v[0][l], v[1][l], v[2][l], v[3][l], v[4][l]);
+            let (z, zd, ph) = (v[0][l], v[1][l], at(ip, l));
             let fz = -c.ks[l] * z + c.ka[l] * z * z - c.c[l] * zd + c.kphi[l] * ph;
             g[event::GAP][l] = c.zst[l] + z;
             g[event::NORMAL][l] = c.fst[l] + fz;
-            g[event::SLIP][l] = if COUL { c.v[l] - (xd + c.sl[l] * phd) } else { 1.0 };
+            g[event::SLIP][l] = if COUL { c.v[l] - (at(ixd, l) + c.sl[l] * at(iphd, l)) } else { 1.0 };
             g[event::ESCAPE][l] = c.esc[l] - z.abs();
         }
         let mut hit = [false; W];
