@@ -373,6 +373,29 @@ pub(crate) struct LaneDense<const C: usize> {
 }
 
 impl<const C: usize> LaneDense<C> {
+    /// The selected components of lane `l` alone at `x = (t - t0) / h` of its own step: the same
+    /// formula, operation for operation, as the scalar interpolants' `eval` (DP5's
+    /// `y0 + (dy + (bspl + (r4 + r5 (1-x)) x) (1-x)) x`).
+    #[inline]
+    pub(crate) fn eval_lane(&self, l: usize, x: f64) -> [f64; C] {
+        let x1 = 1.0 - x;
+        let c = &self.c;
+        std::array::from_fn(|j| {
+            if self.eight {
+                let mut p = c[6][j][l] * x;
+                p = (c[5][j][l] + p) * x1;
+                p = (c[4][j][l] + p) * x;
+                p = (c[3][j][l] + p) * x1;
+                p = (c[2][j][l] + p) * x;
+                p = (c[1][j][l] + p) * x1;
+                p = (c[0][j][l] + p) * x;
+                self.y0[j][l] + p
+            } else {
+                self.y0[j][l] + (c[0][j][l] + (c[1][j][l] + (c[2][j][l] + c[3][j][l] * x1) * x) * x1) * x
+            }
+        })
+    }
+
     #[inline(always)]
     /// The selected components at `x = (t - t0) / h` in `[0, 1]` of each lane's step.
     pub(crate) fn eval(&self, x: f64) -> [L; C] {

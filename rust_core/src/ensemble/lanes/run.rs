@@ -11,6 +11,7 @@ use crate::ode::controller::{FAC_MAX, FAC_MIN, SAFETY};
 use crate::ode::dop853::Dop853Dense;
 use crate::ode::dopri5::Dopri5Dense;
 use crate::ode::events::{step_events, StepEnd};
+use crate::ode::lanes::LaneDense;
 use crate::ode::lanes::{
     cross, dop853_dense, dop853_step, dopri5_dense, dopri5_step, each6, exp_lanes, lane_state, ln_lanes, splat, ALPHA,
     ALPHA8, BETA, LN_ERR_FLOOR, LN_SAFETY, V6, W,
@@ -289,6 +290,25 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
             }
         }
 
+        // ---- samples at t_eval inside an accepted DP5 step with nothing else to do: on the lanes ----
+        // The scalar Sampler's rule on the same interpolant formula, so the samples are the bits
+        // the cold path would give; steps with an event, a pending event or the run's end, and
+        // DOP853 (its interpolant needs three more stages), take the cold path.
+        if sampled && !M8 {
+            let due: [bool; W] =
+                std::array::from_fn(|l| acc_ok[l] & !busy[l] & !last[l] & (t_new[l] >= ln.next_sample[l]));
+            if due.iter().any(|&d| d) {
+                let st = [&ln.f, &k[1], &k[2], &k[3], &k[4], &k[5]];
+                let dense = dopri5_dense(&ALL_COMPS, &ln.y, &yn, st, &hh);
+                for l in 0..W {
+                    if due[l] {
+                        sample_on_lane(&mut ln, l, &dense, (t_start[l], t_new[l], hh[l]), &yn);
+                        attn[l] = false;
+                    }
+                }
+            }
+        }
+
         // ---- the common accepted step: commit on the lanes ----
         let plain: [bool; W] = std::array::from_fn(|l| acc_ok[l] && !attn[l]);
         each6!(i, {
@@ -433,6 +453,32 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
         }
     }
     out
+}
+
+/// Every component: the interpolant of the lanes that take their samples on the lanes.
+const ALL_COMPS: [usize; 6] = [0, 1, 2, 3, 4, 5];
+
+/// Lane `l`'s samples at its `t_eval` points inside its accepted step `(t0, t1, h)` (before the
+/// lane's state is committed: `ln.y` holds the step's start, `yn` its end), by the scalar
+/// `Sampler`'s rule: a time at or before the start takes the start, the end's time the end, any
+/// other the interpolant.
+fn sample_on_lane(ln: &mut Lanes<'_>, l: usize, dense: &LaneDense<6>, (t0, t1, h): (f64, f64, f64), yn: &V6) {
+    let Some(sd) = ln.side[l].as_mut() else { return };
+    let Watch::Sample(smp) = &mut sd.obs.inner else { return };
+    while let Some(&t) = smp.t_eval.get(smp.out.len()) {
+        if t > t1 {
+            break;
+        }
+        let v = if t <= t0 {
+            lane_state(&ln.y, l)
+        } else if t == t1 {
+            lane_state(yn, l)
+        } else {
+            State::from(dense.eval_lane(l, (t - t0) / h))
+        };
+        smp.out.push(v);
+    }
+    ln.next_sample[l] = smp.t_eval.get(smp.out.len()).copied().unwrap_or(f64::INFINITY);
 }
 
 /// The scalar driver's handling of one accepted step of one lane: its events (located on the
