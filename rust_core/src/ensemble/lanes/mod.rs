@@ -19,9 +19,11 @@
 //! - **Observers per lane.** Sampling at `t_eval` and the steady-state watcher (Poincare section
 //!   `zd = 0` falling, decay, cycle detection) are the scalar path's observers, called on the cold
 //!   path only for lanes that need them this step: a lane whose `t_eval` point falls inside its
-//!   step, whose `zd` changes sign downwards, or whose motion fell below the rest floor. On all
-//!   other steps the bookkeeping those observers do per step (extremes, the peaks since the last
-//!   section) runs vectorised on the lanes.
+//!   step (DOP853, or a step with an event or the run's end: DP5 samples on an otherwise plain
+//!   step are taken on the lanes, by the sampler's rule and the same interpolant formula, so with
+//!   the same bits), whose `zd` changes sign downwards, or whose motion fell below the rest floor.
+//!   On all other steps the bookkeeping those observers do per step (extremes, the peaks since the
+//!   last section) runs vectorised on the lanes.
 //!
 //! The result of a trajectory is that of `steady::run`, `steady::run_sampled` or
 //! `steady::run_to_steady` with `Method::Dopri5` to integration accuracy (tested on every scene of
