@@ -373,49 +373,41 @@ pub(crate) struct LaneDense<const C: usize> {
 }
 
 impl<const C: usize> LaneDense<C> {
-    /// The selected components of lane `l` alone at `x = (t - t0) / h` of its own step: the same
-    /// formula, operation for operation, as the scalar interpolants' `eval` (DP5's
-    /// `y0 + (dy + (bspl + (r4 + r5 (1-x)) x) (1-x)) x`).
+    /// Component `j` of lane `l` at `x` (`x1 = 1 - x`): the scalar interpolants' formula,
+    /// operation for operation (DP5's `y0 + (dy + (bspl + (r4 + r5 (1-x)) x) (1-x)) x`,
+    /// DOP853's `contd8` Horner scheme).
+    #[inline(always)]
+    fn at(&self, j: usize, l: usize, x: f64, x1: f64) -> f64 {
+        let c = &self.c;
+        if self.eight {
+            let mut p = c[6][j][l] * x;
+            p = (c[5][j][l] + p) * x1;
+            p = (c[4][j][l] + p) * x;
+            p = (c[3][j][l] + p) * x1;
+            p = (c[2][j][l] + p) * x;
+            p = (c[1][j][l] + p) * x1;
+            p = (c[0][j][l] + p) * x;
+            self.y0[j][l] + p
+        } else {
+            self.y0[j][l] + (c[0][j][l] + (c[1][j][l] + (c[2][j][l] + c[3][j][l] * x1) * x) * x1) * x
+        }
+    }
+
+    /// The selected components of lane `l` alone at `x = (t - t0) / h` of its own step.
     #[inline]
     pub(crate) fn eval_lane(&self, l: usize, x: f64) -> [f64; C] {
         let x1 = 1.0 - x;
-        let c = &self.c;
-        std::array::from_fn(|j| {
-            if self.eight {
-                let mut p = c[6][j][l] * x;
-                p = (c[5][j][l] + p) * x1;
-                p = (c[4][j][l] + p) * x;
-                p = (c[3][j][l] + p) * x1;
-                p = (c[2][j][l] + p) * x;
-                p = (c[1][j][l] + p) * x1;
-                p = (c[0][j][l] + p) * x;
-                self.y0[j][l] + p
-            } else {
-                self.y0[j][l] + (c[0][j][l] + (c[1][j][l] + (c[2][j][l] + c[3][j][l] * x1) * x) * x1) * x
-            }
-        })
+        std::array::from_fn(|j| self.at(j, l, x, x1))
     }
 
     #[inline(always)]
     /// The selected components at `x = (t - t0) / h` in `[0, 1]` of each lane's step.
     pub(crate) fn eval(&self, x: f64) -> [L; C] {
         let x1 = 1.0 - x;
-        let c = &self.c;
         let mut v = [[0.0; W]; C];
         for j in 0..C {
             for l in 0..W {
-                v[j][l] = if self.eight {
-                    let mut p = c[6][j][l] * x;
-                    p = (c[5][j][l] + p) * x1;
-                    p = (c[4][j][l] + p) * x;
-                    p = (c[3][j][l] + p) * x1;
-                    p = (c[2][j][l] + p) * x;
-                    p = (c[1][j][l] + p) * x1;
-                    p = (c[0][j][l] + p) * x;
-                    self.y0[j][l] + p
-                } else {
-                    self.y0[j][l] + (c[0][j][l] + (c[1][j][l] + (c[2][j][l] + c[3][j][l] * x1) * x) * x1) * x
-                };
+                v[j][l] = self.at(j, l, x, x1);
             }
         }
         v
