@@ -9,6 +9,7 @@ import pytest
 
 import tribosweep as ts
 from tribosweep import _census
+from tribosweep._irregular import characteristic_sizes
 
 SEED_U = ts.SliderModel(contact="unilateral")
 
@@ -174,7 +175,7 @@ def test_the_return_to_sliding_is_measured_in_the_saddle_cycles_own_shape(seed64
     thr = _census.return_thresholds(v, sad)[0]
     np.testing.assert_allclose(thr, _census.RETURN_FRACTION * sad[0], rtol=1e-15)
     np.testing.assert_allclose(float(seed64.attrs["saddle_phi1"]), p1, rtol=1e-12)
-    sizes = _census.characteristic_sizes(v)[0]
+    sizes = characteristic_sizes(v)[0]
     assert thr[4] / sizes[4] > 6 * thr[0] / sizes[0]  # phi's threshold, in sizes, is 7x z's
     # Capped at |z_st|/2 in z (the pin on the disk), the shape kept; no saddle: the plain decay test.
     big = _census.return_thresholds(v, 10 * sad)[0]

@@ -58,6 +58,7 @@ import numpy as np
 
 from . import _core
 from ._codes import ATTRACTOR_NAMES, OUTCOME_NAMES, STATUS, STATUS_NAMES
+from ._irregular import characteristic_sizes
 from ._settings import DEFAULTS
 
 #: Steady-state outcome name -> attractor index (-1: failed, left out of the fractions).
@@ -402,14 +403,6 @@ def run(
         "reason": np.asarray(res["reason"], dtype=str).reshape(m, samples),
     }  # fmt: skip
     return out, per_sample
-
-
-def characteristic_sizes(v: Mapping[str, np.ndarray]) -> np.ndarray:
-    """The core's characteristic sizes ``(n, 6)`` of the state: ``|z_st|`` for z and x, ``|z_st|/L`` for phi, times ``omega_t`` for rates."""
-    z = np.abs(_static(v)[0])
-    phi = z / v["moment_arm"]
-    w = v["omega_torsion"]
-    return np.column_stack([z, z * w, z, z * w, phi, phi * w])
 
 
 def saddle_row(df: Mapping[str, np.ndarray], j: int, k: int) -> np.ndarray:
