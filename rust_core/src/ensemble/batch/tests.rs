@@ -237,55 +237,12 @@ fn one_path() {
     }
 }
 
-/// Throughput against the scalar driver in the same process (single thread; the three are
-/// interleaved and the best of five taken, against a noisy machine):
+/// Throughput against the lane route and the scalar driver in the same process (single thread;
+/// the four are interleaved and the best of five taken, against a noisy machine), both methods:
 /// `cargo test --release -p tribosweep-core batch::tests::throughput -- --ignored --nocapture`.
 #[test]
 #[ignore]
 fn throughput() {
-    use std::time::Instant;
-    let n = 1000;
-    let (s, y0) = ensemble(n, 7);
-    for rtol in [1e-6, 1e-9] {
-        let t = tol(rtol);
-        let time = |f: &dyn Fn()| {
-            let t0 = Instant::now();
-            f();
-            t0.elapsed().as_secs_f64()
-        };
-        let mut best = [f64::INFINITY; 3];
-        for _ in 0..5 {
-            best[0] = best[0].min(time(&|| {
-                std::hint::black_box(run_bilateral_batch(&s, &y0, 0.5, Method::Dopri5, &t));
-            }));
-            best[1] = best[1].min(time(&|| {
-                for i in 0..n {
-                    std::hint::black_box(run(&s[i], &y0[i], 0.5, Method::Dopri5, &t));
-                }
-            }));
-            best[2] = best[2].min(time(&|| {
-                std::hint::black_box(run_impl::<false>(&s, &y0, 0.5, &t));
-            }));
-        }
-        let r = run_bilateral_batch(&s, &y0, 0.5, Method::Dopri5, &t);
-        let steps: u64 = r.iter().map(|x| x.stats.n_accept + x.stats.n_reject).sum();
-        println!(
-            "rtol {rtol:e}: batch {:.0} traj/s, scalar steady::run {:.0} traj/s ({:.2}x), portable (no AVX) batch {:.0} traj/s; {:.0} steps/traj, {:.1} ns/step/traj",
-            n as f64 / best[0],
-            n as f64 / best[1],
-            best[1] / best[0],
-            n as f64 / best[2],
-            steps as f64 / n as f64,
-            best[0] / steps as f64 * 1e9
-        );
-    }
-}
-
-/// The batch route against the lane route on the issue-2 ensemble, interleaved, best of five, one
-/// thread: `cargo test --release -p tribosweep-core batch::tests::against_the_lanes -- --ignored --nocapture`.
-#[test]
-#[ignore]
-fn against_the_lanes() {
     use crate::ensemble::lanes::run_lanes;
     use crate::ensemble::Task;
     use std::time::Instant;
@@ -298,20 +255,43 @@ fn against_the_lanes() {
             f();
             t0.elapsed().as_secs_f64()
         };
-        let mut best = [f64::INFINITY; 2];
+        let portable = |t: &Tolerances| {
+            if m == Method::Dop853 {
+                run_impl::<true>(&s, &y0, 0.5, t)
+            } else {
+                run_impl::<false>(&s, &y0, 0.5, t)
+            }
+        };
+        let mut best = [f64::INFINITY; 4];
         for _ in 0..5 {
             best[0] = best[0].min(time(&|| {
                 std::hint::black_box(run_bilateral_batch(&s, &y0, 0.5, m, &t));
             }));
             best[1] = best[1].min(time(&|| {
+                for i in 0..n {
+                    std::hint::black_box(run(&s[i], &y0[i], 0.5, m, &t));
+                }
+            }));
+            best[2] = best[2].min(time(&|| {
+                std::hint::black_box(portable(&t));
+            }));
+            best[3] = best[3].min(time(&|| {
                 std::hint::black_box(run_lanes(&s, &y0, 0.5, m, &t, Task::Final));
             }));
         }
+        let r = run_bilateral_batch(&s, &y0, 0.5, m, &t);
+        let steps: u64 = r.iter().map(|x| x.stats.n_accept + x.stats.n_reject).sum();
         println!(
-            "{m:?} rtol {rtol:e}: batch {:.0} traj/s, lanes {:.0} traj/s ({:.2}x)",
+            "{m:?} rtol {rtol:e}: batch {:.0} traj/s, scalar steady::run {:.0} traj/s ({:.2}x), lanes {:.0} traj/s \
+             ({:.2}x), portable (no AVX) batch {:.0} traj/s; {:.0} steps/traj, {:.1} ns/step/traj",
             n as f64 / best[0],
             n as f64 / best[1],
-            best[1] / best[0]
+            best[1] / best[0],
+            n as f64 / best[3],
+            best[3] / best[0],
+            n as f64 / best[2],
+            steps as f64 / n as f64,
+            best[0] / steps as f64 * 1e9
         );
     }
 }

@@ -186,22 +186,22 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
                     ln.n_extra[l] += 3 * ok[l] as u64;
                 }
             }
-            let mut f = SliderRhs::<UNI, COUL> { c, contact: cm, fzl: &mut fzl_scratch };
-            let st = [k1, &k[1], &k[2], &k[3], &k[4], &k[5]];
+            // One body for both component sets (their count is a const generic).
+            macro_rules! check {
+                ($comps:expr) => {{
+                    let dense = if M8 {
+                        let mut f = SliderRhs::<UNI, COUL> { c, contact: cm, fzl: &mut fzl_scratch };
+                        dop853_dense(&mut f, $comps, y, &yn, k1, &hh, &kk, &mut extra)
+                    } else {
+                        dopri5_dense($comps, y, &yn, [k1, &k[1], &k[2], &k[3], &k[4], &k[5]], &hh)
+                    };
+                    hidden_crossings::<COUL, _>(c, &dense, &ln.g0, &g1, &ln.pend, &ok, &mut hidden);
+                }};
+            }
             if COUL {
-                let dense = if M8 {
-                    dop853_dense(&mut f, &EV_COMPS, y, &yn, k1, &hh, &kk, &mut extra)
-                } else {
-                    dopri5_dense(&EV_COMPS, y, &yn, st, &hh)
-                };
-                hidden_crossings::<COUL, 5>(c, &dense, &ln.g0, &g1, &ln.pend, &ok, &mut hidden);
+                check!(&EV_COMPS)
             } else {
-                let dense = if M8 {
-                    dop853_dense(&mut f, &EV_COMPS_CONST, y, &yn, k1, &hh, &kk, &mut extra)
-                } else {
-                    dopri5_dense(&EV_COMPS_CONST, y, &yn, st, &hh)
-                };
-                hidden_crossings::<COUL, 3>(c, &dense, &ln.g0, &g1, &ln.pend, &ok, &mut hidden);
+                check!(&EV_COMPS_CONST)
             }
         }
 
