@@ -526,16 +526,38 @@ def test_threads_do_not_enter_the_configuration(tmp_path, monkeypatch):
 AGREE_GRID = dict(normal_load=[8.0, 30.0, 70.0, 140.0], extra_axes={"mu": [0.2, 0.3, 0.4]}, progress=False, t_max=40.0)
 
 
+def robust_transient_regimes(kw: dict) -> tuple[np.ndarray, np.ndarray]:
+    """The regime of ``strategy="transient"`` per point (flattened), and whether it is robust.
+
+    A transient is one trajectory from one small disturbance. Where it passes near a basin
+    boundary (at 140 N, mu 0.4 it either settles on the stick-slip cycle or escapes), its regime
+    flips with the last bit of a float. Robust: the same with the loads moved by +-1 and +-2 ulps
+    and rtol moved by +-1 %; only those regimes are single-run facts a test may compare.
+    """
+    from conftest import RTOL_FACTORS, ULPS, moved
+
+    ref = ts.sweep(strategy="transient", **kw)
+    rt = ref.regime.values.ravel()
+    robust = np.ones(rt.size, dtype=bool)
+    loads = np.asarray(kw["normal_load"])
+    for k in ULPS:
+        robust &= ts.sweep(strategy="transient", **(kw | dict(normal_load=moved(loads, k)))).regime.values.ravel() == rt
+    for f in RTOL_FACTORS:
+        robust &= ts.sweep(strategy="transient", **(kw | dict(rtol=1e-8 * f))).regime.values.ravel() == rt
+    return ref, robust
+
+
 def test_auto_agrees_with_transient_where_the_transient_settles():
     # Issue 4: on a test grid, the regime of `auto` (cheapest model per point) equals the regime of
-    # always integrating, at every point where the integration settled.
+    # always integrating, at every point where the integration settled robustly.
     kw = AGREE_GRID
     auto = ts.sweep(strategy="auto", **kw)
-    full = ts.sweep(strategy="transient", **kw)
+    full, robust = robust_transient_regimes(kw)
     ra, rt = auto.regime.values.ravel(), full.regime.values.ravel()
-    # Settled: the transient reached a cycle, sliding or an escape (irregular motion did not settle).
+    # Settled: the transient reached a cycle, sliding or an escape (irregular motion did not settle),
+    # and reaches it under inputs moved by ulps and rtol by 1 %.
     settled = (full.status.values.ravel() == ts.STATUS["success"]) & ~np.isin(
-        rt, [REGIME["unstable_undetermined"], REGIME["irregular"]])
+        rt, [REGIME["unstable_undetermined"], REGIME["irregular"]]) & robust
     assert settled.sum() >= 8, settled
     assert np.array_equal(ra[settled], rt[settled]), (ra, rt)
     # auto decides many points without integrating, and without the bistability question (which

@@ -22,7 +22,7 @@
 //!   not bitwise; step counts agree to a few per cent (they are identical on most trajectories).
 //! - **Only the escape is located.** The bilateral constant-`mu` model never switches mode, so only
 //!   the escape event matters: when `|z| >= escape_limit` at the end of an accepted step, the
-//!   crossing is located on the step's interpolant as the scalar path's event is (Illinois to
+//!   crossing is located on the step's interpolant as the scalar path's event is (`events::locate` to
 //!   `event_tol`, the far side of the crossing) and the lane stops there with `Status::Diverged`.
 //!   `Stats::n_events` is 0 (the scalar path counts the located, non-acting gap, normal-force and
 //!   slip crossings too). A run that starts at `|z| >= escape_limit` stops after its first step.
@@ -413,7 +413,7 @@ struct End<'a> {
 }
 
 /// Lanes whose accepted step ends at `|z| >= escape_limit`: locate the crossing on the step's
-/// interpolant, as the scalar path's escape event does (Illinois to `event_tol`, the time on the
+/// interpolant, as the scalar path's escape event does (`events::locate` to `event_tol`, the time on the
 /// far side of the crossing), and make the lane's step end there: `yn`, the contact force `fz`
 /// and `t` of those lanes are replaced, so that the state, the extremes and the time reported are
 /// the located ones. Called before the lane state is overwritten (`ln.y`, `ln.f` still hold the

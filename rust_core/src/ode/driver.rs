@@ -11,7 +11,7 @@
 //!    `h` below the floor `h_min_rel * max(|t|, 1)` (a finite error there gives `StepTooSmall`).
 //! 2. On acceptance the event functions are evaluated once at the step end (and reused as the next
 //!    step's start values). Every sign change `g(start) != 0`, `g(end)` of the other sign or exactly
-//!    zero, is located on the step's dense output by the Illinois method (bracket shrunk to
+//!    zero, is located on the step's dense output by a bracketing root finder (`events::locate`, bracket shrunk to
 //!    `event_tol`; the returned time is the bracket end on the far side of the crossing, so that a
 //!    restarted run already sees the new sign).
 //! 3. Located events are processed in time order: `sys.on_event` gives each one's action; the first

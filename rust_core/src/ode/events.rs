@@ -1,4 +1,4 @@
-//! Events on an accepted step: sign changes located on the step's dense output (Illinois), acted
+//! Events on an accepted step: sign changes located on the step's dense output ([`locate`]), acted
 //! on in time order, reported to the observer; the hidden-crossing check inside a step.
 //!
 //! The rules (restart, grazing guard, truncation) are those of the driver's module documentation;
@@ -15,15 +15,22 @@ pub(crate) fn crosses(a: f64, b: f64) -> bool {
     (a > 0.0 && b <= 0.0) || (a < 0.0 && b >= 0.0)
 }
 
-/// Illinois (modified regula falsi) on `[a, b]` with `ga`, `gb` of opposite signs (or `gb == 0`),
-/// safeguarded by bisection when the bracket fails to halve in two iterations. Returns a time on
-/// the `b` side of the root with `b - root <= tol` (or a point where `g` is exactly 0).
+/// A root of `g` in `[a, b]`, `ga` and `gb` of opposite signs (or `gb == 0`): returns a time on the
+/// `b` side of the root with `b - root <= tol` (or a point where `g` is exactly 0).
+///
+/// A bracketing method in the manner of Brent's: inverse quadratic interpolation through the two
+/// ends and the last point dropped from the bracket (a secant step on the first iteration), taken
+/// when it falls inside the bracket; bisection when the bracket failed to halve in two iterations.
+/// Every new point is kept at least `tol/2` from both ends, so once the estimate has converged
+/// onto one end the next point lands just past the root and the bracket collapses to `tol`,
+/// instead of creeping in from the far end as plain regula falsi does. On the slider's contact
+/// events this takes about 4 evaluations where Illinois took about 20.
 pub(crate) fn locate(mut g: impl FnMut(f64) -> f64, mut a: f64, mut ga: f64, mut b: f64, mut gb: f64, tol: f64) -> f64 {
     if gb == 0.0 {
         return b;
     }
-    // Which end moved last: +1 the left, -1 the right (Illinois halves the stuck end's value).
-    let mut side = 0i8;
+    // The last point dropped from the bracket (NaN: none yet, or not usable).
+    let (mut d, mut gd) = (f64::NAN, f64::NAN);
     let mut width_2ago = f64::INFINITY;
     let mut width_1ago = f64::INFINITY;
     for _ in 0..300 {
@@ -34,7 +41,20 @@ pub(crate) fn locate(mut g: impl FnMut(f64) -> f64, mut a: f64, mut ga: f64, mut
         let bisect = w > 0.5 * width_2ago;
         width_2ago = width_1ago;
         width_1ago = w;
-        let mut c = if bisect { 0.5 * (a + b) } else { b - gb * (b - a) / (gb - ga) };
+        let mut c = 0.5 * (a + b);
+        if !bisect {
+            let secant = b - gb * (b - a) / (gb - ga);
+            c = secant;
+            if gd.is_finite() && gd != ga && gd != gb {
+                let iqi = a * (gb / (ga - gb)) * (gd / (ga - gd))
+                    + b * (ga / (gb - ga)) * (gd / (gb - gd))
+                    + d * (ga / (gd - ga)) * (gb / (gd - gb));
+                if iqi > a && iqi < b {
+                    c = iqi;
+                }
+            }
+        }
+        c = c.max(a + 0.5 * tol).min(b - 0.5 * tol);
         if !(c > a && c < b) {
             c = 0.5 * (a + b);
             if !(c > a && c < b) {
@@ -46,20 +66,15 @@ pub(crate) fn locate(mut g: impl FnMut(f64) -> f64, mut a: f64, mut ga: f64, mut
             return c;
         }
         // A NaN value is treated as lying on the far side (shrinks from the right).
-        if gc.is_nan() || (gc > 0.0) == (gb > 0.0) {
+        if gc.is_nan() {
             b = c;
-            gb = if gc.is_nan() { gb } else { gc };
-            if side == -1 {
-                ga *= 0.5;
-            }
-            side = -1;
+            (d, gd) = (f64::NAN, f64::NAN);
+        } else if (gc > 0.0) == (gb > 0.0) {
+            (d, gd) = (b, gb);
+            (b, gb) = (c, gc);
         } else {
-            a = c;
-            ga = gc;
-            if side == 1 {
-                gb *= 0.5;
-            }
-            side = 1;
+            (d, gd) = (a, ga);
+            (a, ga) = (c, gc);
         }
     }
     b

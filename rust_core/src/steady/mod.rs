@@ -615,8 +615,8 @@ impl Observer<6, ContactMode> for SteadyObserver {
         self.w.peak_since = self.w.peak_since.max(st.y1[idx::Z].abs());
         self.w.peaks_since = self.w.peaks_since.sup(&st.y1.abs());
         if zd0 > 0.0 && zd1 <= 0.0 {
-            // Section: zd = 0 falling. Locate on the dense output by Illinois iteration; the
-            // dense output is accurate to the integration tolerance, which sets the section's.
+            // Section: zd = 0 falling. Located on the dense output, which is accurate to the
+            // integration tolerance; that sets the section's.
             let (t, y) = locate(st, |y| y[idx::ZD], 1e-14 * st.t1.abs().max(1.0));
             let peaks = self.w.peaks_since.sup(&y.abs());
             self.w.peak_since = st.y1[idx::Z].abs();
@@ -634,38 +634,12 @@ impl Observer<6, ContactMode> for SteadyObserver {
     }
 }
 
-/// Locate a zero of `g` (falling from > 0 to <= 0) inside a step by Illinois iteration on the dense output.
+/// Locate a zero of `g` (falling from > 0 to <= 0) inside a step on the dense output (the events'
+/// root finder, [`crate::ode::events::locate`]): the time on the far side of the zero, and the state there.
 fn locate(st: &StepView<'_, 6, ContactMode>, g: impl Fn(&State) -> f64, tol: f64) -> (f64, State) {
-    let (mut a, mut b) = (st.t0, st.t1);
-    let (mut ga, mut gb) = (g(st.y0), g(st.y1));
-    let mut yb = *st.y1;
-    let mut side = 0i32;
-    for _ in 0..100 {
-        if (b - a).abs() <= tol || gb == 0.0 {
-            break;
-        }
-        let t = (a * gb - b * ga) / (gb - ga);
-        let t = if t.is_finite() && t > a.min(b) && t < a.max(b) { t } else { 0.5 * (a + b) };
-        let y = st.dense.eval(t);
-        let gt = g(&y);
-        if gt * gb > 0.0 {
-            b = t;
-            gb = gt;
-            yb = y;
-            if side == -1 {
-                ga *= 0.5;
-            }
-            side = -1;
-        } else {
-            a = t;
-            ga = gt;
-            if side == 1 {
-                gb *= 0.5;
-            }
-            side = 1;
-        }
-    }
-    (b, yb)
+    let t = crate::ode::events::locate(|t| g(&st.dense.eval(t)), st.t0, g(st.y0), st.t1, g(st.y1), tol);
+    let y = if t == st.t1 { *st.y1 } else { st.dense.eval(t) };
+    (t, y)
 }
 
 /// Run `s` from `y0` until it decays, settles on a periodic state, escapes, or reaches `t_max`,

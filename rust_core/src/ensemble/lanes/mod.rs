@@ -14,7 +14,7 @@
 //!   crossing and its return inside its step redoes the step ending inside the excursion. A lane
 //!   whose step shows a crossing (or has an event pending after a switch) goes to a cold path that
 //!   builds that lane's Dormand–Prince interpolant and runs **the scalar driver's own event code**
-//!   (`ode::events::step_events`: Illinois location, time order, actions, the re-trigger guard) on it,
+//!   (`ode::events::step_events`: location, time order, actions, the re-trigger guard) on it,
 //!   then restarts the lane in its new mode with a fresh derivative, as the scalar driver does.
 //! - **Observers per lane.** Sampling at `t_eval` and the steady-state watcher (Poincare section
 //!   `zd = 0` falling, decay, cycle detection) are the scalar path's observers, called on the cold

@@ -276,22 +276,38 @@ fn non_autonomous_rodas_matches_dop853() {
 }
 
 #[test]
-fn illinois_locates_roots() {
-    let mut calls = 0;
-    let t = locate(
-        |t| {
-            calls += 1;
-            t * t * t - 0.5
-        },
-        0.0,
-        -0.5,
-        2.0,
-        7.5,
-        1e-14,
-    );
-    let root = 0.5f64.cbrt();
-    assert!(t >= root - 1e-15 && t - root <= 1e-14, "{t} {root}");
-    assert!(calls < 60, "{calls}");
+fn the_root_finder_brackets_roots_in_few_evaluations() {
+    // (g, [a, b], root, most evaluations; Illinois took 14, 32, 20 and 13): a cubic across a wide
+    // bracket, a root next to the left end of a strongly curved function (the slider's lift-off
+    // just after a touchdown looks like this), one next to the right end, and a nearly linear one
+    // (most contact events).
+    type Case = (fn(f64) -> f64, f64, f64, f64, usize);
+    let cases: [Case; 4] = [
+        (|t| t * t * t - 0.5, 0.0, 2.0, 0.5f64.cbrt(), 12),
+        (|t| (t - 1e-6) * (1.0 + 1e4 * t), 0.0, 1e-3, 1e-6, 7),
+        (|t| (t - 0.999) * (3.0 - t * t), 0.0, 1.0, 0.999, 6),
+        (|t| 2.0 * (t - 0.3) + 0.1 * (t - 0.3) * (t - 0.3), 0.0, 1.0, 0.3, 5),
+    ];
+    for (k, (g, a, b, root, most)) in cases.into_iter().enumerate() {
+        for tol in [1e-9, 1e-14] {
+            let mut calls = 0;
+            let t = locate(
+                |t| {
+                    calls += 1;
+                    g(t)
+                },
+                a,
+                g(a),
+                b,
+                g(b),
+                tol,
+            );
+            // On the far side of the root, within tol of it (to rounding of g near the root).
+            assert!(t >= root - 1e-15 && t - root <= tol + 1e-15, "case {k}, tol {tol:e}: {t} against {root}");
+            assert!(g(t).signum() == g(b).signum() || g(t) == 0.0, "case {k}: the near side");
+            assert!(calls <= most, "case {k}, tol {tol:e}: {calls} evaluations (at most {most})");
+        }
+    }
     // Exactly zero at the end: the end.
     assert_eq!(locate(|t| t - 1.0, 0.0, -1.0, 1.0, 0.0, 1e-12), 1.0);
 }
