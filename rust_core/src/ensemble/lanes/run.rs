@@ -176,8 +176,15 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
         // ---- events at the step end; hidden crossings inside the step (unilateral) ----
         let mut g1 = [zero; NE];
         events_lanes::<COUL>(c, &yn, &fzl, &mut g1);
-        let mut hidden = zero; // theta of the interior point to end a redone step at (0: none)
-        if UNI {
+        // Theta of the interior point to end a redone step at (0: none).
+        let mut hidden = zero;
+        // The lanes whose step needs the hidden-crossing check (`near_events`): the check runs
+        // when any does, and acts, counts and leaves its extra stages (DOP853) for those only, so
+        // that a lane's run does not depend on the other lanes of its batch.
+        let need =
+            if UNI { near_events::<COUL>(c, y, k1, &yn, fnew, &ln.g0, &g1, &ln.pend, &ok, &hh) } else { [false; W] };
+        if need.iter().any(|&x| x) {
+            let ok: [bool; W] = std::array::from_fn(|l| ok[l] & need[l]);
             // The interpolant at three interior points: DP5's from its stages, DOP853's needs
             // three more right-hand sides (its 7th-order dense output), counted as work. Only the
             // components the event functions read: under constant friction z, zd and phi.
@@ -374,7 +381,7 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
                 }
                 let span = ((t_start[l], &y0), (t_new[l], &y1));
                 let ev: StepEnd<6, ContactMode> = if M8 {
-                    let dense = if UNI {
+                    let dense = if UNI && need[l] {
                         // The lanes built the interpolant's extra stages for the hidden-crossing
                         // check (and counted them): reuse them.
                         let ext = [lane_state(&extra[0], l), lane_state(&extra[1], l), lane_state(&extra[2], l)];
@@ -453,6 +460,57 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
         }
     }
     out
+}
+
+/// Safety factor of [`near_events`].
+const FAR: f64 = 4.0;
+
+/// The lanes whose accepted step may hold a hidden crossing; the others skip the check (and, for
+/// DOP853, the three extra stages it needs). A lane skips when, for every event function
+/// that is not pending, both ends are more than `FAR` times the step's travel bound
+/// `h (|g'(t0)| + |g'(t1)|)` from zero, with the exact derivatives of the event functions at both
+/// ends (from the state and its derivative there). A crossing and return inside the step would
+/// need the function's slope inside to exceed several times its slopes at both ends: an
+/// oscillation of the event function within one step, which an accepted step of an error-controlled
+/// method does not hold (steps are a small fraction of the period). When it skips, the check would
+/// have found nothing, so the run is the same; on the disk, far from lift-off, it always skips.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn near_events<const COUL: bool>(
+    c: &Coef,
+    y0: &V6,
+    f0: &V6,
+    y1: &V6,
+    f1: &V6,
+    g0: &[[f64; W]; NE],
+    g1: &[[f64; W]; NE],
+    pend: &[[bool; W]; NE],
+    ok: &[bool; W],
+    hh: &[f64; W],
+) -> [bool; W] {
+    let mut near = [false; W];
+    for l in 0..W {
+        // d/dt of each event function (`events_lanes`) at one end.
+        let slopes = |y: &V6, f: &V6| {
+            let (z, zd) = (y[idx::Z][l], y[idx::ZD][l]);
+            let mut d = [0.0; NE];
+            d[event::GAP] = zd;
+            d[event::NORMAL] =
+                (-c.ks[l] + 2.0 * c.ka[l] * z) * zd - c.c[l] * f[idx::ZD][l] + c.kphi[l] * y[idx::PHID][l];
+            d[event::SLIP] = if COUL { -(f[idx::XD][l] + c.sl[l] * f[idx::PHID][l]) } else { 0.0 };
+            d[event::ESCAPE] = zd; // |d|z|/dt| = |zd|
+            d
+        };
+        let (d0, d1) = (slopes(y0, f0), slopes(y1, f1));
+        let mut clear = true;
+        for e in 0..NE {
+            let travel = FAR * hh[l] * (d0[e].abs() + d1[e].abs());
+            // NaN anywhere: not far (the check runs).
+            clear &= pend[e][l] || (g0[e][l].abs() > travel && g1[e][l].abs() > travel);
+        }
+        near[l] = !clear && ok[l];
+    }
+    near
 }
 
 /// Every component: the interpolant of the lanes that take their samples on the lanes.

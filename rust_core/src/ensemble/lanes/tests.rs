@@ -544,9 +544,14 @@ fn driver_cost() {
     p.normal_load = 120.0;
     p.moment_arm = 0.11;
     let bouncing = vec![Slider::new(p).unwrap(); n];
+    let mut q = Params::seed();
+    q.contact = crate::model::ContactModel::Unilateral;
+    let on_disk = vec![Slider::new(q).unwrap(); n];
     for (name, m, sl) in [
         ("dopri5", Method::Dopri5, &sliders),
         ("dop853", Method::Dop853, &sliders),
+        ("dopri5, unilateral, on the disk", Method::Dopri5, &on_disk),
+        ("dop853, unilateral, on the disk", Method::Dop853, &on_disk),
         ("dop853, unilateral, bouncing", Method::Dop853, &bouncing),
     ] {
         let mut best = f64::INFINITY;
