@@ -5,7 +5,7 @@ BIN    := $(VENV)/bin
 # Two cores on CI: build and test with both.
 export CARGO_BUILD_JOBS ?= 2
 
-.PHONY: run test test-rust test-python install install-test lint bench bench-quick clean
+.PHONY: run test test-rust test-python install install-test lint bench bench-quick bench-pybasin clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -56,6 +56,11 @@ bench: install-test
 	$(BIN)/python benches/bench_sweep.py --points 100000 --memory-points 1000000
 	$(BIN)/python benches/bench_census.py
 	$(BIN)/python benches/work_precision.py --out bench_out
+
+# The seed census against pybasin 0.2.0 (needs a Python 3.12 for pybasin: see benches/pybasin_env.sh).
+bench-pybasin:
+	bash benches/pybasin_env.sh
+	.venv-pybasin/bin/python benches/bench_pybasin.py --samples 1024 --horizon 15
 
 bench-quick: install-test
 	$(BIN)/tribosweep bench --quick --out bench_out
