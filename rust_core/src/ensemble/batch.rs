@@ -54,8 +54,8 @@ use crate::ode::dop853::Dop853Dense;
 use crate::ode::dopri5::Dopri5Dense;
 use crate::ode::events::locate;
 use crate::ode::lanes::{
-    dop853_step, dopri5_step, each6, exp_lanes, lane_state, ln_lanes, splat, LaneRhs, ALPHA, ALPHA8, BETA, L,
-    LN_ERR_FLOOR, LN_SAFETY, V6, W,
+    dop853_dense, dop853_step, dopri5_dense, dopri5_step, each6, exp_lanes, lane_state, ln_lanes, splat, LaneRhs,
+    ALPHA, ALPHA8, BETA, L, LN_ERR_FLOOR, LN_SAFETY, V6, W,
 };
 use crate::ode::stepper::StepDense;
 use crate::ode::{Dense, Method, Options, Stats};
@@ -128,6 +128,22 @@ pub fn run_bilateral_batch(
     method: Method,
     tol: &Tolerances,
 ) -> Vec<RunResult> {
+    run_bilateral_batch_sampled(sliders, y0s, t_end, method, tol, &[]).into_iter().map(|(r, _)| r).collect()
+}
+
+/// [`run_bilateral_batch`] with the states at the times `t_eval` (sorted, in `[0, t_end]`) of each
+/// trajectory, by the scalar `Sampler`'s rule on each accepted step: a time at or before the step's
+/// start takes the start, the step end's time the end, any other the step's interpolant (DP5's
+/// from its stages; DOP853's needs three more right-hand sides per sampled step, counted). A run
+/// that escapes has the samples up to the located crossing, then NaN (as `steady::run_sampled`).
+pub fn run_bilateral_batch_sampled(
+    sliders: &[Slider],
+    y0s: &[State],
+    t_end: f64,
+    method: Method,
+    tol: &Tolerances,
+    t_eval: &[f64],
+) -> Vec<(RunResult, Vec<State>)> {
     assert_eq!(sliders.len(), y0s.len(), "run_bilateral_batch: one initial state per slider");
     assert!(supports_method(method), "run_bilateral_batch: method {method:?} is not batched");
     for s in sliders {
@@ -136,11 +152,19 @@ pub fn run_bilateral_batch(
             "run_bilateral_batch: only bilateral contact with constant friction"
         );
     }
-    if method == Method::Dop853 {
-        dispatch::<true>(sliders, y0s, t_end, tol)
+    let mut samples: Vec<Vec<State>> = (0..sliders.len()).map(|_| Vec::with_capacity(t_eval.len())).collect();
+    let runs = if method == Method::Dop853 {
+        dispatch::<true>(sliders, y0s, t_end, tol, t_eval, &mut samples)
     } else {
-        dispatch::<false>(sliders, y0s, t_end, tol)
+        dispatch::<false>(sliders, y0s, t_end, tol, t_eval, &mut samples)
+    };
+    if !t_eval.is_empty() {
+        // As the scalar `run_sampled`: a run that stopped early has NaN at the times it did not reach.
+        for v in &mut samples {
+            v.resize(t_eval.len(), State::repeat(f64::NAN));
+        }
     }
+    runs.into_iter().zip(samples).collect()
 }
 
 /// Whether [`run_bilateral_batch`] integrates with this method.
@@ -148,19 +172,29 @@ pub fn supports_method(m: Method) -> bool {
     matches!(m, Method::Dopri5 | Method::Dop853)
 }
 
-fn dispatch<const M8: bool>(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances) -> Vec<RunResult> {
+/// Samples requested of the batch: the times and, per trajectory, the states.
+type Sampling<'a> = (&'a [f64], &'a mut [Vec<State>]);
+
+fn dispatch<const M8: bool>(
+    sliders: &[Slider],
+    y0s: &[State],
+    t_end: f64,
+    tol: &Tolerances,
+    t_eval: &[f64],
+    samples: &mut [Vec<State>],
+) -> Vec<RunResult> {
     #[cfg(target_arch = "x86_64")]
     {
         if std::is_x86_feature_detected!("avx512f") {
             // SAFETY: the CPU supports the features the function is compiled for.
-            return unsafe { run_avx512::<M8>(sliders, y0s, t_end, tol) };
+            return unsafe { run_avx512::<M8>(sliders, y0s, t_end, tol, (t_eval, samples)) };
         }
         if std::is_x86_feature_detected!("avx2") {
             // SAFETY: as above.
-            return unsafe { run_avx2::<M8>(sliders, y0s, t_end, tol) };
+            return unsafe { run_avx2::<M8>(sliders, y0s, t_end, tol, (t_eval, samples)) };
         }
     }
-    run_impl::<M8>(sliders, y0s, t_end, tol)
+    run_impl::<M8>(sliders, y0s, t_end, tol, (t_eval, samples))
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -170,21 +204,39 @@ unsafe fn run_avx512<const M8: bool>(
     y0s: &[State],
     t_end: f64,
     tol: &Tolerances,
+    sampling: Sampling<'_>,
 ) -> Vec<RunResult> {
-    run_impl::<M8>(sliders, y0s, t_end, tol)
+    run_impl::<M8>(sliders, y0s, t_end, tol, sampling)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn run_avx2<const M8: bool>(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances) -> Vec<RunResult> {
-    run_impl::<M8>(sliders, y0s, t_end, tol)
+unsafe fn run_avx2<const M8: bool>(
+    sliders: &[Slider],
+    y0s: &[State],
+    t_end: f64,
+    tol: &Tolerances,
+    sampling: Sampling<'_>,
+) -> Vec<RunResult> {
+    run_impl::<M8>(sliders, y0s, t_end, tol, sampling)
 }
 
 /// The portable path (also used by the tests to check that the SIMD copies agree bitwise).
 /// `M8`: DOP853, else Dormand–Prince 5(4).
 #[inline(always)]
-fn run_impl<const M8: bool>(sliders: &[Slider], y0s: &[State], t_end: f64, tol: &Tolerances) -> Vec<RunResult> {
+fn run_impl<const M8: bool>(
+    sliders: &[Slider],
+    y0s: &[State],
+    t_end: f64,
+    tol: &Tolerances,
+    (t_eval, samples): Sampling<'_>,
+) -> Vec<RunResult> {
     let n = sliders.len();
+    let sampled = !t_eval.is_empty();
+    let first_sample = t_eval.first().copied().unwrap_or(f64::INFINITY);
+    // Per lane: the index of its trajectory's next sample, and that sample's time.
+    let mut ns = [0usize; W];
+    let mut next_t = [first_sample; W];
     let opts = Options::<6>::new(tol.rtol, 1.0);
     let rtol = tol.rtol;
     let max_steps = opts.max_steps;
@@ -221,6 +273,8 @@ fn run_impl<const M8: bool>(sliders: &[Slider], y0s: &[State], t_end: f64, tol: 
     let mut kk = [[zero; 6]; 16];
     let mut yn = [zero; 6];
     let mut fz = zero;
+    let mut fz_scratch = zero;
+    let mut extra = [[zero; 6]; 3];
 
     while ln.who.iter().any(|&w| w != usize::MAX) {
         rounds += 1;
@@ -262,6 +316,7 @@ fn run_impl<const M8: bool>(sliders: &[Slider], y0s: &[State], t_end: f64, tol: 
                 };
                 finish(&mut ln, l, status, hh[l], &end, &mut out);
                 refill(&mut ln, l, &mut next, sliders, y0s, t_end, tol, M8, &mut out);
+                (ns[l], next_t[l]) = (0, first_sample);
             }
             continue;
         }
@@ -328,6 +383,23 @@ fn run_impl<const M8: bool>(sliders: &[Slider], y0s: &[State], t_end: f64, tol: 
             let end_r = h_new.is_nan() || h_new < floor[l];
             ended[l] = if ok { end_a } else { end_r };
         }
+        // ---- samples: the interpolant of the step, built when some accepted lane passes its next
+        // sample time (before an escape cuts the step: the crossing is located on it) ----
+        let due: [bool; W] =
+            std::array::from_fn(|l| sampled & ok[l] & (ln.who[l] != usize::MAX) & (ln.t[l] >= next_t[l]));
+        let dense = if due.iter().any(|&d| d) {
+            Some(if M8 {
+                for l in 0..W {
+                    ln.n_extra[l] += 3 * due[l] as u64;
+                }
+                dop853_dense(&mut BatchRhs { c, fz: &mut fz_scratch }, &ALL_COMPS, y, &yn, k1, &hh, &kk, &mut extra)
+            } else {
+                dopri5_dense(&ALL_COMPS, y, &yn, [k1, &k[1], &k[2], &k[3], &k[4], &k[5]], &hh)
+            })
+        } else {
+            None
+        };
+
         // Off the common path: only when some lane ends this step.
         let attention = ended.iter().fold(false, |a, &b| a | b);
         if attention && (0..W).any(|l| ok[l] && ended[l] && yn[idx::Z][l].abs() >= c.esc[l]) {
@@ -339,6 +411,30 @@ fn run_impl<const M8: bool>(sliders: &[Slider], y0s: &[State], t_end: f64, tol: 
             };
             let esc = Escapes { c, who: &ln.who, y: &ln.y, stages: &stages, step: &step, sliders, event_tol, m8: M8 };
             locate_escapes(&esc, &mut yn, &mut fz, &mut ln.t, &mut ln.n_extra);
+        }
+        if let Some(d) = &dense {
+            for l in 0..W {
+                if !due[l] {
+                    continue;
+                }
+                // The step as it ends (an escape ends it at the crossing).
+                let (t0, t1, h, i) = (t_start[l], ln.t[l], hh[l], ln.who[l]);
+                while let Some(&t) = t_eval.get(ns[l]) {
+                    if t > t1 {
+                        break;
+                    }
+                    let v = if t <= t0 {
+                        lane_state(&ln.y, l)
+                    } else if t == t1 {
+                        lane_state(&yn, l)
+                    } else {
+                        State::from(d.eval_lane(l, (t - t0) / h))
+                    };
+                    samples[i].push(v);
+                    ns[l] += 1;
+                }
+                next_t[l] = t_eval.get(ns[l]).copied().unwrap_or(f64::INFINITY);
+            }
         }
         for l in 0..W {
             ln.n_acc[l] += ok[l] as u64;
@@ -382,6 +478,7 @@ fn run_impl<const M8: bool>(sliders: &[Slider], y0s: &[State], t_end: f64, tol: 
                 let h = if ln.rejected[l] { ln.h[l] } else { hh[l] };
                 finish(&mut ln, l, status, h, &end, &mut out);
                 refill(&mut ln, l, &mut next, sliders, y0s, t_end, tol, M8, &mut out);
+                (ns[l], next_t[l]) = (0, first_sample);
             }
         }
     }
@@ -390,6 +487,9 @@ fn run_impl<const M8: bool>(sliders: &[Slider], y0s: &[State], t_end: f64, tol: 
         .map(|r| r.unwrap_or_else(|| RunResult::failed(Status::NotComputed, Some(Failure::NotStarted))))
         .collect()
 }
+
+/// Every component: the interpolant of the sampled steps.
+const ALL_COMPS: [usize; 6] = [0, 1, 2, 3, 4, 5];
 
 /// The caller cancelled: every running lane ends where it is (`NotComputed`).
 #[cold]

@@ -1,8 +1,9 @@
 //! Ensembles of slider trajectories: one entry point, [`run`], and the policy that routes an
 //! ensemble to one of three paths.
 //!
-//! - [`Route::Batch`]: [`batch::run_bilateral_batch`], lane-batched Dormand–Prince 5(4) or DOP853 for the end
-//!   state of the bilateral constant-`mu` slider (the fastest path; only the escape is located).
+//! - [`Route::Batch`]: [`batch::run_bilateral_batch_sampled`], lane-batched Dormand–Prince 5(4) or DOP853 for
+//!   the end state, or samples at `t_eval`, of the bilateral constant-`mu` slider (the fastest path;
+//!   only the escape is located).
 //! - [`Route::Lanes`]: [`lanes::run_lanes_threads`], lane-batched Dormand–Prince 5(4) and DOP853 for
 //!   everything else the lanes support (unilateral contact, the Coulomb/Stribeck law, samples at
 //!   `t_eval`, runs to a steady state), with the scalar driver's event code on a cold path.
@@ -128,7 +129,7 @@ fn method_tol(settings: &Settings, task: &Task<'_>) -> (Method, Tolerances) {
 }
 
 /// Whether `route` can compute `task` for these sliders with these settings: the batch only the
-/// end state of bilateral constant-`mu` sliders with DOPRI5 or DOP853 and the default step and event
+/// end state or samples (`t_end > 0`) of bilateral constant-`mu` sliders with DOPRI5 or DOP853 and the default step and event
 /// budgets (it counts no events); the lanes only DOPRI5 or DOP853 and the friction laws they know,
 /// with one contact model and one law for all sliders; the scalar route everything.
 pub fn supports(route: Route, sliders: &[Slider], settings: &Settings, task: &Task<'_>) -> bool {
@@ -137,7 +138,8 @@ pub fn supports(route: Route, sliders: &[Slider], settings: &Settings, task: &Ta
     let shared = sliders.iter().all(|s| s.p.contact == first.p.contact && s.p.friction_law == first.p.friction_law);
     match route {
         Route::Batch => {
-            matches!(task, Task::Final)
+            (matches!(task, Task::Final)
+                || (matches!(task, Task::Sampled(_)) && settings.t_end.is_finite() && settings.t_end > 0.0))
                 && !tol.has_limits()
                 && batch::supports_method(method)
                 && shared
@@ -206,12 +208,14 @@ pub fn run_on(
                 &ranges,
                 threads,
                 |r| {
-                    Some(Ok(batch::run_bilateral_batch(
+                    let t_eval: &[f64] = if let Task::Sampled(te) = task { te } else { &[] };
+                    Some(Ok(batch::run_bilateral_batch_sampled(
                         &sliders[r.clone()],
                         &y0s[r.clone()],
                         settings.t_end,
                         method,
                         &tol,
+                        t_eval,
                     )))
                 },
                 |msg| Some(Err(msg)),
@@ -221,7 +225,10 @@ pub fn run_on(
                 .into_iter()
                 .zip(&ranges)
                 .flat_map(|(p, r)| match p {
-                    Some(Ok(v)) => v.into_iter().map(|run| Ok(TrajectoryResult::from_run(run))).collect::<Vec<_>>(),
+                    Some(Ok(v)) => v
+                        .into_iter()
+                        .map(|(run, samples)| Ok(TrajectoryResult { samples, ..TrajectoryResult::from_run(run) }))
+                        .collect::<Vec<_>>(),
                     Some(Err(msg)) => vec![Err(msg); r.len()],
                     None => vec![Ok(TrajectoryResult::not_started()); r.len()],
                 })

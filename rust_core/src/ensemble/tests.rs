@@ -68,10 +68,17 @@ fn the_policy_picks_the_fastest_route_that_applies() {
     let steady = Task::Steady { opts: &opts, decay: None };
     let dp5 = settings(0.5, Method::Dopri5, 1e-8, None);
     let limited = Settings { tol: Tolerances { max_steps: Some(1000), ..tol(1e-8) }, ..dp5 };
-    let cases: [(&str, &[Slider], Settings, Task<'_>, Route); 12] = [
+    let cases: [(&str, &[Slider], Settings, Task<'_>, Route); 13] = [
         ("bilateral constant end state", &bil, dp5, Task::Final, Route::Batch),
         ("with a step budget (the batch keeps the default)", &bil, limited, Task::Final, Route::Lanes),
-        ("samples", &bil, dp5, Task::Sampled(&te), Route::Lanes),
+        ("samples", &bil, dp5, Task::Sampled(&te), Route::Batch),
+        (
+            "samples of a run that ends at 0",
+            &bil,
+            settings(0.0, Method::Dopri5, 1e-8, None),
+            Task::Sampled(&[0.0]),
+            Route::Lanes,
+        ),
         ("steady state", &bil, dp5, steady, Route::Lanes),
         ("events", &bil, dp5, Task::Events, Route::Lanes),
         ("DOP853", &bil, Settings { method: Method::Dop853, ..dp5 }, Task::Final, Route::Batch),
@@ -246,12 +253,17 @@ fn results_are_bitwise_the_same_for_any_thread_count_and_through_the_entry_point
                 // The entry point adds nothing to the lane paths' arithmetic (the batch route's
                 // grouping included).
                 let direct: Option<Vec<Vec<u64>>> = match r {
-                    Route::Batch => Some(
-                        batch::run_bilateral_batch(&s, &y0, 0.1, Method::Dopri5, &set.tol)
-                            .into_iter()
-                            .map(|x| bits(&TrajectoryResult::from_run(x)))
-                            .collect(),
-                    ),
+                    Route::Batch => {
+                        let t_eval: &[f64] = if let Task::Sampled(te) = task { te } else { &[] };
+                        Some(
+                            batch::run_bilateral_batch_sampled(&s, &y0, 0.1, Method::Dopri5, &set.tol, t_eval)
+                                .into_iter()
+                                .map(|(run, samples)| {
+                                    bits(&TrajectoryResult { samples, ..TrajectoryResult::from_run(run) })
+                                })
+                                .collect(),
+                        )
+                    }
                     Route::Lanes => {
                         Some(lanes::run_lanes(&s, &y0, 0.1, Method::Dopri5, &set.tol, task).iter().map(bits).collect())
                     }

@@ -137,10 +137,67 @@ fn independent_of_the_batch(m: Method) {
         }
     }
     // The portable code path gives the same bits as the SIMD copy picked at run time.
-    let portable =
-        if m == Method::Dop853 { run_impl::<true>(&s, &y0, 0.2, &t) } else { run_impl::<false>(&s, &y0, 0.2, &t) };
+    let portable = if m == Method::Dop853 {
+        run_impl::<true>(&s, &y0, 0.2, &t, (&[], &mut []))
+    } else {
+        run_impl::<false>(&s, &y0, 0.2, &t, (&[], &mut []))
+    };
     for i in 0..s.len() {
         assert!(same(&portable[i], &all[i]), "{m:?} portable #{i}");
+    }
+}
+
+/// Samples at `t_eval`: the scalar `run_sampled`'s to the paths' rounding-level differences (the
+/// same steps on most trajectories, the same interpolant formula), one per time; the escaping run's
+/// stop at the located crossing; independent of the batch bit for bit.
+#[test]
+fn samples_agree_with_the_scalar_path() {
+    for m in [Method::Dopri5, Method::Dop853] {
+        let (mut sl, mut ys) = ensemble(19, 5);
+        // One that escapes (before 20 s), in the middle of the batch.
+        sl.insert(9, Slider::new(Params { mu: 0.35, normal_load: 84.46, ..Params::seed() }).unwrap());
+        ys.insert(9, State::new(1e-6, 0.0, 0.0, 0.0, 0.0, 0.0));
+        let t_end = 20.0;
+        let te: Vec<f64> = (0..=2000).map(|j| t_end * j as f64 / 2000.0).collect();
+        let r = run_bilateral_batch_sampled(&sl, &ys, t_end, m, &tol(1e-6), &te);
+        let (mut worst, mut escaped) = (0.0f64, 0);
+        for (i, (run, samples)) in r.iter().enumerate() {
+            let (sc, ss) = crate::steady::run_sampled(&sl[i], &ys[i], t_end, m, &tol(1e-6), &te);
+            assert_eq!(run.status, sc.status, "{m:?} #{i}");
+            assert_eq!(samples.len(), te.len(), "{m:?} #{i}");
+            // Samples up to the end of the run (for an escape, the located crossing), NaN after it,
+            // as the scalar path's.
+            let reached = samples.iter().take_while(|x| x[0].is_finite()).count();
+            let reached_sc = ss.iter().take_while(|x| x[0].is_finite()).count();
+            assert_eq!(reached, reached_sc, "{m:?} #{i}");
+            assert!(te[reached - 1] <= run.t && samples[reached..].iter().all(|x| x.iter().all(|v| v.is_nan())));
+            escaped += (run.status == Status::Diverged) as usize;
+            assert_eq!(samples[0], ys[i], "{m:?} #{i}: t = 0 is the start");
+            let scale = run.extremes.max_abs_z;
+            // Each path held to its own distance from a tight reference (as the end-state test):
+            // the two differ by rounding per step, amplified along growing runs.
+            let (_, rf) = crate::steady::run_sampled(&sl[i], &ys[i], t_end, Method::Dop853, &tol(1e-12), &te);
+            let (mut e_b, mut e_s) = (0.0f64, 0.0f64);
+            for ((a, b), c) in samples.iter().zip(&ss).zip(&rf).take(reached.min(reached_sc) - 1) {
+                e_b = e_b.max((a[0] - c[0]).abs() / scale);
+                e_s = e_s.max((b[0] - c[0]).abs() / scale);
+            }
+            assert!(e_b <= 10.0 * e_s + 1e-5, "{m:?} #{i}: batch {e_b:e}, scalar {e_s:e}");
+            worst = worst.max(e_b);
+        }
+        assert!(r[9].0.status == Status::Diverged && escaped < r.len(), "{m:?}: {escaped} escaped");
+        println!("{m:?}: largest sample error against rtol 1e-12, batch {worst:.2e} (growing runs over 20 s)");
+        // The batch's composition does not matter.
+        let (rev_s, rev_y): (Vec<Slider>, Vec<State>) = sl.iter().copied().zip(ys.iter().copied()).rev().unzip();
+        let rr = run_bilateral_batch_sampled(&rev_s, &rev_y, t_end, m, &tol(1e-6), &te);
+        for (i, (run, samples)) in r.iter().enumerate() {
+            let (run2, samples2) = &rr[r.len() - 1 - i];
+            assert!(same(run, run2), "{m:?} #{i}");
+            let bits = |v: &Vec<State>| {
+                v.iter().flat_map(|x| x.iter().map(|c| c.to_bits()).collect::<Vec<_>>()).collect::<Vec<_>>()
+            };
+            assert_eq!(bits(samples), bits(samples2), "{m:?} #{i}");
+        }
     }
 }
 
@@ -228,7 +285,7 @@ fn one_path() {
                 }
             }
             "portable" => {
-                std::hint::black_box(run_impl::<false>(&s, &y0, 0.5, &t));
+                std::hint::black_box(run_impl::<false>(&s, &y0, 0.5, &t, (&[], &mut [])));
             }
             _ => {
                 std::hint::black_box(run_bilateral_batch(&s, &y0, 0.5, Method::Dopri5, &t));
@@ -257,9 +314,9 @@ fn throughput() {
         };
         let portable = |t: &Tolerances| {
             if m == Method::Dop853 {
-                run_impl::<true>(&s, &y0, 0.5, t)
+                run_impl::<true>(&s, &y0, 0.5, t, (&[], &mut []))
             } else {
-                run_impl::<false>(&s, &y0, 0.5, t)
+                run_impl::<false>(&s, &y0, 0.5, t, (&[], &mut []))
             }
         };
         let mut best = [f64::INFINITY; 4];
