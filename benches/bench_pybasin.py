@@ -194,10 +194,9 @@ def main() -> None:
     if mism:
         # A referee for the disagreements: the event-driven scipy reference (every switch located),
         # judged on its last windows by tribosweep.bench.census_check (no code shared with the core).
-        from tribosweep.bench import census_check, reference
+        from tribosweep.bench import census_check
 
-        cyc = reference.solve_unilateral(params, orbit.state0.values, 0.3, rtol=1e-9, t_eval=np.linspace(0.1, 0.3, 4001))
-        half = 0.5 * float(np.ptp(cyc.y[0]))
+        half = census_check.cycle_half_range(params, orbit.state0.values)
         for i, x, y, t in mism[: a.referee]:
             ref = census_check.classify_unilateral(params, ds.y0.values[i], a.referee_horizon, float(ds.attrs["saddle_a1"]),
                                                    half, rtol=1e-10)  # fmt: skip

@@ -12,10 +12,17 @@ import numpy as np
 
 from .reference import _Coeffs, solve_unilateral
 
-__all__ = ["CLASS_LABELS", "classify_unilateral"]
+__all__ = ["CLASS_LABELS", "classify_unilateral", "cycle_half_range"]
 
 #: Labels of :func:`classify_unilateral`; "unsettled" runs are left out of comparisons.
 CLASS_LABELS = ("sliding", "cycle", "escape", "unsettled")
+
+
+def cycle_half_range(params: dict, state0) -> float:
+    """Half the peak-to-peak ``z`` of the stable cycle through ``state0`` (m), the ``cycle_half_range``
+    of :func:`classify_unilateral`: the event-driven reference over 0.1-0.3 s from that state."""
+    cyc = solve_unilateral(params, state0, 0.3, rtol=1e-9, t_eval=np.linspace(0.1, 0.3, 4001))
+    return 0.5 * float(np.ptp(cyc.y[0]))
 
 
 def classify_unilateral(params: dict, y0, t_end: float, saddle_a1: float, cycle_half_range: float, *,

@@ -54,8 +54,8 @@ use crate::ode::dop853::Dop853Dense;
 use crate::ode::dopri5::Dopri5Dense;
 use crate::ode::events::locate;
 use crate::ode::lanes::{
-    dop853_dense, dop853_step, dopri5_dense, dopri5_step, each6, exp_lanes, lane_state, ln_lanes, splat, LaneRhs,
-    ALPHA, ALPHA8, BETA, L, LN_ERR_FLOOR, LN_SAFETY, V6, W,
+    dop853_dense, dop853_step, dopri5_dense, dopri5_step, each6, exp_lanes, lane_state, ln_lanes, sample_lane, splat,
+    LaneRhs, ALL_COMPS, ALPHA, ALPHA8, BETA, L, LN_ERR_FLOOR, LN_SAFETY, V6, W,
 };
 use crate::ode::stepper::StepDense;
 use crate::ode::{Dense, Method, Options, Stats};
@@ -153,11 +153,8 @@ pub fn run_bilateral_batch_sampled(
         );
     }
     let mut samples: Vec<Vec<State>> = (0..sliders.len()).map(|_| Vec::with_capacity(t_eval.len())).collect();
-    let runs = if method == Method::Dop853 {
-        dispatch::<true>(sliders, y0s, t_end, tol, t_eval, &mut samples)
-    } else {
-        dispatch::<false>(sliders, y0s, t_end, tol, t_eval, &mut samples)
-    };
+    let job = Job { sliders, y0s, t_end, tol, t_eval, samples: &mut samples };
+    let runs = if method == Method::Dop853 { dispatch::<true>(job) } else { dispatch::<false>(job) };
     if !t_eval.is_empty() {
         // As the scalar `run_sampled`: a run that stopped early has NaN at the times it did not reach.
         for v in &mut samples {
@@ -172,70 +169,54 @@ pub fn supports_method(m: Method) -> bool {
     matches!(m, Method::Dopri5 | Method::Dop853)
 }
 
-/// Samples requested of the batch: the times and, per trajectory, the states.
-type Sampling<'a> = (&'a [f64], &'a mut [Vec<State>]);
-
-fn dispatch<const M8: bool>(
-    sliders: &[Slider],
-    y0s: &[State],
+/// One call's trajectories, horizon, tolerances and samples requested: the times and, per
+/// trajectory, the states (empty `t_eval`: the end state only).
+struct Job<'a> {
+    sliders: &'a [Slider],
+    y0s: &'a [State],
     t_end: f64,
-    tol: &Tolerances,
-    t_eval: &[f64],
-    samples: &mut [Vec<State>],
-) -> Vec<RunResult> {
+    tol: &'a Tolerances,
+    t_eval: &'a [f64],
+    samples: &'a mut [Vec<State>],
+}
+
+fn dispatch<const M8: bool>(job: Job<'_>) -> Vec<RunResult> {
     #[cfg(target_arch = "x86_64")]
     {
         if std::is_x86_feature_detected!("avx512f") {
             // SAFETY: the CPU supports the features the function is compiled for.
-            return unsafe { run_avx512::<M8>(sliders, y0s, t_end, tol, (t_eval, samples)) };
+            return unsafe { run_avx512::<M8>(job) };
         }
         if std::is_x86_feature_detected!("avx2") {
             // SAFETY: as above.
-            return unsafe { run_avx2::<M8>(sliders, y0s, t_end, tol, (t_eval, samples)) };
+            return unsafe { run_avx2::<M8>(job) };
         }
     }
-    run_impl::<M8>(sliders, y0s, t_end, tol, (t_eval, samples))
+    run_impl::<M8>(job)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
-unsafe fn run_avx512<const M8: bool>(
-    sliders: &[Slider],
-    y0s: &[State],
-    t_end: f64,
-    tol: &Tolerances,
-    sampling: Sampling<'_>,
-) -> Vec<RunResult> {
-    run_impl::<M8>(sliders, y0s, t_end, tol, sampling)
+unsafe fn run_avx512<const M8: bool>(job: Job<'_>) -> Vec<RunResult> {
+    run_impl::<M8>(job)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn run_avx2<const M8: bool>(
-    sliders: &[Slider],
-    y0s: &[State],
-    t_end: f64,
-    tol: &Tolerances,
-    sampling: Sampling<'_>,
-) -> Vec<RunResult> {
-    run_impl::<M8>(sliders, y0s, t_end, tol, sampling)
+unsafe fn run_avx2<const M8: bool>(job: Job<'_>) -> Vec<RunResult> {
+    run_impl::<M8>(job)
 }
 
 /// The portable path (also used by the tests to check that the SIMD copies agree bitwise).
 /// `M8`: DOP853, else Dormand–Prince 5(4).
 #[inline(always)]
-fn run_impl<const M8: bool>(
-    sliders: &[Slider],
-    y0s: &[State],
-    t_end: f64,
-    tol: &Tolerances,
-    (t_eval, samples): Sampling<'_>,
-) -> Vec<RunResult> {
+fn run_impl<const M8: bool>(job: Job<'_>) -> Vec<RunResult> {
+    let Job { sliders, y0s, t_end, tol, t_eval, samples } = job;
     let n = sliders.len();
     let sampled = !t_eval.is_empty();
     let first_sample = t_eval.first().copied().unwrap_or(f64::INFINITY);
-    // Per lane: the index of its trajectory's next sample, and that sample's time.
-    let mut ns = [0usize; W];
+    // Per lane: the time of its trajectory's next sample (its index is the length of the
+    // trajectory's samples so far).
     let mut next_t = [first_sample; W];
     let opts = Options::<6>::new(tol.rtol, 1.0);
     let rtol = tol.rtol;
@@ -316,7 +297,7 @@ fn run_impl<const M8: bool>(
                 };
                 finish(&mut ln, l, status, hh[l], &end, &mut out);
                 refill(&mut ln, l, &mut next, sliders, y0s, t_end, tol, M8, &mut out);
-                (ns[l], next_t[l]) = (0, first_sample);
+                next_t[l] = first_sample;
             }
             continue;
         }
@@ -418,22 +399,8 @@ fn run_impl<const M8: bool>(
                     continue;
                 }
                 // The step as it ends (an escape ends it at the crossing).
-                let (t0, t1, h, i) = (t_start[l], ln.t[l], hh[l], ln.who[l]);
-                while let Some(&t) = t_eval.get(ns[l]) {
-                    if t > t1 {
-                        break;
-                    }
-                    let v = if t <= t0 {
-                        lane_state(&ln.y, l)
-                    } else if t == t1 {
-                        lane_state(&yn, l)
-                    } else {
-                        State::from(d.eval_lane(l, (t - t0) / h))
-                    };
-                    samples[i].push(v);
-                    ns[l] += 1;
-                }
-                next_t[l] = t_eval.get(ns[l]).copied().unwrap_or(f64::INFINITY);
+                let span = (t_start[l], ln.t[l], hh[l]);
+                next_t[l] = sample_lane(t_eval, &mut samples[ln.who[l]], d, l, span, &ln.y, &yn);
             }
         }
         for l in 0..W {
@@ -478,7 +445,7 @@ fn run_impl<const M8: bool>(
                 let h = if ln.rejected[l] { ln.h[l] } else { hh[l] };
                 finish(&mut ln, l, status, h, &end, &mut out);
                 refill(&mut ln, l, &mut next, sliders, y0s, t_end, tol, M8, &mut out);
-                (ns[l], next_t[l]) = (0, first_sample);
+                next_t[l] = first_sample;
             }
         }
     }
@@ -487,9 +454,6 @@ fn run_impl<const M8: bool>(
         .map(|r| r.unwrap_or_else(|| RunResult::failed(Status::NotComputed, Some(Failure::NotStarted))))
         .collect()
 }
-
-/// Every component: the interpolant of the sampled steps.
-const ALL_COMPS: [usize; 6] = [0, 1, 2, 3, 4, 5];
 
 /// The caller cancelled: every running lane ends where it is (`NotComputed`).
 #[cold]

@@ -164,6 +164,40 @@ pub(crate) fn lane_state(v: &V6, l: usize) -> SVector<f64, 6> {
     SVector::<f64, 6>::from_fn(|i, _| v[i][l])
 }
 
+/// Every state component (the interpolant of steps whose samples are taken on the lanes).
+pub(crate) const ALL_COMPS: [usize; 6] = [0, 1, 2, 3, 4, 5];
+
+/// Lane `l`'s samples at its times `t_eval` inside its accepted step `(t0, t1, h)` from `y0` to
+/// `y1`, appended to `out` (whose length is the index of the lane's next sample), by the scalar
+/// `Sampler`'s rule: a time at or before the start takes the start, the end's time the end, any
+/// other the step's interpolant `dense`. Returns the time of the next sample (infinity: none).
+#[inline]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn sample_lane(
+    t_eval: &[f64],
+    out: &mut Vec<SVector<f64, 6>>,
+    dense: &LaneDense<6>,
+    l: usize,
+    (t0, t1, h): (f64, f64, f64),
+    y0: &V6,
+    y1: &V6,
+) -> f64 {
+    while let Some(&t) = t_eval.get(out.len()) {
+        if t > t1 {
+            break;
+        }
+        let v = if t <= t0 {
+            lane_state(y0, l)
+        } else if t == t1 {
+            lane_state(y1, l)
+        } else {
+            SVector::from(dense.eval_lane(l, (t - t0) / h))
+        };
+        out.push(v);
+    }
+    t_eval.get(out.len()).copied().unwrap_or(f64::INFINITY)
+}
+
 /// `events::crosses` without short-circuit evaluation, so that loops over lanes vectorise.
 #[inline(always)]
 pub(crate) fn cross(a: f64, b: f64) -> bool {

@@ -21,6 +21,13 @@ fn ensemble(n: usize, seed: u64) -> (Vec<Slider>, Vec<State>) {
     (s, y0)
 }
 
+impl<'a> Job<'a> {
+    /// The end states of `sliders` from `y0s`, no samples.
+    fn end_states(sliders: &'a [Slider], y0s: &'a [State], t_end: f64, tol: &'a Tolerances) -> Self {
+        Job { sliders, y0s, t_end, tol, t_eval: &[], samples: &mut [] }
+    }
+}
+
 fn tol(rtol: f64) -> Tolerances {
     Tolerances::new(rtol)
 }
@@ -138,9 +145,9 @@ fn independent_of_the_batch(m: Method) {
     }
     // The portable code path gives the same bits as the SIMD copy picked at run time.
     let portable = if m == Method::Dop853 {
-        run_impl::<true>(&s, &y0, 0.2, &t, (&[], &mut []))
+        run_impl::<true>(Job::end_states(&s, &y0, 0.2, &t))
     } else {
-        run_impl::<false>(&s, &y0, 0.2, &t, (&[], &mut []))
+        run_impl::<false>(Job::end_states(&s, &y0, 0.2, &t))
     };
     for i in 0..s.len() {
         assert!(same(&portable[i], &all[i]), "{m:?} portable #{i}");
@@ -285,7 +292,7 @@ fn one_path() {
                 }
             }
             "portable" => {
-                std::hint::black_box(run_impl::<false>(&s, &y0, 0.5, &t, (&[], &mut [])));
+                std::hint::black_box(run_impl::<false>(Job::end_states(&s, &y0, 0.5, &t)));
             }
             _ => {
                 std::hint::black_box(run_bilateral_batch(&s, &y0, 0.5, Method::Dopri5, &t));
@@ -314,9 +321,9 @@ fn throughput() {
         };
         let portable = |t: &Tolerances| {
             if m == Method::Dop853 {
-                run_impl::<true>(&s, &y0, 0.5, t, (&[], &mut []))
+                run_impl::<true>(Job::end_states(&s, &y0, 0.5, t))
             } else {
-                run_impl::<false>(&s, &y0, 0.5, t, (&[], &mut []))
+                run_impl::<false>(Job::end_states(&s, &y0, 0.5, t))
             }
         };
         let mut best = [f64::INFINITY; 4];

@@ -13,8 +13,8 @@ use crate::ode::dopri5::Dopri5Dense;
 use crate::ode::events::{step_events, StepEnd};
 use crate::ode::lanes::LaneDense;
 use crate::ode::lanes::{
-    cross, dop853_dense, dop853_step, dopri5_dense, dopri5_step, each6, exp_lanes, lane_state, ln_lanes, splat, ALPHA,
-    ALPHA8, BETA, LN_ERR_FLOOR, LN_SAFETY, V6, W,
+    cross, dop853_dense, dop853_step, dopri5_dense, dopri5_step, each6, exp_lanes, lane_state, ln_lanes, sample_lane,
+    splat, ALL_COMPS, ALPHA, ALPHA8, BETA, LN_ERR_FLOOR, LN_SAFETY, V6, W,
 };
 use crate::ode::stepper::StepDense;
 use crate::ode::{Control, Observer, OdeSystem, Options, Outcome, StepView, MAX_EVENTS};
@@ -513,30 +513,12 @@ fn near_events<const COUL: bool>(
     near
 }
 
-/// Every component: the interpolant of the lanes that take their samples on the lanes.
-const ALL_COMPS: [usize; 6] = [0, 1, 2, 3, 4, 5];
-
-/// Lane `l`'s samples at its `t_eval` points inside its accepted step `(t0, t1, h)` (before the
-/// lane's state is committed: `ln.y` holds the step's start, `yn` its end), by the scalar
-/// `Sampler`'s rule: a time at or before the start takes the start, the end's time the end, any
-/// other the interpolant.
-fn sample_on_lane(ln: &mut Lanes<'_>, l: usize, dense: &LaneDense<6>, (t0, t1, h): (f64, f64, f64), yn: &V6) {
+/// Lane `l`'s samples inside its accepted step (before the lane's state is committed: `ln.y`
+/// holds the step's start, `yn` its end): [`sample_lane`] into its sampler's output.
+fn sample_on_lane(ln: &mut Lanes<'_>, l: usize, dense: &LaneDense<6>, span: (f64, f64, f64), yn: &V6) {
     let Some(sd) = ln.side[l].as_mut() else { return };
     let Watch::Sample(smp) = &mut sd.obs.inner else { return };
-    while let Some(&t) = smp.t_eval.get(smp.out.len()) {
-        if t > t1 {
-            break;
-        }
-        let v = if t <= t0 {
-            lane_state(&ln.y, l)
-        } else if t == t1 {
-            lane_state(yn, l)
-        } else {
-            State::from(dense.eval_lane(l, (t - t0) / h))
-        };
-        smp.out.push(v);
-    }
-    ln.next_sample[l] = smp.t_eval.get(smp.out.len()).copied().unwrap_or(f64::INFINITY);
+    ln.next_sample[l] = sample_lane(smp.t_eval, &mut smp.out, dense, l, span, &ln.y, yn);
 }
 
 /// The scalar driver's handling of one accepted step of one lane: its events (located on the
