@@ -6,6 +6,7 @@ run in the same process (the machines are shared: absolute seconds drift with th
     python benches/bench_census.py                 # one point K = 1024, 2,000-point sweep at K = 16
     python benches/bench_census.py --sweep-points 120 --samples 16 --threads 2
     python benches/bench_census.py --scipy 128 --sweep-points 0   # labels against scipy, 128 starts
+    python benches/bench_census.py --compare --sweep-points 0     # the stationarity stop against t_max
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ import time
 import numpy as np
 
 import tribosweep as ts
+from tribosweep._settings import DEFAULTS
 
 
 def one_point(k: int, threads: int | None) -> None:
@@ -80,6 +82,38 @@ def sweep(n_loads: int, n_arms: int, n_speeds: int, k: int, threads: int | None)
           f"{censused // n_speeds} computed), coexisting attractors at {coexist}")  # fmt: skip
 
 
+def compare_irregular_stop(n_loads: int, n_arms: int, k: int, threads: int | None) -> None:
+    """The census with the stationarity stop of irregular motion against runs to t_max, sample by sample.
+
+    The points are those the default sweep censuses (stable, with a saddle cycle) at 0.3 m/s; the
+    census there is the same at every speed under constant friction.
+    """
+    import dataclasses
+
+    loads, arms = np.linspace(10, 150, n_loads), np.linspace(0.05, 0.127, n_arms)
+    ds = ts.sweep(normal_load=loads, arm_length=arms, sliding_speed=[0.3], samples=1, progress=False, threads=threads)
+    pts = [(a, b) for a in loads for b in arms if int(ds.census_samples.sel(normal_load=a, arm_length=b).item()) > 0]
+    out = {}
+    for block in (0, DEFAULTS.census.irregular_block):
+        t0 = time.perf_counter()
+        runs = [ts.census(dataclasses.replace(ts.apparatus_model(a, b, 0.3), contact="unilateral"), samples=k,
+                          irregular_block=block, threads=threads) for a, b in pts]  # fmt: skip
+        out[block] = (time.perf_counter() - t0, np.array([r.attractor_reached.values for r in runs]),
+                      np.array([r.t_end.values for r in runs]))  # fmt: skip
+    (w0, a0, t0_), (w1, a1, t1_) = out.values()
+    names = ts.ATTRACTOR_NAMES
+    for (w, a, t), label in ((out[0], "to t_max"), (out[max(out)], f"block {max(out)}")):
+        counts = ", ".join(f"{n} {int((a == i).sum())}" for i, n in enumerate(names))
+        print(f"census {label}: {len(pts)} points x K = {k}: {w:.1f} s, simulated {t.sum():.0f} s; {counts}")
+    moved = a0 != a1
+    pairs = {}
+    for x, y in zip(a0[moved], a1[moved]):
+        key = f"{names[x] if x >= 0 else 'failed'} -> {names[y] if y >= 0 else 'failed'}"
+        pairs[key] = pairs.get(key, 0) + 1
+    print(f"  labels that differ: {int(moved.sum())} of {a0.size} ({100 * moved.mean():.1f} %): {pairs}; "
+          f"cost {w0 / w1:.2f}x lower, simulated time {t0_.sum() / t1_.sum():.2f}x")  # fmt: skip
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--samples-one", type=int, default=1024)
@@ -87,11 +121,14 @@ def main() -> None:
     ap.add_argument("--sweep-points", type=int, choices=(0, 120, 2000), default=2000)
     ap.add_argument("--scipy", type=int, default=0, help="compare this many census labels with scipy's")
     ap.add_argument("--threads", type=int, default=None)
+    ap.add_argument("--compare", action="store_true", help="the stationarity stop against runs to t_max (K = --samples)")
     a = ap.parse_args()
     print(f"cores {os.cpu_count()}, load average {os.getloadavg()[0]:.2f}")
     one_point(a.samples_one, a.threads)
     if a.scipy:
         scipy_agreement(a.scipy)
+    if a.compare:
+        compare_irregular_stop(40, 10, a.samples, a.threads)
     if a.sweep_points == 2000:
         sweep(40, 10, 5, a.samples, a.threads)
     elif a.sweep_points == 120:

@@ -161,6 +161,30 @@ def test_early_return_to_sliding_agrees_with_running_on(seed64, monkeypatch):
     assert t_early.sum() < 0.3 * t_full.sum()  # 81 % saved (2026-11-25; 62 % when measured in sizes)
 
 
+def test_irregular_motion_stops_early_with_the_same_fractions():
+    """The stationarity test stops sustained irregular motion long before t_max, and the fractions stand.
+
+    At 20.8 N, 11 cm (0.3 m/s) most disturbances end in sustained irregular bouncing and the rest
+    return to sliding; on the default sweep's census none of its 16 samples changed label with the
+    test on. Run on to t_max = 30 s instead, the fractions agree within 3 standard errors of their
+    difference, while the irregular samples are stopped after about 5-8 s (three blocks of 256
+    sections at about 130 Hz) instead of 30.
+    """
+    k = 64
+    m = ts.apparatus_model(20.7692, 0.1099, 0.3, base=SEED_U)
+    on, off = ts.census(m, samples=k), ts.census(m, samples=k, irregular_block=0)
+    assert on.attrs["irregular_block"] == 256 and off.attrs["irregular_block"] == 0
+    _within_3_se(on, off, k)
+    irr_on, irr_off = on.attractor_reached.values == 2, off.attractor_reached.values == 2
+    assert irr_on.sum() >= k // 3 and irr_off.sum() >= k // 3  # the comparison covers many early stops
+    assert np.all(off.t_end.values[irr_off] == 30.0)
+    t = on.t_end.values[irr_on]
+    assert np.median(t) < 10.0 and t.min() > 3.0, np.percentile(t, [0, 50, 100])
+    # The other samples are untouched: a sample that settles before the test can decide ends the same way.
+    settled = ~irr_on & ~irr_off
+    np.testing.assert_array_equal(on.t_end.values[settled], off.t_end.values[settled])
+
+
 def test_the_return_to_sliding_is_measured_in_the_saddle_cycles_own_shape(seed64):
     # The thresholds are RETURN_FRACTION of the describing function's saddle root in every
     # component (docs/model.md §5: A1 = 21.52 um, phi1 = 2.066e-3 rad, omega = 647.56 rad/s at the
@@ -252,6 +276,8 @@ def test_a_sweep_point_has_the_standalone_census():
         ({"t_max": -1.0}, "t_max"),
         ({"rtol": 2.0}, "rtol"),
         ({"integrator": "euler"}, "euler"),
+        ({"irregular_block": -1}, r"irregular_block = -1 is out of range: must be an integer in \[0, "),
+        ({"irregular_block": 2.5}, "irregular_block"),
     ],
 )
 def test_census_rejects_bad_input(kwargs, needle):

@@ -123,3 +123,16 @@ def budget(name: str, value) -> int | None:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
         raise ValueError(f"{name} = {value!r} is out of range: must be an integer >= 1 or None")
     return int(value)
+
+
+#: Largest block of the census's stationarity test (sections).
+MAX_BLOCK: int = 1_000_000
+
+
+def block(name: str, value) -> int:
+    """An integer in [0, MAX_BLOCK]: sections per block of a stationarity test, 0 for off."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not 0 <= value <= MAX_BLOCK:
+        raise ValueError(
+            f"{name} = {value!r} is out of range: must be an integer in [0, {MAX_BLOCK}] (sections per block; 0: off)"
+        )
+    return int(value)

@@ -93,6 +93,7 @@ def ensemble(
     decay_amplitudes: npt.NDArray[np.float64] | None = None,
     watch_x: bool = True,
     decay_thresholds: npt.NDArray[np.float64] | None = None,
+    irregular_block: int = 0,
 ) -> dict[str, Any]: ...
 def linear_stability(
     base: dict[str, float],

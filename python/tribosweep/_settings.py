@@ -144,6 +144,11 @@ class Census:
         Largest modal amplitude of a disturbance in units of ``|z_st|``, the size at which the
         contact opens (3: at the seed the saddle cycle's A1 is 1.35 |z_st| and the bouncing
         cycle's 1.43 |z_st|, so the box reaches past both).
+    irregular_block : int
+        Sections per block of the stationarity test (256; 0: off). A disturbance in bounded motion
+        that neither repeats nor decays stops as ``irregular`` once three consecutive blocks agree:
+        the mean distance of each section state to the nearest of the 8 before it within 25 %,
+        and the largest excursion of each component within 5 %. Off, it runs to ``t_max``.
 
     Notes
     -----
@@ -155,6 +160,7 @@ class Census:
     samples: int = 32
     t_max: float = 30.0
     disturbance_scale: float = 3.0
+    irregular_block: int = 256
 
     def __post_init__(self):
         _set(self, "enabled", bool(self.enabled))
@@ -167,6 +173,7 @@ class Census:
         _set(self, "samples", int(self.samples))
         _set(self, "t_max", _checks.positive("census_t_max", self.t_max))
         _set(self, "disturbance_scale", _checks.positive("disturbance_scale", self.disturbance_scale))
+        _set(self, "irregular_block", _checks.block("census_irregular_block", self.irregular_block))
 
 
 @dataclass(frozen=True)
@@ -246,6 +253,7 @@ _FLAT: tuple[tuple[str, str, str], ...] = (
     ("samples", "census", "samples"),
     ("census_t_max", "census", "t_max"),
     ("disturbance_scale", "census", "disturbance_scale"),
+    ("census_irregular_block", "census", "irregular_block"),
     ("unstable_disturbance", "", "unstable_disturbance"),
     ("irregular_window", "irregular", "window"),
     ("irregular_sample_dt", "irregular", "sample_dt"),

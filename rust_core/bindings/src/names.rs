@@ -40,7 +40,7 @@ fn method_names() -> Vec<&'static str> {
 #[pyfunction]
 fn steady_outcome_names() -> Vec<&'static str> {
     use SteadyOutcome::*;
-    [Decayed, Periodic, Diverged, Unsettled, Failed].iter().map(|o| o.name()).collect()
+    [Decayed, Periodic, Diverged, Unsettled, Failed, Irregular].iter().map(|o| o.name()).collect()
 }
 
 /// How a periodic orbit is unstable (`PeriodicOrbit::instability`), in code order.

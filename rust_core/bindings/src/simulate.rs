@@ -134,12 +134,14 @@ fn with_reasons(out: Vec<Result<TrajectoryResult, String>>, steady: bool) -> Vec
 
 /// Many trajectories in parallel (GIL released). `kind` is "final" (end state), "sampled"
 /// (states at `t_eval`) or "steady" (run to steady state and summarise; `t_end` is then `t_max`;
-/// `watch_x=False`: the settling tests ignore `x, xd` where they are slaved, under constant friction).
+/// `watch_x=False`: the settling tests ignore `x, xd` where they are slaved, under constant friction;
+/// `irregular_block > 0`: sustained irregular motion stops once stationary over three blocks of
+/// that many sections, outcome "irregular").
 /// The core picks the path (lane-batched or scalar) and the grouping; results do not depend on it
 /// beyond integration accuracy, nor on the thread count at all. Every non-success status has a
 /// reason; Ctrl-C stops every thread (`KeyboardInterrupt`, the results are dropped).
 #[pyfunction]
-#[pyo3(signature = (base, contact, friction_law, names, values, y0, t_end, method, rtol, *, atol=None, t_eval=None, threads=None, kind="final", periodic_tol=1e-5, decay_amplitude=None, n_fourier=512, max_steps=None, max_events=None, decay_amplitudes=None, watch_x=true, decay_thresholds=None))]
+#[pyo3(signature = (base, contact, friction_law, names, values, y0, t_end, method, rtol, *, atol=None, t_eval=None, threads=None, kind="final", periodic_tol=1e-5, decay_amplitude=None, n_fourier=512, max_steps=None, max_events=None, decay_amplitudes=None, watch_x=true, decay_thresholds=None, irregular_block=0))]
 #[allow(clippy::too_many_arguments)]
 fn ensemble<'py>(
     py: Python<'py>,
@@ -164,6 +166,7 @@ fn ensemble<'py>(
     decay_amplitudes: Option<PyReadonlyArray1<'py, f64>>,
     watch_x: bool,
     decay_thresholds: Option<PyReadonlyArray2<'py, f64>>,
+    irregular_block: usize,
 ) -> PyResult<Bound<'py, PyDict>> {
     let call = Call::rows(py, &base, contact, friction_law, &names, &values, threads)?;
     let n = call.len();
@@ -204,6 +207,7 @@ fn ensemble<'py>(
                 decay_amplitude,
                 n_fourier,
                 watch_x,
+                irregular_block,
                 ..SteadyOptions::default()
             };
             let task = Task::Steady { opts: &opts, decay: decays.as_deref() };

@@ -281,6 +281,9 @@ pub enum SteadyOutcome {
     Unsettled = 3,
     /// The integration failed (see the status).
     Failed = 4,
+    /// Sustained irregular motion: bounded, and its statistics on the section stationary over
+    /// three blocks while it neither repeats nor decays (only with `SteadyOptions::irregular_block`).
+    Irregular = 5,
 }
 
 impl SteadyOutcome {
@@ -292,6 +295,7 @@ impl SteadyOutcome {
             SteadyOutcome::Diverged => "diverged",
             SteadyOutcome::Unsettled => "unsettled",
             SteadyOutcome::Failed => "failed",
+            SteadyOutcome::Irregular => "irregular",
         }
     }
 }
@@ -326,6 +330,9 @@ pub struct SteadyOptions {
     /// which asks which attractor, turns this off; runs that report `x`'s amplitude keep it. Under
     /// a speed-dependent law `x` acts back through the sliding velocity and is always watched.
     pub watch_x: bool,
+    /// Sections per block of the stationarity test that stops sustained irregular motion early
+    /// ([`SteadyOutcome::Irregular`]); 0 turns it off (the run then goes on to `t_max`).
+    pub irregular_block: usize,
 }
 
 impl Default for SteadyOptions {
@@ -340,6 +347,7 @@ impl Default for SteadyOptions {
             decay_window: 8,
             n_fourier: 512,
             watch_x: true,
+            irregular_block: 0,
         }
     }
 }
@@ -424,152 +432,6 @@ impl Summary {
     }
 }
 
-#[derive(Clone, Copy)]
-struct Crossing {
-    t: f64,
-    y: State,
-    /// Largest |y_c| of each component since the previous crossing.
-    peaks: State,
-}
-
-/// Watches the Poincare section and decides when the run has settled.
-pub(crate) struct SectionWatcher {
-    ring: Vec<Crossing>,
-    n_seen: usize,
-    pub(crate) peak_since: f64,
-    pub(crate) peaks_since: State,
-    tol: f64,
-    /// The decay test: the largest `peaks[c] / decay_scale[c]` over the compared components,
-    /// times `decay_unit`, below `decay_amp`.
-    decay_scale: [f64; 6],
-    decay_unit: f64,
-    decay_amp: f64,
-    window: usize,
-    found: Option<(usize, f64)>,
-    decayed: bool,
-    matches_in_row: [u32; MAX_MULTIPLICITY + 1],
-    sizes: [f64; 6],
-    /// The components the repetition and decay tests compare (`SteadyOptions::watch_x`).
-    comps: &'static [usize],
-}
-
-const ALL: [usize; 6] = [0, 1, 2, 3, 4, 5];
-const NOT_X: [usize; 4] = [idx::Z, idx::ZD, idx::PHI, idx::PHID];
-
-const RING: usize = 64;
-
-/// Relative repetition tolerance under which a found multiplicity `p` is reduced to a divisor
-/// (a period-doubled orbit whose two halves differ by less than this is reported as period-1).
-pub const REDUCE_TOL: f64 = 1e-2;
-
-impl SectionWatcher {
-    fn new(opts: &SteadyOptions, s: &Slider) -> Self {
-        let sizes = characteristic_sizes(s);
-        SectionWatcher {
-            ring: Vec::with_capacity(RING),
-            n_seen: 0,
-            peak_since: 0.0,
-            peaks_since: State::zeros(),
-            tol: opts.periodic_tol,
-            decay_scale: opts.decay_thresholds.unwrap_or(sizes),
-            decay_unit: if opts.decay_thresholds.is_some() { 1.0 } else { sizes[0] },
-            decay_amp: if opts.decay_thresholds.is_some() { 1.0 } else { decay_amplitude(opts, s) },
-            window: opts.decay_window.max(2),
-            found: None,
-            decayed: false,
-            matches_in_row: [0; MAX_MULTIPLICITY + 1],
-            sizes,
-            comps: if opts.watch_x || s.p.friction_law != FrictionLaw::Constant { &ALL } else { &NOT_X },
-        }
-    }
-
-    fn get(&self, back: usize) -> &Crossing {
-        // back = 0: newest
-        let i = (self.n_seen - 1 - back) % RING;
-        &self.ring[i]
-    }
-
-    fn push(&mut self, c: Crossing) {
-        if self.ring.len() < RING {
-            self.ring.push(c);
-        } else {
-            self.ring[self.n_seen % RING] = c;
-        }
-        self.n_seen += 1;
-        self.check();
-    }
-
-    /// Whether the newest section state equals the one `d` crossings back within `rel` relative
-    /// to each component's amplitude (floored at a millionth of its characteristic size, so that a
-    /// component that hardly moves does not demand the impossible).
-    fn repeats(&self, d: usize, rel: f64) -> bool {
-        let (a, b) = (self.get(0), self.get(d));
-        // The motion's own scale over the compared span (a minor maximum's interval alone may
-        // miss a component's extreme).
-        let amp = (0..d).fold(State::zeros(), |m, k| m.sup(&self.get(k).peaks));
-        self.comps.iter().all(|&c| (a.y[c] - b.y[c]).abs() <= rel * amp[c].max(1e-6 * self.sizes[c]))
-    }
-
-    fn check(&mut self) {
-        let n = self.n_seen;
-        for p in 1..=MAX_MULTIPLICITY {
-            if n <= p {
-                break;
-            }
-            let a = self.get(0);
-            let b = self.get(p);
-            let mut ok = self.repeats(p, self.tol);
-            let dt_now = a.t - b.t;
-            if ok && n > 2 * p {
-                let dt_prev = self.get(p).t - self.get(2 * p).t;
-                ok = (dt_now - dt_prev).abs() <= self.tol.max(1e-12) * dt_now;
-            } else if n <= 2 * p {
-                ok = false;
-            }
-            if ok {
-                self.matches_in_row[p] += 1;
-                if self.matches_in_row[p] >= 2 {
-                    // A residual slow transient can fool the test: at the seed's bouncing cycle
-                    // the lightly damped x mode (306 rad/s) is nearly commensurate with two cycle
-                    // periods, so p = 4 matches while the true p = 2 misses by the residual.
-                    // Reduce p to its smallest divisor whose states repeat to REDUCE_TOL; a true
-                    // sub-multiple structure (major/minor maxima of z) differs by far more.
-                    let d =
-                        (1..p).filter(|d| p % d == 0).find(|&d| self.repeats(d, REDUCE_TOL.max(self.tol))).unwrap_or(p);
-                    self.found = Some((d, self.get(0).t - self.get(d).t));
-                    return;
-                }
-            } else {
-                self.matches_in_row[p] = 0;
-            }
-        }
-        // Decay: the motion, measured on every component in units of its characteristic size
-        // (so that a torsion oscillation with little z is not missed) or of its own threshold,
-        // is small over the newest window and below the window before it.
-        let w = self.window;
-        if n >= 2 * w {
-            let rel = |b: usize| {
-                let c = self.get(b);
-                self.comps.iter().map(|&k| c.peaks[k] / self.decay_scale[k]).fold(0.0, f64::max)
-            };
-            let recent = (0..w).map(rel).fold(0.0, f64::max);
-            let before = (w..2 * w).map(rel).fold(0.0, f64::max);
-            if recent * self.decay_unit < self.decay_amp && recent < before {
-                self.decayed = true;
-            }
-        }
-    }
-
-    /// Mean angular frequency of section crossings over the newest `k` intervals.
-    fn mean_omega(&self, k: usize) -> f64 {
-        let k = k.min(self.n_seen.saturating_sub(1)).min(RING - 1);
-        if k == 0 {
-            return f64::NAN;
-        }
-        std::f64::consts::TAU * k as f64 / (self.get(0).t - self.get(k).t)
-    }
-}
-
 /// The decay amplitude of `z` that `opts` sets for `s` (without per-component thresholds).
 fn decay_amplitude(opts: &SteadyOptions, s: &Slider) -> f64 {
     opts.decay_amplitude.unwrap_or(1e-3 * s.z_st.abs())
@@ -622,7 +484,7 @@ impl Observer<6, ContactMode> for SteadyObserver {
             self.w.peak_since = st.y1[idx::Z].abs();
             self.w.peaks_since = st.y1.abs();
             self.w.push(Crossing { t, y, peaks });
-            if self.w.found.is_some() || self.w.decayed {
+            if self.w.found.is_some() || self.w.decayed || self.w.irregular {
                 return Control::Stop;
             }
         } else if st.y1.norm() == 0.0 || self.w.peak_since < self.decay_floor {
@@ -683,6 +545,8 @@ pub(crate) fn summarize(s: &Slider, r: &RunResult, w: &SectionWatcher, opts: &St
         fourier_period(s, &c.y, period, opts, &mut sum);
     } else if w.decayed {
         sum.outcome = SteadyOutcome::Decayed;
+    } else if w.irregular {
+        sum.outcome = SteadyOutcome::Irregular;
     } else {
         sum.outcome = SteadyOutcome::Unsettled;
         sum.status = Status::NotConverged;
@@ -692,9 +556,15 @@ pub(crate) fn summarize(s: &Slider, r: &RunResult, w: &SectionWatcher, opts: &St
 }
 
 mod fourier;
+mod section;
 use fourier::fourier_period;
 #[cfg(test)]
 use fourier::{amp_phase, wrap};
+use section::Crossing;
+pub(crate) use section::SectionWatcher;
+#[cfg(test)]
+use section::{ALL, NOT_X};
+pub use section::{REDUCE_TOL, STATIONARY_FLOOR, STATIONARY_PEAK_TOL, STATIONARY_RESIDUAL_TOL};
 
 #[cfg(test)]
 mod tests;

@@ -61,3 +61,62 @@ fn per_component_decay_thresholds_set_the_decay_test() {
     assert_eq!(back.decay_thresholds, None);
     assert_eq!(run_to_steady(&s, &y0, &back).t_end, plain.t_end);
 }
+
+/// Feed the watcher section states `y(n)` at times `n * dt` until it decides (or `n_max`), and say
+/// what it decided and after how many sections.
+fn watch(opts: &SteadyOptions, n_max: usize, y: impl Fn(usize) -> State) -> (&'static str, usize) {
+    let s = Slider::seed();
+    let mut w = SectionWatcher::new(opts, &s);
+    for n in 0..n_max {
+        let c = y(n);
+        w.push(Crossing { t: 0.01 * n as f64, y: c, peaks: c.abs() });
+        if w.found.is_some() {
+            return ("periodic", n + 1);
+        }
+        if w.decayed {
+            return ("decayed", n + 1);
+        }
+        if w.irregular {
+            return ("irregular", n + 1);
+        }
+    }
+    ("running", n_max)
+}
+
+#[test]
+fn stationary_irregular_motion_stops_after_three_blocks_and_nothing_else_does() {
+    let s = Slider::seed();
+    let sizes = characteristic_sizes(&s);
+    let opts = SteadyOptions { watch_x: false, irregular_block: 32, ..SteadyOptions::default() };
+    // A section state that never repeats: two incommensurate phases (a quasi-periodic torus).
+    let torus = |amp: f64| {
+        move |n: usize| {
+            let (a, b) = (n as f64 * 0.618_033_988_749_895, n as f64 * 0.414_213_562_373_095);
+            let (a, b) = (std::f64::consts::TAU * a, std::f64::consts::TAU * b);
+            let mut y = State::zeros();
+            for (c, v) in [(0, 1.0 + 0.2 * a.cos()), (2, 0.3 * b.sin()), (4, 1.0 + 0.2 * b.cos()), (5, 0.5 * a.sin())] {
+                y[c] = amp * v * sizes[c];
+            }
+            y
+        }
+    };
+    // Blocks start once 8 states are there to compare with (the 9th); three full blocks later it stops.
+    assert_eq!(watch(&opts, 1000, torus(1.0)), ("irregular", 8 + 3 * 32));
+    // Off by default: the same motion runs on.
+    assert_eq!(watch(&SteadyOptions { watch_x: false, ..SteadyOptions::default() }, 1000, torus(1.0)).0, "running");
+    // Growing by 0.2 % per section (13 % per two blocks): never stationary.
+    assert_eq!(watch(&opts, 1000, |n| torus(1.002f64.powi(n as i32))(n)).0, "running");
+    // Converging on a period-2 cycle, its section states spread over two points, with a residual
+    // shrinking by `mult` per section.
+    let two = |mult: f64| {
+        move |n: usize| {
+            let sign = if n.is_multiple_of(2) { 1.0 } else { -1.0 };
+            State::from_fn(|c, _| sizes[c] * (1.0 + 0.3 * sign)) + mult.powi(n as i32) * torus(0.1)(n)
+        }
+    };
+    // At 0.9: recognised as periodic, never taken for irregular on the way.
+    let (what, n) = watch(&opts, 1000, two(0.9));
+    assert_eq!(what, "periodic", "after {n}");
+    // At 0.99 (47 % per two blocks) still not irregular: it waits for the repetition test.
+    assert_ne!(watch(&opts, 3000, two(0.99)).0, "irregular");
+}

@@ -1,0 +1,253 @@
+//! The Poincare section `zd = 0` (falling) and the tests that decide when a run to steady state
+//! has settled: repetition (periodic), decay, and stationarity (sustained irregular motion).
+
+use super::{characteristic_sizes, decay_amplitude, SteadyOptions, MAX_MULTIPLICITY};
+use crate::model::{idx, FrictionLaw, Slider, State};
+
+#[derive(Clone, Copy)]
+pub(super) struct Crossing {
+    pub(super) t: f64,
+    pub(super) y: State,
+    /// Largest |y_c| of each component since the previous crossing.
+    pub(super) peaks: State,
+}
+
+/// Watches the Poincare section and decides when the run has settled.
+pub(crate) struct SectionWatcher {
+    ring: Vec<Crossing>,
+    n_seen: usize,
+    pub(crate) peak_since: f64,
+    pub(crate) peaks_since: State,
+    tol: f64,
+    /// The decay test: the largest `peaks[c] / decay_scale[c]` over the compared components,
+    /// times `decay_unit`, below `decay_amp`.
+    decay_scale: [f64; 6],
+    decay_unit: f64,
+    decay_amp: f64,
+    pub(super) window: usize,
+    pub(super) found: Option<(usize, f64)>,
+    pub(super) decayed: bool,
+    matches_in_row: [u32; MAX_MULTIPLICITY + 1],
+    sizes: [f64; 6],
+    /// The components the repetition and decay tests compare (`SteadyOptions::watch_x`).
+    pub(super) comps: &'static [usize],
+    /// The stationarity test of sustained irregular motion (`SteadyOptions::irregular_block`).
+    stationary: Option<Stationarity>,
+    /// Below this mean repetition residual the motion is nearly periodic: the repetition test decides.
+    stationary_floor: f64,
+    pub(super) irregular: bool,
+}
+
+/// Largest relative spread of three consecutive blocks' mean repetition residuals for stationary motion.
+pub const STATIONARY_RESIDUAL_TOL: f64 = 0.25;
+/// Largest relative spread of three consecutive blocks' largest excursions (each compared component).
+pub const STATIONARY_PEAK_TOL: f64 = 0.05;
+/// The residual floor of the stationarity test in units of `periodic_tol`.
+pub const STATIONARY_FLOOR: f64 = 100.0;
+
+/// One block of sections: the mean repetition residual and the largest excursion of each
+/// component, both in units of the characteristic sizes.
+#[derive(Clone, Copy, Default)]
+struct Block {
+    residual: f64,
+    peaks: [f64; 6],
+}
+
+/// Block statistics of the section states, for the stationarity test.
+///
+/// The repetition residual of a section state is its distance to the nearest of the `p = 1..=8`
+/// states before it (the largest component difference in units of the characteristic sizes).
+/// Converging on a cycle of any multiplicity drives it to zero geometrically; on sustained
+/// irregular motion it stays of the order of the attractor's spread. The motion is stationary
+/// when, over the newest three blocks, the mean residual is above the floor and spread by less
+/// than `STATIONARY_RESIDUAL_TOL`, and each component's largest excursion by less than
+/// `STATIONARY_PEAK_TOL` (a decay or a growth, however slow, shows there first).
+///
+/// What it may take for irregular motion: an approach to a cycle whose residual shrinks by less
+/// than 25 % per two blocks (multiplier above 0.999 per section for blocks of 128 sections:
+/// thousands of sections to converge, more than a census's `t_max` at these frequencies), an
+/// amplitude drifting by less than 5 % per two blocks, or transient chaos that leaves later.
+struct Stationarity {
+    block: usize,
+    n: usize,
+    sum: f64,
+    peaks: [f64; 6],
+    done: [Block; 3],
+    n_done: usize,
+}
+
+impl Stationarity {
+    /// Add one section's residual and excursions; `true` when this completed a block.
+    fn add(&mut self, residual: f64, peaks: [f64; 6]) -> bool {
+        self.n += 1;
+        self.sum += residual;
+        for (m, p) in self.peaks.iter_mut().zip(peaks) {
+            *m = m.max(p);
+        }
+        if self.n < self.block {
+            return false;
+        }
+        self.done[self.n_done % 3] = Block { residual: self.sum / self.n as f64, peaks: self.peaks };
+        self.n_done += 1;
+        (self.n, self.sum, self.peaks) = (0, 0.0, [0.0; 6]);
+        true
+    }
+
+    /// Whether the newest three blocks are stationary (see the type's documentation).
+    fn stationary(&self, floor: f64, comps: &[usize]) -> bool {
+        if self.n_done < 3 {
+            return false;
+        }
+        let spread_ok = |v: [f64; 3], tol: f64| {
+            let (lo, hi) = (v.iter().copied().fold(f64::INFINITY, f64::min), v.iter().copied().fold(0.0, f64::max));
+            lo >= (1.0 - tol) * hi
+        };
+        let r = self.done.map(|b| b.residual);
+        r.iter().all(|&x| x >= floor)
+            && spread_ok(r, STATIONARY_RESIDUAL_TOL)
+            && comps.iter().all(|&c| spread_ok(self.done.map(|b| b.peaks[c]), STATIONARY_PEAK_TOL))
+    }
+}
+
+pub(super) const ALL: [usize; 6] = [0, 1, 2, 3, 4, 5];
+pub(super) const NOT_X: [usize; 4] = [idx::Z, idx::ZD, idx::PHI, idx::PHID];
+
+const RING: usize = 64;
+
+/// Relative repetition tolerance under which a found multiplicity `p` is reduced to a divisor
+/// (a period-doubled orbit whose two halves differ by less than this is reported as period-1).
+pub const REDUCE_TOL: f64 = 1e-2;
+
+impl SectionWatcher {
+    pub(super) fn new(opts: &SteadyOptions, s: &Slider) -> Self {
+        let sizes = characteristic_sizes(s);
+        SectionWatcher {
+            ring: Vec::with_capacity(RING),
+            n_seen: 0,
+            peak_since: 0.0,
+            peaks_since: State::zeros(),
+            tol: opts.periodic_tol,
+            decay_scale: opts.decay_thresholds.unwrap_or(sizes),
+            decay_unit: if opts.decay_thresholds.is_some() { 1.0 } else { sizes[0] },
+            decay_amp: if opts.decay_thresholds.is_some() { 1.0 } else { decay_amplitude(opts, s) },
+            window: opts.decay_window.max(2),
+            found: None,
+            decayed: false,
+            matches_in_row: [0; MAX_MULTIPLICITY + 1],
+            sizes,
+            comps: if opts.watch_x || s.p.friction_law != FrictionLaw::Constant { &ALL } else { &NOT_X },
+            stationary: (opts.irregular_block > 0).then(|| Stationarity {
+                block: opts.irregular_block,
+                n: 0,
+                sum: 0.0,
+                peaks: [0.0; 6],
+                done: [Block::default(); 3],
+                n_done: 0,
+            }),
+            stationary_floor: STATIONARY_FLOOR * opts.periodic_tol,
+            irregular: false,
+        }
+    }
+
+    pub(super) fn get(&self, back: usize) -> &Crossing {
+        // back = 0: newest
+        let i = (self.n_seen - 1 - back) % RING;
+        &self.ring[i]
+    }
+
+    pub(super) fn push(&mut self, c: Crossing) {
+        if self.ring.len() < RING {
+            self.ring.push(c);
+        } else {
+            self.ring[self.n_seen % RING] = c;
+        }
+        self.n_seen += 1;
+        self.check();
+    }
+
+    /// Whether the newest section state equals the one `d` crossings back within `rel` relative
+    /// to each component's amplitude (floored at a millionth of its characteristic size, so that a
+    /// component that hardly moves does not demand the impossible).
+    fn repeats(&self, d: usize, rel: f64) -> bool {
+        let (a, b) = (self.get(0), self.get(d));
+        // The motion's own scale over the compared span (a minor maximum's interval alone may
+        // miss a component's extreme).
+        let amp = (0..d).fold(State::zeros(), |m, k| m.sup(&self.get(k).peaks));
+        self.comps.iter().all(|&c| (a.y[c] - b.y[c]).abs() <= rel * amp[c].max(1e-6 * self.sizes[c]))
+    }
+
+    fn check(&mut self) {
+        let n = self.n_seen;
+        for p in 1..=MAX_MULTIPLICITY {
+            if n <= p {
+                break;
+            }
+            let a = self.get(0);
+            let b = self.get(p);
+            let mut ok = self.repeats(p, self.tol);
+            let dt_now = a.t - b.t;
+            if ok && n > 2 * p {
+                let dt_prev = self.get(p).t - self.get(2 * p).t;
+                ok = (dt_now - dt_prev).abs() <= self.tol.max(1e-12) * dt_now;
+            } else if n <= 2 * p {
+                ok = false;
+            }
+            if ok {
+                self.matches_in_row[p] += 1;
+                if self.matches_in_row[p] >= 2 {
+                    // A residual slow transient can fool the test: at the seed's bouncing cycle
+                    // the lightly damped x mode (306 rad/s) is nearly commensurate with two cycle
+                    // periods, so p = 4 matches while the true p = 2 misses by the residual.
+                    // Reduce p to its smallest divisor whose states repeat to REDUCE_TOL; a true
+                    // sub-multiple structure (major/minor maxima of z) differs by far more.
+                    let d =
+                        (1..p).filter(|d| p % d == 0).find(|&d| self.repeats(d, REDUCE_TOL.max(self.tol))).unwrap_or(p);
+                    self.found = Some((d, self.get(0).t - self.get(d).t));
+                    return;
+                }
+            } else {
+                self.matches_in_row[p] = 0;
+            }
+        }
+        // Decay: the motion, measured on every component in units of its characteristic size
+        // (so that a torsion oscillation with little z is not missed) or of its own threshold,
+        // is small over the newest window and below the window before it.
+        let w = self.window;
+        if n >= 2 * w {
+            let rel = |b: usize| {
+                let c = self.get(b);
+                self.comps.iter().map(|&k| c.peaks[k] / self.decay_scale[k]).fold(0.0, f64::max)
+            };
+            let recent = (0..w).map(rel).fold(0.0, f64::max);
+            let before = (w..2 * w).map(rel).fold(0.0, f64::max);
+            if recent * self.decay_unit < self.decay_amp && recent < before {
+                self.decayed = true;
+                return;
+            }
+        }
+        if self.stationary.is_none() || n <= MAX_MULTIPLICITY {
+            return;
+        }
+        let a = self.get(0);
+        let residual = (1..=MAX_MULTIPLICITY)
+            .map(|p| {
+                let b = self.get(p);
+                self.comps.iter().map(|&c| (a.y[c] - b.y[c]).abs() / self.sizes[c]).fold(0.0, f64::max)
+            })
+            .fold(f64::INFINITY, f64::min);
+        let peaks = std::array::from_fn(|c| a.peaks[c] / self.sizes[c]);
+        let (floor, comps) = (self.stationary_floor, self.comps);
+        if let Some(st) = self.stationary.as_mut() {
+            self.irregular = st.add(residual, peaks) && st.stationary(floor, comps);
+        }
+    }
+
+    /// Mean angular frequency of section crossings over the newest `k` intervals.
+    pub(super) fn mean_omega(&self, k: usize) -> f64 {
+        let k = k.min(self.n_seen.saturating_sub(1)).min(RING - 1);
+        if k == 0 {
+            return f64::NAN;
+        }
+        std::f64::consts::TAU * k as f64 / (self.get(0).t - self.get(k).t)
+    }
+}
