@@ -55,6 +55,7 @@ bench: install-test
 	$(BIN)/python benches/bench_branch.py
 	$(BIN)/python benches/bench_sweep.py --points 100000 --memory-points 1000000
 	$(BIN)/python benches/bench_census.py
+	$(BIN)/python benches/bench_stribeck.py
 	$(BIN)/python benches/work_precision.py --out bench_out
 
 # The seed census against pybasin 0.2.0 (needs a Python 3.12 for pybasin: see benches/pybasin_env.sh).

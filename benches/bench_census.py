@@ -94,7 +94,7 @@ def compare_irregular_stop(n_loads: int, n_arms: int, k: int, threads: int | Non
     ds = ts.sweep(normal_load=loads, arm_length=arms, sliding_speed=[0.3], samples=1, progress=False, threads=threads)
     pts = [(a, b) for a in loads for b in arms if int(ds.census_samples.sel(normal_load=a, arm_length=b).item()) > 0]
     out = {}
-    for block in (0, DEFAULTS.census.irregular_block):
+    for block in (0, DEFAULTS.irregular.block):
         t0 = time.perf_counter()
         runs = [ts.census(dataclasses.replace(ts.apparatus_model(a, b, 0.3), contact="unilateral"), samples=k,
                           irregular_block=block, threads=threads) for a, b in pts]  # fmt: skip

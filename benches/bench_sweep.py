@@ -26,7 +26,7 @@ def grid_for(points: int) -> tuple[int, int, int]:
     return max(2, round(4 * k)), max(2, round(2 * k)), max(1, round(k))
 
 
-def child(points: int, method: str, threads: int, output: str | None, bistability: bool) -> dict:
+def child(points: int, method: str, threads: int, output: str | None, bistability: bool, samples: int) -> dict:
     import numpy as np
 
     import tribosweep as ts
@@ -36,14 +36,15 @@ def child(points: int, method: str, threads: int, output: str | None, bistabilit
     ds = ts.sweep(
         normal_load=np.linspace(10, 150, nl), arm_length=np.linspace(0.05, 0.127, na),
         sliding_speed=np.linspace(0.2, 1.0, nv), strategy=method, threads=threads, output=output,
-        progress=False, census=bistability, t_max=20.0,
+        progress=False, census=bistability, t_max=20.0, samples=samples,
     )
     wall = time.perf_counter() - t0
     regime = ds.regime.values.ravel()
     decided = ds.decided_by.values.ravel()
     n = regime.size
     out = {
-        "points": int(n), "method": method, "threads": threads, "bistability": bistability, "wall_s": wall,
+        "points": int(n), "method": method, "threads": threads, "bistability": bistability, "samples": samples,
+        "censused": int((ds.census_samples.values > 0).sum()), "wall_s": wall,
         "points_per_s": n / wall, "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
         "regimes": {name: int((regime == i).sum()) for i, name in enumerate(ts.REGIME_NAMES)},
         "decided_by": {name: int((decided == i).sum()) for i, name in enumerate(("linear", "tidf", "shooting", "transient"))},
@@ -63,21 +64,24 @@ def main(argv=None) -> int:
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--memory-points", type=int, default=0, help="also stream a sweep of this many points (method linear) to disk")
     ap.add_argument("--no-bistability", action="store_true")
-    ap.add_argument("--child", nargs=5, metavar=("POINTS", "METHOD", "THREADS", "OUTPUT", "BISTABILITY"), help=argparse.SUPPRESS)
+    ap.add_argument("--samples", type=int, default=16, help="census disturbances per point K (the issue's 10^5-point goal: 16)")
+    ap.add_argument("--child", nargs=6, metavar=("POINTS", "METHOD", "THREADS", "OUTPUT", "BISTABILITY", "K"), help=argparse.SUPPRESS)
     ap.add_argument("--json", type=pathlib.Path)
     a = ap.parse_args(argv)
     if a.child:
-        p, m, t, o, b = a.child
-        print(json.dumps(child(int(p), m, int(t), None if o == "-" else o, b == "1")))
+        p, m, t, o, b, k = a.child
+        print(json.dumps(child(int(p), m, int(t), None if o == "-" else o, b == "1", int(k))))
         return 0
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for bist in ([False] if a.no_bistability else [False, True]):
-            rows.append(run_child([str(a.points), "auto", str(a.threads), os.path.join(tmp, f"auto{int(bist)}.nc"), str(int(bist))]))
+            rows.append(run_child([str(a.points), "auto", str(a.threads), os.path.join(tmp, f"auto{int(bist)}.nc"), str(int(bist)),
+                                     str(a.samples)]))  # fmt: skip
         if a.memory_points:
-            rows.append(run_child([str(a.memory_points), "linear", str(a.threads), os.path.join(tmp, "big.nc"), "0"]))
+            rows.append(run_child([str(a.memory_points), "linear", str(a.threads), os.path.join(tmp, "big.nc"), "0", "1"]))
     for r in rows:
-        print(f"{r['method']:6} points {r['points']:>8} threads {r['threads']} bistability {str(r['bistability']):5} "
+        census = f"census K = {r['samples']} at {r['censused']} points" if r["bistability"] else "no census"
+        print(f"{r['method']:6} points {r['points']:>8} threads {r['threads']} {census}: "
               f"wall {r['wall_s']:8.1f} s  {r['points_per_s']:9.0f} points/s  peak RSS {r['peak_rss_mb']:7.0f} MB")
         print(f"       regimes {r['regimes']}\n       decided by {r['decided_by']}")
     if a.json:

@@ -71,7 +71,8 @@ REGIME_DOC: dict[str, str] = {
     "failed": "the computation failed (see status and reason)",
     "unstable_undetermined": "sliding unstable and the motion not determined: strategy=linear computes no motion (by "
     "choice), or the run was bounded but its measurement failed numerically (see status and reason)",
-    "irregular": "sustained irregular motion: bounded, neither periodic nor decayed by t_max (quasi-periodic: "
+    "irregular": "sustained irregular motion: bounded, neither periodic nor decayed, and stationary over three blocks "
+    "of Poincare sections or still so at t_max (quasi-periodic: "
     "irregular_ftle about 0; chaotic: irregular_ftle > 0; see irregular_*)",
     "crashed": "computing the point killed its process again and again (an abort or a crash in native code): it was "
     "quarantined so that the rest of the sweep could finish (see reason)",
@@ -104,8 +105,8 @@ ATTRACTOR_NAMES: tuple[str, ...] = ("sliding", "cycle", "irregular", "escape")
 ATTRACTOR_DOC: dict[str, str] = {
     "sliding": "the disturbance decayed to steady sliding",
     "cycle": "the run settled on a periodic cycle",
-    "irregular": "bounded motion, neither periodic nor decayed by the census t_max (quasi-periodic or chaotic "
-    "bouncing, or a slower approach)",
+    "irregular": "bounded motion, neither periodic nor decayed, and stationary over three blocks of Poincare "
+    "sections or still so at the census t_max (quasi-periodic or chaotic bouncing, or a slower approach)",
     "escape": "|z| passed the escape limit (outside the model's validity)",
 }
 ATTRACTOR: dict[str, int] = {name: i for i, name in enumerate(ATTRACTOR_NAMES)}

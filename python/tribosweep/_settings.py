@@ -144,11 +144,6 @@ class Census:
         Largest modal amplitude of a disturbance in units of ``|z_st|``, the size at which the
         contact opens (3: at the seed the saddle cycle's A1 is 1.35 |z_st| and the bouncing
         cycle's 1.43 |z_st|, so the box reaches past both).
-    irregular_block : int
-        Sections per block of the stationarity test (256; 0: off). A disturbance in bounded motion
-        that neither repeats nor decays stops as ``irregular`` once three consecutive blocks agree:
-        the mean distance of each section state to the nearest of the 8 before it within 25 %,
-        and the largest excursion of each component within 5 %. Off, it runs to ``t_max``.
 
     Notes
     -----
@@ -160,7 +155,6 @@ class Census:
     samples: int = 32
     t_max: float = 30.0
     disturbance_scale: float = 3.0
-    irregular_block: int = 256
 
     def __post_init__(self):
         _set(self, "enabled", bool(self.enabled))
@@ -173,15 +167,21 @@ class Census:
         _set(self, "samples", int(self.samples))
         _set(self, "t_max", _checks.positive("census_t_max", self.t_max))
         _set(self, "disturbance_scale", _checks.positive("disturbance_scale", self.disturbance_scale))
-        _set(self, "irregular_block", _checks.block("census_irregular_block", self.irregular_block))
 
 
 @dataclass(frozen=True)
 class Irregular:
-    """Measurement of sustained irregular motion (:mod:`tribosweep._irregular`).
+    """Sustained irregular motion: when a run stops as such, and its measurement (:mod:`tribosweep._irregular`).
 
     Parameters
     ----------
+    block : int
+        Sections per block of the stationarity test (256; 0: off) of the census's disturbances
+        and the ``auto`` transients. A run in bounded motion that neither repeats nor decays stops
+        as irregular once three consecutive blocks of Poincare sections agree: the mean distance of
+        each section state to the nearest of the 8 before it within 25 % (and above
+        ``max(100 periodic_tol, 1e-3)`` of the characteristic sizes), and the largest excursion of each component within 5 %. Off, it runs to
+        ``t_max`` (``census_t_max`` in the census).
     window : float, s
         Window after the transient (0.5: about 50 torsion periods; the spectrum's bins are
         12.6 rad/s apart and the parabola refines the peak well within one).
@@ -200,6 +200,7 @@ class Irregular:
         Relative tolerance of the exponent's runs (1e-11: well below ``ftle_d0``).
     """
 
+    block: int = 256
     window: float = 0.5
     sample_dt: float = 1e-4
     ftle_tau: float = 0.05
@@ -214,6 +215,7 @@ class Irregular:
         except ValueError as e:
             raise ValueError(str(e).replace("rtol", "ftle_rtol", 1)) from None
         _set(self, "ftle_rtol", rt)
+        _set(self, "block", _checks.block("irregular_block", self.block))
         _set(self, "window", _checks.positive("irregular_window", self.window))
         _set(self, "sample_dt", _checks.positive("irregular_sample_dt", self.sample_dt))
         _set(self, "ftle_tau", _checks.positive("ftle_tau", self.ftle_tau))
@@ -253,8 +255,8 @@ _FLAT: tuple[tuple[str, str, str], ...] = (
     ("samples", "census", "samples"),
     ("census_t_max", "census", "t_max"),
     ("disturbance_scale", "census", "disturbance_scale"),
-    ("census_irregular_block", "census", "irregular_block"),
     ("unstable_disturbance", "", "unstable_disturbance"),
+    ("irregular_block", "irregular", "block"),
     ("irregular_window", "irregular", "window"),
     ("irregular_sample_dt", "irregular", "sample_dt"),
     ("ftle_tau", "irregular", "ftle_tau"),

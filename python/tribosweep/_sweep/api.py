@@ -74,10 +74,10 @@ def sweep(
     samples: int = _D.census.samples,
     census_t_max: float = _D.census.t_max,
     disturbance_scale: float = _D.census.disturbance_scale,
-    census_irregular_block: int = _D.census.irregular_block,
     unstable_disturbance: float = _D.unstable_disturbance,
     shooting_rtol: float = _D.shooting.rtol,
     shooting_tol: float = _D.shooting.tol,
+    irregular_block: int = _D.irregular.block,
     irregular_window: float = _D.irregular.window,
     irregular_sample_dt: float = _D.irregular.sample_dt,
     ftle_tau: float = _D.irregular.ftle_tau,
@@ -189,18 +189,18 @@ def sweep(
         decayed nor repeated by then counts as ``irregular``.
     disturbance_scale : float
         Largest modal amplitude of a census disturbance in units of ``|z_st|`` (3).
-    census_irregular_block : int
-        Sections per block of the census's stationarity test (256; 0: off): bounded motion whose
-        statistics agree over three blocks stops as ``irregular`` before ``census_t_max``
-        (see :func:`tribosweep.census`).
     unstable_disturbance : float
         ``auto``: transients of linearly unstable points start on the unstable mode with
         ``|z| = unstable_disturbance |z_st|``.
     decay_amplitude : float, m, optional
         Amplitude below which a motion counts as decayed (default ``1e-3 |z_st|``).
+    irregular_block : int
+        Sections per block of the stationarity test (256; 0: off): a transient or census
+        disturbance in bounded motion that neither repeats nor decays ends as irregular once three
+        consecutive blocks of Poincare sections agree (see :func:`tribosweep.census`), else at ``t_max``.
     irregular_window, irregular_sample_dt : float, s
-        A transient that stays bounded but neither repeats nor decays by ``t_max`` is regime
-        ``irregular``; from where it ended, ``z`` is sampled every ``irregular_sample_dt`` (1e-4)
+        A transient that stays bounded but neither repeats nor decays (stationary, or still so at
+        ``t_max``) is regime ``irregular``; from where it ended, ``z`` is sampled every ``irregular_sample_dt`` (1e-4)
         over ``irregular_window`` (0.5) for ``irregular_z_min``, ``irregular_z_max`` and
         ``irregular_omega`` (the spectral peak).
     ftle_tau : float, s
@@ -317,9 +317,8 @@ def sweep(
     settings = SweepSettings.from_flat(
         t_max=t_max, integrator=integrator, rtol=rtol, atol=atol, periodic_tol=periodic_tol,
         decay_amplitude=decay_amplitude, census=census, samples=samples, census_t_max=census_t_max,
-        disturbance_scale=disturbance_scale, census_irregular_block=census_irregular_block,
-        unstable_disturbance=unstable_disturbance, shooting_rtol=shooting_rtol,
-        shooting_tol=shooting_tol, irregular_window=irregular_window, irregular_sample_dt=irregular_sample_dt,
+        disturbance_scale=disturbance_scale, unstable_disturbance=unstable_disturbance, shooting_rtol=shooting_rtol,
+        shooting_tol=shooting_tol, irregular_block=irregular_block, irregular_window=irregular_window, irregular_sample_dt=irregular_sample_dt,
         ftle_tau=ftle_tau, ftle_segments=ftle_segments, ftle_warmup=ftle_warmup, ftle_d0=ftle_d0, ftle_rtol=ftle_rtol,
         y0=_settings.disturbance(disturbance),
     )  # fmt: skip

@@ -258,8 +258,9 @@ def shooting(p: Points, roots: Roots, *, every_root: bool, escalate: bool) -> No
 def classify(summary: dict, stable: np.ndarray, t_max: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Regime, status, reason and deciding stage of transient runs from their steady-state summaries.
 
-    A run that stayed bounded (no escape, a finite end state) but neither repeated nor decayed by
-    ``t_max`` (outcome ``unsettled``) is an answer: sustained ``irregular`` motion, decided by the
+    A run that stayed bounded (no escape, a finite end state) but neither repeated nor decayed,
+    either stationary over three blocks of sections (outcome ``irregular``) or still so at
+    ``t_max`` (outcome ``unsettled``), is an answer: sustained ``irregular`` motion, decided by the
     transient, status ``success`` (its measurement follows in :func:`transient`). Only a failed
     integration makes a point ``failed``.
     """
@@ -268,6 +269,7 @@ def classify(summary: dict, stable: np.ndarray, t_max: float) -> tuple[np.ndarra
     off = np.asarray(summary["fraction_off_disk"])
     vmin = np.asarray(summary["min_slip_velocity"])
     y_end = summary.get("y_end")
+    t_end = summary.get("t_end")
     names = [OUTCOME_NAMES[o] for o in outcome]
     n = len(names)
     regime = np.full(n, REGIME["failed"], dtype=np.uint8)
@@ -278,13 +280,15 @@ def classify(summary: dict, stable: np.ndarray, t_max: float) -> tuple[np.ndarra
         finite = y_end is None or bool(np.all(np.isfinite(np.asarray(y_end)[i])))
         if name == "diverged" or st == "diverged":
             regime[i] = REGIME["diverged"]
-        elif name == "unsettled" and st == "not_converged" and finite:
+        elif (name == "unsettled" and st == "not_converged" and finite) or (name == "irregular" and finite):
             regime[i] = REGIME["irregular"]
             status[i] = STATUS["success"]
-            reason[i] = f"bounded motion, neither periodic nor decayed by t_max = {t_max:g} s" + (
+            when = (f"and stationary over three blocks of sections by t = {float(t_end[i]):.3g} s"
+                    if name == "irregular" else f"by t_max = {t_max:g} s")  # fmt: skip
+            reason[i] = f"bounded motion, neither periodic nor decayed {when}" + (
                 "" if not stable[i] else " (sliding is linearly stable: this motion coexists with it, or is a slow "
                 "transient)")  # fmt: skip
-        elif st != "success" or name in ("failed", "unsettled"):
+        elif st != "success" or name in ("failed", "unsettled", "irregular"):
             regime[i] = REGIME["failed"]
             if st == "success":
                 status[i] = STATUS["non_finite"]
@@ -315,6 +319,7 @@ def run_steady(p: Points, sel: np.ndarray, y0: np.ndarray, decay: np.ndarray | N
         atol=None if it.atol is None else np.asarray(it.atol, dtype=np.float64), threads=p.threads, kind="steady",
         periodic_tol=float(st.periodic_tol), decay_amplitude=st.decay_amplitude, n_fourier=512,
         decay_amplitudes=None if decay is None else np.ascontiguousarray(decay, dtype=np.float64),
+        irregular_block=int(p.settings.irregular.block),
     )  # fmt: skip
 
 
@@ -432,7 +437,7 @@ def census(p: Points) -> None:
         integrator=it.integrator, rtol=it.rtol, atol=None if it.atol is None else list(it.atol),
         periodic_tol=p.settings.steady.periodic_tol, threads=p.threads,
         eigenvalues=p.eigenvalues[cand], linear_frequency=out["linear_frequency"][cand],
-        saddle=p.saddle[cand], irregular_block=cs.irregular_block,
+        saddle=p.saddle[cand], irregular_block=p.settings.irregular.block,
     )  # fmt: skip
     p.charge(cand, t1)
     out["n_rhs"][cand] += per["n_rhs"].sum(axis=1)

@@ -564,7 +564,9 @@ use section::Crossing;
 pub(crate) use section::SectionWatcher;
 #[cfg(test)]
 use section::{ALL, NOT_X};
-pub use section::{REDUCE_TOL, STATIONARY_FLOOR, STATIONARY_PEAK_TOL, STATIONARY_RESIDUAL_TOL};
+pub use section::{
+    REDUCE_TOL, STATIONARY_FLOOR, STATIONARY_MIN_RESIDUAL, STATIONARY_PEAK_TOL, STATIONARY_RESIDUAL_TOL,
+};
 
 #[cfg(test)]
 mod tests;

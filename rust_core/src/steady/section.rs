@@ -42,8 +42,14 @@ pub(crate) struct SectionWatcher {
 pub const STATIONARY_RESIDUAL_TOL: f64 = 0.25;
 /// Largest relative spread of three consecutive blocks' largest excursions (each compared component).
 pub const STATIONARY_PEAK_TOL: f64 = 0.05;
-/// The residual floor of the stationarity test in units of `periodic_tol`.
+/// The residual floor of the stationarity test in units of `periodic_tol`, and never below
+/// [`STATIONARY_MIN_RESIDUAL`].
 pub const STATIONARY_FLOOR: f64 = 100.0;
+/// The smallest residual floor (in characteristic sizes): a cycle repeats far better than this
+/// even where `periodic_tol` asks for more than the integration can give (a cycle's residual is
+/// then rounding and integration error, steady from block to block, and must not pass for
+/// irregular motion).
+pub const STATIONARY_MIN_RESIDUAL: f64 = 1e-3;
 
 /// One block of sections: the mean repetition residual and the largest excursion of each
 /// component, both in units of the characteristic sizes.
@@ -144,7 +150,7 @@ impl SectionWatcher {
                 done: [Block::default(); 3],
                 n_done: 0,
             }),
-            stationary_floor: STATIONARY_FLOOR * opts.periodic_tol,
+            stationary_floor: (STATIONARY_FLOOR * opts.periodic_tol).max(STATIONARY_MIN_RESIDUAL),
             irregular: false,
         }
     }

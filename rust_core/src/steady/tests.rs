@@ -119,4 +119,10 @@ fn stationary_irregular_motion_stops_after_three_blocks_and_nothing_else_does() 
     assert_eq!(what, "periodic", "after {n}");
     // At 0.99 (47 % per two blocks) still not irregular: it waits for the repetition test.
     assert_ne!(watch(&opts, 3000, two(0.99)).0, "irregular");
+    // A converged cycle whose section states jitter at 1e-6 of the sizes (integration error)
+    // never repeats to a periodic_tol of 1e-15, and its residual is as steady as a torus's; the
+    // floor of 1e-3 keeps it from passing for irregular motion.
+    let tight = SteadyOptions { periodic_tol: 1e-15, ..opts };
+    let jitter = |n: usize| two(0.0)(n) + 1e-5 * torus(1.0)(n);
+    assert_eq!(watch(&tight, 3000, jitter), ("running", 3000));
 }

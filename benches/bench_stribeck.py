@@ -1,0 +1,60 @@
+"""The issue-10 Stribeck sweep: speed-dependent friction as a stiff tanh law against the switch model.
+
+`contact="unilateral"`, `mu_static=0.3`, loads 10-150 N x 10, arms 5-12.7 cm x 4, speeds
+0.2-1 m/s x 5 (200 points), `auto` without the census, `t_max=20`, on 2 threads; both laws in
+the same process. Prints points/s, right-hand sides per point, where the points go, and the
+regimes the two laws give at each point.
+
+    python benches/bench_stribeck.py [--threads 2] [--repeat 2]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import time
+
+import numpy as np
+
+import tribosweep as ts
+
+AXES = dict(normal_load=np.linspace(10, 150, 10), arm_length=np.linspace(0.05, 0.127, 4),
+            sliding_speed=np.linspace(0.2, 1.0, 5))  # fmt: skip
+
+
+def run(law: str, threads: int) -> tuple[float, object]:
+    model = ts.SliderModel(contact="unilateral", friction_law=law, mu_static=0.3)
+    t0 = time.perf_counter()
+    ds = ts.sweep(model=model, census=False, t_max=20.0, threads=threads, progress=False, **AXES)
+    return time.perf_counter() - t0, ds
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--repeat", type=int, default=2, help="best of this many runs of each law")
+    a = ap.parse_args(argv)
+    print(f"cores {os.cpu_count()}, load average {os.getloadavg()[0]:.2f}, threads {a.threads}")
+    out = {}
+    for law in ("coulomb", "switch"):
+        walls, ds = [], None
+        for _ in range(a.repeat):
+            w, ds = run(law, a.threads)
+            walls.append(w)
+        out[law] = (min(walls), ds)
+        n = int(ds.regime.size)
+        regimes = ds.regime.values.ravel()
+        counts = ", ".join(f"{name} {int((regimes == i).sum())}" for i, name in enumerate(ts.REGIME_NAMES)
+                           if (regimes == i).any())  # fmt: skip
+        rhs = ds.n_rhs.values.ravel()
+        print(f"{law:8} {n} points: {min(walls):6.2f} s ({n / min(walls):6.1f} points/s; runs {np.round(walls, 2)}), "
+              f"rhs per point mean {rhs.mean():,.0f} median {np.median(rhs):,.0f}; {counts}")  # fmt: skip
+    (wc, dc), (ws, dsw) = out["coulomb"], out["switch"]
+    same = dc.regime.values == dsw.regime.values
+    print(f"switch against tanh: {wc / ws:.2f}x the points/s, {dc.n_rhs.values.sum() / dsw.n_rhs.values.sum():.2f}x "
+          f"fewer right-hand sides; the same regime at {int(same.sum())} of {same.size} points")  # fmt: skip
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
