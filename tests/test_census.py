@@ -185,6 +185,19 @@ def test_irregular_motion_stops_early_with_the_same_fractions():
     np.testing.assert_array_equal(on.t_end.values[settled], off.t_end.values[settled])
 
 
+def test_a_sweep_point_says_how_its_irregular_samples_were_decided():
+    # The reason counts the irregular samples stopped as stationary and those that reached t_max,
+    # as the standalone census's per-sample end times tell (K = 16 at the point above).
+    ds = ts.sweep(normal_load=[20.7692], arm_length=[0.1099], sliding_speed=[0.3], samples=16, progress=False)
+    alone = ts.census(ts.apparatus_model(20.7692, 0.1099, 0.3, base=SEED_U), samples=16)
+    irr = alone.attractor_reached.values == 2
+    late = int(np.sum(alone.t_end.values[irr] >= alone.attrs["t_max"]))
+    assert irr.sum() >= 4, irr.sum()
+    assert f"irregular {irr.sum()}/16 ({irr.sum() - late} stationary, {late} at the census t_max)" in str(
+        ds.reason.item()
+    ), ds.reason.item()
+
+
 def test_the_return_to_sliding_is_measured_in_the_saddle_cycles_own_shape(seed64):
     # The thresholds are RETURN_FRACTION of the describing function's saddle root in every
     # component (docs/model.md §5: A1 = 21.52 um, phi1 = 2.066e-3 rad, omega = 647.56 rad/s at the

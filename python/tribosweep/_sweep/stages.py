@@ -451,6 +451,10 @@ def census(p: Points) -> None:
         out["bistable"][i] = BISTABLE["coexisting"] if res["n_attractors"][j] > 1 else BISTABLE["one_attractor"]
         counts = np.rint(res["basin_fraction"][j] * nv).astype(int)
         seen = ", ".join(f"{a} {c}/{nv}" for a, c in zip(_census.ATTRACTOR_NAMES, counts) if c)
+        if counts[2]:
+            # How the irregular samples were decided: stationary (the early stop) or still so at t_max.
+            late = int(np.sum(per["outcome"][j] == OUTCOME_NAMES.index("unsettled")))
+            seen += f" ({counts[2] - late} stationary, {late} at the census t_max)"
         if res["n_attractors"][j] > 1:
             reason[i] = f"coexisting attractors (census): {seen}"
         elif counts[0] < nv:
