@@ -27,8 +27,8 @@ What each sample reaches (``ATTRACTOR_NAMES``)
     ``sliding`` (decayed), ``cycle`` (a periodic state; cycles are told apart by period
     multiplicity, frequency and first-harmonic amplitude within ``CYCLE_TOL``), ``irregular``
     (bounded, neither periodic nor decaying, and stationary over three blocks of sections, or still
-    so at ``t_max``: quasi-periodic or chaotic bouncing, or an approach slower than ``t_max``), ``escape`` (``|z|`` past the escape limit: outside the
-    model's validity). A sample whose integration failed is counted apart (``census_failed``) and
+    so at ``t_max``: quasi-periodic or chaotic bouncing, or an approach slower than ``t_max``),
+    ``escape`` (``|z|`` past the escape limit: outside the model's validity). A sample whose integration failed is counted apart (``census_failed``) and
     left out of the fractions.
 
 Early stops
@@ -52,9 +52,9 @@ Early stops
     (``irregular_block`` sections per block, 256 by default; 0 runs it to ``t_max``): over three
     consecutive blocks the mean distance of each section state to the nearest of the 8 before it
     (zero on any cycle of multiplicity up to 8, so an approach to a cycle shrinks it block after
-    block) agrees within 25 % and stays above ``max(100 periodic_tol, 1e-3)`` (in characteristic sizes:
-    a cycle that cannot repeat to a tight ``periodic_tol`` is not irregular), and each component's largest
-    excursion agrees within 5 % (a slow decay or growth shows there). Measured on the default
+    block) agrees within 25 % and stays above ``max(100 periodic_tol, 1e-3)`` (in characteristic
+    sizes: a cycle that cannot repeat to a tight ``periodic_tol`` is not irregular), and each
+    component's largest excursion agrees within 5 % (a slow decay or growth shows there). Measured on the default
     sweep's 361 censused points at K = 16 (5,776 samples, ``benches/bench_census.py --compare``),
     the simulated time falls from 64,045 s to 28,329 s and 172 labels (3.0 %) differ from runs to
     ``t_max`` = 30 s: 128 escapes, 34 cycles and 10 returns to sliding that came after a chaotic

@@ -180,8 +180,8 @@ class Irregular:
         and the ``auto`` transients. A run in bounded motion that neither repeats nor decays stops
         as irregular once three consecutive blocks of Poincare sections agree: the mean distance of
         each section state to the nearest of the 8 before it within 25 % (and above
-        ``max(100 periodic_tol, 1e-3)`` of the characteristic sizes), and the largest excursion of each component within 5 %. Off, it runs to
-        ``t_max`` (``census_t_max`` in the census).
+        ``max(100 periodic_tol, 1e-3)`` of the characteristic sizes), and the largest excursion of
+        each component within 5 %. Off, it runs to ``t_max`` (``census_t_max`` in the census).
     window : float, s
         Window after the transient (0.5: about 50 torsion periods; the spectrum's bins are
         12.6 rad/s apart and the parabola refines the peak well within one).
