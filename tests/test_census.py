@@ -179,7 +179,9 @@ def test_irregular_motion_stops_early_with_the_same_fractions():
     assert irr_on.sum() >= k // 3 and irr_off.sum() >= k // 3  # the comparison covers many early stops
     assert np.all(off.t_end.values[irr_off] == 30.0)
     t = on.t_end.values[irr_on]
-    assert np.median(t) < 10.0 and t.min() > 3.0, np.percentile(t, [0, 50, 100])
+    # Three blocks of 256 sections take at least 776 crossings: above 2.8 s even at the fastest
+    # crossing rate seen here (about 275 per second); 3.75-9 s were measured.
+    assert np.median(t) < 10.0 and t.min() > 1.5, np.percentile(t, [0, 50, 100])
     # The other samples are untouched: a sample that settles before the test can decide ends the same way.
     settled = ~irr_on & ~irr_off
     np.testing.assert_array_equal(on.t_end.values[settled], off.t_end.values[settled])
