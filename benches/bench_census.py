@@ -112,6 +112,13 @@ def compare_irregular_stop(n_loads: int, n_arms: int, k: int, threads: int | Non
         pairs[key] = pairs.get(key, 0) + 1
     print(f"  labels that differ: {int(moved.sum())} of {a0.size} ({100 * moved.mean():.1f} %): {pairs}; "
           f"cost {w0 / w1:.2f}x lower, simulated time {t0_.sum() / t1_.sum():.2f}x")  # fmt: skip
+    # Per point: the largest move of a fraction in standard errors of the difference (floored at one sample).
+    frac = [np.array([np.bincount(r[r >= 0], minlength=len(names)) / max(int((r >= 0).sum()), 1) for r in a])
+            for a in (a0, a1)]  # fmt: skip
+    se = np.maximum(np.sqrt((frac[0] * (1 - frac[0]) + frac[1] * (1 - frac[1])) / k), 1.0 / k)
+    z = np.max(np.abs(frac[0] - frac[1]) / se, axis=1)
+    print(f"  points where a fraction moves by more than 2 / 3 standard errors: {int((z > 2).sum())} / "
+          f"{int((z > 3).sum())} of {len(pts)} (largest {z.max():.2f}, at {pts[int(np.argmax(z))]})")  # fmt: skip
 
 
 def main() -> None:
