@@ -117,8 +117,9 @@ def compare_irregular_stop(n_loads: int, n_arms: int, k: int, threads: int | Non
             for a in (a0, a1)]  # fmt: skip
     se = np.maximum(np.sqrt((frac[0] * (1 - frac[0]) + frac[1] * (1 - frac[1])) / k), 1.0 / k)
     z = np.max(np.abs(frac[0] - frac[1]) / se, axis=1)
+    load, arm = pts[int(np.argmax(z))]
     print(f"  points where a fraction moves by more than 2 / 3 standard errors: {int((z > 2).sum())} / "
-          f"{int((z > 3).sum())} of {len(pts)} (largest {z.max():.2f}, at {pts[int(np.argmax(z))]})")  # fmt: skip
+          f"{int((z > 3).sum())} of {len(pts)} (largest {z.max():.2f}, at {load:.1f} N, {100 * arm:.1f} cm)")  # fmt: skip
 
 
 def main() -> None:
