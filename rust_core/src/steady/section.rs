@@ -15,6 +15,8 @@ pub(super) struct Crossing {
 /// Watches the Poincare section and decides when the run has settled.
 pub(crate) struct SectionWatcher {
     ring: Vec<Crossing>,
+    /// The decay test's measure of each crossing in `ring` (same slots), computed once at its push.
+    decay_ring: Vec<f64>,
     n_seen: usize,
     pub(crate) peak_since: f64,
     pub(crate) peaks_since: State,
@@ -129,6 +131,7 @@ impl SectionWatcher {
         let sizes = characteristic_sizes(s);
         SectionWatcher {
             ring: Vec::with_capacity(RING),
+            decay_ring: Vec::with_capacity(RING),
             n_seen: 0,
             peak_since: 0.0,
             peaks_since: State::zeros(),
@@ -162,10 +165,14 @@ impl SectionWatcher {
     }
 
     pub(super) fn push(&mut self, c: Crossing) {
+        // The decay measure: the largest compared component in units of its decay scale.
+        let d = self.comps.iter().map(|&k| c.peaks[k] / self.decay_scale[k]).fold(0.0, f64::max);
         if self.ring.len() < RING {
             self.ring.push(c);
+            self.decay_ring.push(d);
         } else {
             self.ring[self.n_seen % RING] = c;
+            self.decay_ring[self.n_seen % RING] = d;
         }
         self.n_seen += 1;
         self.check();
@@ -175,22 +182,30 @@ impl SectionWatcher {
     /// to each component's amplitude (floored at a millionth of its characteristic size, so that a
     /// component that hardly moves does not demand the impossible).
     fn repeats(&self, d: usize, rel: f64) -> bool {
-        let (a, b) = (self.get(0), self.get(d));
         // The motion's own scale over the compared span (a minor maximum's interval alone may
         // miss a component's extreme).
         let amp = (0..d).fold(State::zeros(), |m, k| m.sup(&self.get(k).peaks));
+        self.repeats_within(d, rel, &amp)
+    }
+
+    /// [`Self::repeats`] with the span's amplitude `amp` given (the sup of the newest `d` crossings' peaks).
+    fn repeats_within(&self, d: usize, rel: f64, amp: &State) -> bool {
+        let (a, b) = (self.get(0), self.get(d));
         self.comps.iter().all(|&c| (a.y[c] - b.y[c]).abs() <= rel * amp[c].max(1e-6 * self.sizes[c]))
     }
 
     fn check(&mut self) {
         let n = self.n_seen;
+        // The sup of the newest p crossings' peaks, grown with p (the same as `repeats` folds).
+        let mut amp = State::zeros();
         for p in 1..=MAX_MULTIPLICITY {
             if n <= p {
                 break;
             }
+            amp = amp.sup(&self.get(p - 1).peaks);
             let a = self.get(0);
             let b = self.get(p);
-            let mut ok = self.repeats(p, self.tol);
+            let mut ok = self.repeats_within(p, self.tol, &amp);
             let dt_now = a.t - b.t;
             if ok && n > 2 * p {
                 let dt_prev = self.get(p).t - self.get(2 * p).t;
@@ -220,10 +235,7 @@ impl SectionWatcher {
         // is small over the newest window and below the window before it.
         let w = self.window;
         if n >= 2 * w {
-            let rel = |b: usize| {
-                let c = self.get(b);
-                self.comps.iter().map(|&k| c.peaks[k] / self.decay_scale[k]).fold(0.0, f64::max)
-            };
+            let rel = |b: usize| self.decay_ring[(n - 1 - b) % RING];
             let recent = (0..w).map(rel).fold(0.0, f64::max);
             let before = (w..2 * w).map(rel).fold(0.0, f64::max);
             if recent * self.decay_unit < self.decay_amp && recent < before {
