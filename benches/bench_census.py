@@ -119,7 +119,8 @@ def compare_irregular_stop(n_loads: int, n_arms: int, k: int, threads: int | Non
     z = np.max(np.abs(frac[0] - frac[1]) / se, axis=1)
     load, arm = pts[int(np.argmax(z))]
     print(f"  points where a fraction moves by more than 2 / 3 standard errors: {int((z > 2).sum())} / "
-          f"{int((z > 3).sum())} of {len(pts)} (largest {z.max():.2f}, at {load:.1f} N, {100 * arm:.1f} cm)")  # fmt: skip
+          f"{int((z > 3).sum())} of {len(pts)} (largest {z.max():.2f}, "
+          f"at {load:.1f} N, {100 * arm:.1f} cm)")  # fmt: skip
 
 
 def main() -> None:
@@ -129,7 +130,8 @@ def main() -> None:
     ap.add_argument("--sweep-points", type=int, choices=(0, 120, 2000), default=2000)
     ap.add_argument("--scipy", type=int, default=0, help="compare this many census labels with scipy's")
     ap.add_argument("--threads", type=int, default=None)
-    ap.add_argument("--compare", action="store_true", help="the stationarity stop against runs to t_max (K = --samples)")
+    ap.add_argument("--compare", action="store_true",
+                    help="the stationarity stop against runs to t_max (K = --samples)")  # fmt: skip
     a = ap.parse_args()
     print(f"cores {os.cpu_count()}, load average {os.getloadavg()[0]:.2f}")
     one_point(a.samples_one, a.threads)

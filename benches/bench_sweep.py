@@ -64,8 +64,10 @@ def main(argv=None) -> int:
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--memory-points", type=int, default=0, help="also stream a sweep of this many points (method linear) to disk")
     ap.add_argument("--no-bistability", action="store_true")
-    ap.add_argument("--samples", type=int, default=16, help="census disturbances per point K (the issue's 10^5-point goal: 16)")
-    ap.add_argument("--child", nargs=6, metavar=("POINTS", "METHOD", "THREADS", "OUTPUT", "BISTABILITY", "K"), help=argparse.SUPPRESS)
+    ap.add_argument("--samples", type=int, default=16,
+                    help="census disturbances per point K (the issue's 10^5-point goal: 16)")  # fmt: skip
+    ap.add_argument("--child", nargs=6, metavar=("POINTS", "METHOD", "THREADS", "OUTPUT", "BISTABILITY", "K"),
+                    help=argparse.SUPPRESS)  # fmt: skip
     ap.add_argument("--json", type=pathlib.Path)
     a = ap.parse_args(argv)
     if a.child:
@@ -75,8 +77,8 @@ def main(argv=None) -> int:
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for bist in ([False] if a.no_bistability else [False, True]):
-            rows.append(run_child([str(a.points), "auto", str(a.threads), os.path.join(tmp, f"auto{int(bist)}.nc"), str(int(bist)),
-                                     str(a.samples)]))  # fmt: skip
+            out = os.path.join(tmp, f"auto{int(bist)}.nc")
+            rows.append(run_child([str(a.points), "auto", str(a.threads), out, str(int(bist)), str(a.samples)]))
         if a.memory_points:
             rows.append(run_child([str(a.memory_points), "linear", str(a.threads), os.path.join(tmp, "big.nc"), "0", "1"]))
     for r in rows:

@@ -28,8 +28,8 @@ What each sample reaches (``ATTRACTOR_NAMES``)
     multiplicity, frequency and first-harmonic amplitude within ``CYCLE_TOL``), ``irregular``
     (bounded, neither periodic nor decaying, and stationary over three blocks of sections, or still
     so at ``t_max``: quasi-periodic or chaotic bouncing, or an approach slower than ``t_max``),
-    ``escape`` (``|z|`` past the escape limit: outside the model's validity). A sample whose integration failed is counted apart (``census_failed``) and
-    left out of the fractions.
+    ``escape`` (``|z|`` past the escape limit: outside the model's validity). A sample whose
+    integration failed is counted apart (``census_failed``) and left out of the fractions.
 
 Early stops
     A cycle stops once its section state has repeated to ``periodic_tol`` twice. Under constant
@@ -596,7 +596,8 @@ def census(
     attrs = {f"model_{k}": v for k, v in base.items()}
     attrs.update(model_contact=model.contact, model_friction_law=model.friction_law, samples=int(samples),
                  disturbance_scale=scale, t_max=t_max, integrator=integrator, rtol=rtol, periodic_tol=periodic_tol,
-                 cycle_tol=cycle_tol, irregular_block=irregular_block, sliding_stable=int(stable[0]), saddle_a1=float(sad[0, 0]),
+                 cycle_tol=cycle_tol, irregular_block=irregular_block, sliding_stable=int(stable[0]),
+                 saddle_a1=float(sad[0, 0]),
                  saddle_phi1=float(sad[0, 4]),
                  disturbances="y0 = Re(a_t e^(i theta_t) v_t + a_n e^(i theta_n) v_n), v_t, v_n the torsion and normal "
                  "modes with z = 1, a uniform in [0, disturbance_scale |z_st|), theta uniform in [0, 2 pi); a Halton "

@@ -318,7 +318,8 @@ def sweep(
         t_max=t_max, integrator=integrator, rtol=rtol, atol=atol, periodic_tol=periodic_tol,
         decay_amplitude=decay_amplitude, census=census, samples=samples, census_t_max=census_t_max,
         disturbance_scale=disturbance_scale, unstable_disturbance=unstable_disturbance, shooting_rtol=shooting_rtol,
-        shooting_tol=shooting_tol, irregular_block=irregular_block, irregular_window=irregular_window, irregular_sample_dt=irregular_sample_dt,
+        shooting_tol=shooting_tol, irregular_block=irregular_block, irregular_window=irregular_window,
+        irregular_sample_dt=irregular_sample_dt,
         ftle_tau=ftle_tau, ftle_segments=ftle_segments, ftle_warmup=ftle_warmup, ftle_d0=ftle_d0, ftle_rtol=ftle_rtol,
         y0=_settings.disturbance(disturbance),
     )  # fmt: skip

@@ -453,7 +453,7 @@ def census(p: Points) -> None:
         seen = ", ".join(f"{a} {c}/{nv}" for a, c in zip(_census.ATTRACTOR_NAMES, counts) if c)
         if counts[2]:
             # How the irregular samples were decided: stationary (the early stop) or still so at t_max.
-            late = int(np.sum(per["outcome"][j] == OUTCOME_NAMES.index("unsettled")))
+            late = int(np.sum((per["outcome"][j] == OUTCOME_NAMES.index("unsettled")) & (per["attractor"][j] == 2)))
             seen += f" ({counts[2] - late} stationary, {late} at the census t_max)"
         if res["n_attractors"][j] > 1:
             reason[i] = f"coexisting attractors (census): {seen}"

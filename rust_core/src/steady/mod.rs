@@ -8,7 +8,9 @@
 //!   the smallest `p` wins, so a cycle with several maxima of `z` per period is still found) to
 //!   `periodic_tol` relative to each component's range over the window, twice in a row;
 //! - **escapes** the model's validity: `|z|` reaches the escape limit (an event);
-//! - or reaches `t_max` without either (status `NotConverged`).
+//! - is **irregular**, where `irregular_block > 0`: bounded, neither repeating nor decaying, with
+//!   its section statistics stationary over three blocks (`section.rs`);
+//! - or reaches `t_max` without any of these (status `NotConverged`).
 //!
 //! For a periodic state the summary re-integrates one period from the section state and takes
 //! Fourier integrals of uniform dense-output samples: DC and harmonics 1-3 of `z` with phases

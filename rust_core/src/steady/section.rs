@@ -72,8 +72,8 @@ struct Block {
 /// `STATIONARY_PEAK_TOL` (a decay or a growth, however slow, shows there first).
 ///
 /// What it may take for irregular motion: an approach to a cycle whose residual shrinks by less
-/// than 25 % per two blocks (multiplier above 0.999 per section for blocks of 128 sections:
-/// thousands of sections to converge, more than a census's `t_max` at these frequencies), an
+/// than 25 % per two blocks (multiplier above 0.9994 per section for the default blocks of 256
+/// sections: thousands of sections to converge, more than a census's `t_max` at these frequencies), an
 /// amplitude drifting by less than 5 % per two blocks, or transient chaos that leaves later.
 struct Stationarity {
     block: usize,
@@ -158,10 +158,13 @@ impl SectionWatcher {
         }
     }
 
+    /// The ring slot of the crossing `back` crossings before the newest (0: the newest).
+    fn slot(&self, back: usize) -> usize {
+        (self.n_seen - 1 - back) % RING
+    }
+
     pub(super) fn get(&self, back: usize) -> &Crossing {
-        // back = 0: newest
-        let i = (self.n_seen - 1 - back) % RING;
-        &self.ring[i]
+        &self.ring[self.slot(back)]
     }
 
     pub(super) fn push(&mut self, c: Crossing) {
@@ -235,7 +238,7 @@ impl SectionWatcher {
         // is small over the newest window and below the window before it.
         let w = self.window;
         if n >= 2 * w {
-            let rel = |b: usize| self.decay_ring[(n - 1 - b) % RING];
+            let rel = |b: usize| self.decay_ring[self.slot(b)];
             let recent = (0..w).map(rel).fold(0.0, f64::max);
             let before = (w..2 * w).map(rel).fold(0.0, f64::max);
             if recent * self.decay_unit < self.decay_amp && recent < before {
