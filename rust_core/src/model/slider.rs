@@ -381,6 +381,22 @@ impl OdeSystem<6> for Slider {
         }
     }
 
+    /// Exact rates of the first four event functions along the flow (`f` = the right-hand side at
+    /// `y`); the switch law's band and stick functions have none here (NaN).
+    fn event_rates(&self, _t: f64, y: &State, f: &State, _mode: ContactMode, d: &mut [f64; MAX_EVENTS]) -> bool {
+        let p = &self.p;
+        let (z, zd) = (y[idx::Z], y[idx::ZD]);
+        d.fill(f64::NAN);
+        d[event::GAP] = zd;
+        d[event::NORMAL] = (-self.k_s + 2.0 * p.contact_quadratic * z) * zd - p.contact_damping * f[idx::ZD]
+            + p.twist_coupling * y[idx::PHID];
+        if p.friction_law != FrictionLaw::Constant {
+            d[event::SLIP] = self.slip_velocity_gradient().dot(f);
+        }
+        d[event::ESCAPE] = -z.signum() * zd;
+        true
+    }
+
     fn on_event(&self, _t: f64, y: &State, mode: ContactMode, index: usize) -> EventAction<ContactMode> {
         match index {
             event::ESCAPE => EventAction::Stop,

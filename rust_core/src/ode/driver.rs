@@ -235,7 +235,18 @@ where
         if n_ev > 0 {
             sys.events(t_new, &y_new, mode, &mut g1);
             if opts.interior_checks > 0 {
-                if let Some(t_in) = hidden_crossing(sys, &dense, mode, t, t_new, n_ev, &g0, &g1, &pend, opts) {
+                if let Some(t_in) = hidden_crossing(
+                    sys,
+                    &dense,
+                    mode,
+                    (t, &y, &f),
+                    (t_new, &y_new, &f_new),
+                    n_ev,
+                    &g0,
+                    &g1,
+                    &pend,
+                    opts,
+                ) {
                     // A crossing and its return inside this step: redo it ending inside the excursion.
                     stats.n_rhs += dense.extra_rhs();
                     stats.n_reject += 1;

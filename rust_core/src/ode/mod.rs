@@ -95,6 +95,20 @@ pub trait OdeSystem<const N: usize> {
     /// (in either direction) within a step.
     fn events(&self, _t: f64, _y: &SVector<f64, N>, _mode: Self::Mode, _g: &mut [f64; MAX_EVENTS]) {}
 
+    /// Time derivatives `d[i]` of the event functions at `(t, y)`, where `f` is the right-hand side
+    /// there in `mode`; `false` where the system does not provide them (then the hidden-crossing
+    /// check uses its interior points only). An entry may be NaN: no rate for that function.
+    fn event_rates(
+        &self,
+        _t: f64,
+        _y: &SVector<f64, N>,
+        _f: &SVector<f64, N>,
+        _mode: Self::Mode,
+        _d: &mut [f64; MAX_EVENTS],
+    ) -> bool {
+        false
+    }
+
     /// Action at a located event `index` at `(t, y)` in `mode`.
     fn on_event(&self, _t: f64, _y: &SVector<f64, N>, _mode: Self::Mode, _index: usize) -> EventAction<Self::Mode> {
         EventAction::Continue

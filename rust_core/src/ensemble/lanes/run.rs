@@ -10,11 +10,11 @@ use crate::model::{event, idx, ContactMode, Slider, State};
 use crate::ode::controller::{FAC_MAX, FAC_MIN, SAFETY};
 use crate::ode::dop853::Dop853Dense;
 use crate::ode::dopri5::Dopri5Dense;
-use crate::ode::events::{step_events, StepEnd};
+use crate::ode::events::{step_events, turn_point, StepEnd};
 use crate::ode::lanes::LaneDense;
 use crate::ode::lanes::{
     cross, dop853_dense, dop853_step, dopri5_dense, dopri5_step, each6, exp_lanes, lane_state, ln_lanes, sample_lane,
-    splat, ALL_COMPS, ALPHA, ALPHA8, BETA, LN_ERR_FLOOR, LN_SAFETY, V6, W,
+    splat, ALL_COMPS, ALPHA, ALPHA8, BETA, L, LN_ERR_FLOOR, LN_SAFETY, V6, W,
 };
 use crate::ode::stepper::StepDense;
 use crate::ode::{Control, Observer, OdeSystem, Options, Outcome, StepView, MAX_EVENTS};
@@ -181,8 +181,14 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
         // The lanes whose step needs the hidden-crossing check (`near_events`): the check runs
         // when any does, and acts, counts and leaves its extra stages (DOP853) for those only, so
         // that a lane's run does not depend on the other lanes of its batch.
-        let need =
-            if UNI { near_events::<COUL>(c, y, k1, &yn, fnew, &ln.g0, &g1, &ln.pend, &ok, &hh) } else { [false; W] };
+        // `turn`: each near lane's turning point of the event function most likely to touch zero
+        // inside the step (0: none), checked on the interpolant beside the three fixed points.
+        let mut turn = zero;
+        let need = if UNI {
+            near_events::<COUL>(c, y, k1, &yn, fnew, &ln.g0, &g1, &ln.pend, &ok, &hh, &mut turn)
+        } else {
+            [false; W]
+        };
         if need.iter().any(|&x| x) {
             let ok: [bool; W] = std::array::from_fn(|l| ok[l] & need[l]);
             // The interpolant at three interior points: DP5's from its stages, DOP853's needs
@@ -202,7 +208,7 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
                     } else {
                         dopri5_dense($comps, y, &yn, [k1, &k[1], &k[2], &k[3], &k[4], &k[5]], &hh)
                     };
-                    hidden_crossings::<COUL, _>(c, &dense, &ln.g0, &g1, &ln.pend, &ok, &mut hidden);
+                    hidden_crossings::<COUL, _>(c, &dense, &ln.g0, &g1, &ln.pend, &ok, &turn, &mut hidden);
                 }};
             }
             if COUL {
@@ -474,6 +480,9 @@ const FAR: f64 = 4.0;
 /// oscillation of the event function within one step, which an accepted step of an error-controlled
 /// method does not hold (steps are a small fraction of the period). When it skips, the check would
 /// have found nothing, so the run is the same; on the disk, far from lift-off, it always skips.
+///
+/// For the near lanes, `turn[l]` is the [`turn_point`] of the event function whose cubic model
+/// comes closest to zero (relative to its start value) inside the step, 0 where none turns.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn near_events<const COUL: bool>(
@@ -487,6 +496,7 @@ fn near_events<const COUL: bool>(
     pend: &[[bool; W]; NE],
     ok: &[bool; W],
     hh: &[f64; W],
+    turn: &mut L,
 ) -> [bool; W] {
     let mut near = [false; W];
     for l in 0..W {
@@ -498,7 +508,7 @@ fn near_events<const COUL: bool>(
             d[event::NORMAL] =
                 (-c.ks[l] + 2.0 * c.ka[l] * z) * zd - c.c[l] * f[idx::ZD][l] + c.kphi[l] * y[idx::PHID][l];
             d[event::SLIP] = if COUL { -(f[idx::XD][l] + c.sl[l] * f[idx::PHID][l]) } else { 0.0 };
-            d[event::ESCAPE] = zd; // |d|z|/dt| = |zd|
+            d[event::ESCAPE] = -z.signum() * zd;
             d
         };
         let (d0, d1) = (slopes(y0, f0), slopes(y1, f1));
@@ -509,6 +519,27 @@ fn near_events<const COUL: bool>(
             clear &= pend[e][l] || (g0[e][l].abs() > travel && g1[e][l].abs() > travel);
         }
         near[l] = !clear && ok[l];
+        if near[l] {
+            // The turning point whose cubic model dips deepest towards zero (fraction of g0 left).
+            let mut best = f64::INFINITY;
+            for e in 0..NE {
+                let (a, b) = (g0[e][l], g1[e][l]);
+                if pend[e][l] {
+                    continue;
+                }
+                if let Some(x) = turn_point(a, b, d0[e], d1[e], hh[l]) {
+                    let (m0, m1) = (hh[l] * d0[e], hh[l] * d1[e]);
+                    let x1 = 1.0 - x;
+                    let p = a * (1.0 + 2.0 * x) * x1 * x1 + m0 * x * x1 * x1 + b * x * x * (3.0 - 2.0 * x)
+                        - m1 * x * x * x1;
+                    let left = p / a;
+                    if left < best {
+                        best = left;
+                        turn[l] = x;
+                    }
+                }
+            }
+        }
     }
     near
 }

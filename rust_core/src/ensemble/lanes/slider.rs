@@ -188,9 +188,10 @@ pub(super) fn events_lanes<const COUL: bool>(c: &Coef, y: &V6, fzl: &L, g: &mut 
 }
 
 /// The scalar driver's hidden-crossing check on all lanes at once: at the three interior points
-/// `x = 1/4, 1/2, 3/4` of each accepted step's interpolant, an event function that is not pending
-/// and differs in sign from the step start while the step end does not. `hidden[l]` becomes the
-/// first such `x` (0 where none).
+/// `x = 1/4, 1/2, 3/4` of each accepted step's interpolant and at each lane's own turning point
+/// `turn[l]` (0: none; see `run::near_events`), an event function that is not pending and differs
+/// in sign from the step start while the step end does not. `hidden[l]` becomes the earliest such
+/// `x` (0 where none).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 pub(super) fn hidden_crossings<const COUL: bool, const C: usize>(
@@ -200,34 +201,48 @@ pub(super) fn hidden_crossings<const COUL: bool, const C: usize>(
     g1: &[L; NE],
     pend: &[[bool; W]; NE],
     ok: &[bool; W],
+    turn: &L,
     hidden: &mut L,
 ) {
+    // The event functions of lane `l` from the interpolant's components there: EV_COMPS (C = 5)
+    // or EV_COMPS_CONST (C = 3).
+    let g_at = |v: [f64; C], l: usize| {
+        let (ip, ixd, iphd) = if C == 5 { (3, 2, 4) } else { (2, usize::MAX, usize::MAX) };
+        let at = |k: usize| if k < C { v[k] } else { 0.0 };
+        let (z, zd, ph) = (v[0], v[1], at(ip));
+        let fz = -c.ks[l] * z + c.ka[l] * z * z - c.c[l] * zd + c.kphi[l] * ph;
+        let mut g = [0.0; NE];
+        g[event::GAP] = c.zst[l] + z;
+        g[event::NORMAL] = c.fst[l] + fz;
+        g[event::SLIP] = if COUL { c.v[l] - (at(ixd) + c.sl[l] * at(iphd)) } else { 1.0 };
+        g[event::ESCAPE] = c.esc[l] - z.abs();
+        g
+    };
+    let hit_of = |g: &[f64; NE], l: usize| {
+        let mut hit = false;
+        for e in 0..NE {
+            hit |= !pend[e][l] & cross(g0[e][l], g[e]) & !cross(g0[e][l], g1[e][l]);
+        }
+        hit
+    };
     let mut found = [false; W];
     for q in 1..=3 {
         let th = q as f64 / 4.0;
         let v = dense.eval(th);
-        let mut g = [[0.0; W]; NE];
-        // The interpolant's components: EV_COMPS (C = 5) or EV_COMPS_CONST (C = 3).
-        let at = |k: usize, l: usize| if k < C { v[k][l] } else { 0.0 };
-        let (ip, ixd, iphd) = if C == 5 { (3, 2, 4) } else { (2, usize::MAX, usize::MAX) };
         for l in 0..W {
-            let (z, zd, ph) = (v[0][l], v[1][l], at(ip, l));
-            let fz = -c.ks[l] * z + c.ka[l] * z * z - c.c[l] * zd + c.kphi[l] * ph;
-            g[event::GAP][l] = c.zst[l] + z;
-            g[event::NORMAL][l] = c.fst[l] + fz;
-            g[event::SLIP][l] = if COUL { c.v[l] - (at(ixd, l) + c.sl[l] * at(iphd, l)) } else { 1.0 };
-            g[event::ESCAPE][l] = c.esc[l] - z.abs();
-        }
-        let mut hit = [false; W];
-        for e in 0..NE {
-            for l in 0..W {
-                hit[l] |= !pend[e][l] & cross(g0[e][l], g[e][l]) & !cross(g0[e][l], g1[e][l]);
-            }
-        }
-        for l in 0..W {
-            let take = hit[l] & ok[l] & !found[l];
+            let g = g_at(std::array::from_fn(|k| v[k][l]), l);
+            let take = hit_of(&g, l) & ok[l] & !found[l];
             hidden[l] = if take { th } else { hidden[l] };
             found[l] |= take;
+        }
+    }
+    for l in 0..W {
+        let x = turn[l];
+        if x > 0.0 && ok[l] && !(found[l] && hidden[l] <= x) {
+            let v = dense.eval_lane(l, x);
+            if hit_of(&g_at(v, l), l) {
+                hidden[l] = x;
+            }
         }
     }
 }

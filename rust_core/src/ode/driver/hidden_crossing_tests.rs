@@ -61,3 +61,65 @@ fn n_rhs_counts_every_evaluation_with_events_and_interior_checks() {
         }
     }
 }
+
+/// `PEAK` with the exact rate of its event function, `d(x - level)/dt = x'`.
+struct WithRates;
+impl OdeSystem<2> for WithRates {
+    type Mode = ();
+    fn rhs(&self, t: f64, y: &SVector<f64, 2>, m: ()) -> SVector<f64, 2> {
+        PEAK.rhs(t, y, m)
+    }
+    fn initial_mode(&self, _t: f64, _y: &SVector<f64, 2>) {}
+    fn n_events(&self) -> usize {
+        1
+    }
+    fn events(&self, t: f64, y: &SVector<f64, 2>, m: (), g: &mut [f64; MAX_EVENTS]) {
+        PEAK.events(t, y, m, g)
+    }
+    fn event_rates(
+        &self,
+        _t: f64,
+        _y: &SVector<f64, 2>,
+        f: &SVector<f64, 2>,
+        _m: (),
+        d: &mut [f64; MAX_EVENTS],
+    ) -> bool {
+        d[0] = f[0];
+        true
+    }
+}
+
+#[test]
+fn turning_points_find_excursions_that_evenly_spaced_checks_miss() {
+    // The loose steps jump over some of the 0.28 s excursions; the turning point of g's cubic
+    // model (from g and its rate at both step ends) lands on each peak; one midpoint check does not.
+    let y0 = SVector::<f64, 2>::new(0.1f64.cos(), -0.1f64.sin());
+    for method in [Method::Dopri5, Method::Dop853] {
+        let mut o = Options::<2>::new(1e-4, 1e-6);
+        o.interior_checks = 1;
+        let without = integrate(&PEAK, method, 0.1, y0, 33.0, &o, &mut NoObserver);
+        let with = integrate(&WithRates, method, 0.1, y0, 33.0, &o, &mut NoObserver);
+        // DP5's shorter steps put the midpoint inside every excursion; DOP853's do not.
+        let missed = without.stats.n_events < 11;
+        assert!(
+            missed || method == Method::Dopri5,
+            "{method:?}: the test does not exercise hidden crossings: {:?}",
+            without.stats
+        );
+        assert_eq!(with.stats.n_events, 11, "{method:?}: {:?}", with.stats);
+    }
+}
+
+#[test]
+fn turning_point_of_a_parabola_is_its_vertex() {
+    // g(t) = -1 + 4 (t - 0.3)^2 ... a parabola through g(0) = -0.64, peaking at t = 0.7 below zero:
+    // g = -(t - 0.7)^2 - 0.01 on [0, 1] (h = 1): g0 = -0.5, g1 = -0.1, d0 = 1.4, d1 = -0.6.
+    let x = super::super::events::turn_point(-0.5, -0.1, 1.4, -0.6, 1.0).unwrap();
+    assert!((x - 0.7).abs() < 1e-9, "{x}");
+    // The same on a step of 2 s: x is the fraction of the step.
+    let x = super::super::events::turn_point(-0.5, -0.1, 0.7, -0.3, 2.0).unwrap();
+    assert!((x - 0.7).abs() < 1e-9, "{x}");
+    // Heading away at the start, or a sign change at the ends: none.
+    assert!(super::super::events::turn_point(-0.5, -0.1, -1.0, -0.6, 1.0).is_none());
+    assert!(super::super::events::turn_point(-0.5, 0.1, 1.4, 0.6, 1.0).is_none());
+}
