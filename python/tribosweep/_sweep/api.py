@@ -124,8 +124,8 @@ def sweep(
         netCDF file to write (through ``<output>.tmp``); finished chunks are kept in
         ``<output>.parts/`` until it is complete. Without it the Dataset is built in memory.
     chunk_size : int, optional
-        Points per chunk (default 4096 for ``linear``, 64 otherwise; on a dask cluster at most
-        that, and small enough for 4 chunks per worker thread). Results do not depend on it. Part
+        Points per chunk (default 4096 for ``linear``, 256 otherwise; with an executor or on a
+        dask cluster at most that, and small enough for 4 chunks per worker). Results do not depend on it. Part
         of the configuration a resumed sweep must match; without it a resumed sweep keeps its own.
     threads : int, optional
         Rust worker threads inside a chunk (default ``TRIBOSWEEP_THREADS`` or all cores).
@@ -343,8 +343,10 @@ def sweep(
         if chunk_size is None:
             chunk_size = (Parts.saved_chunk_size(output) if resume else None) or DEFAULT_CHUNK_SIZE.get(
                 strategy, DEFAULT_CHUNK_SIZE_OTHER)  # fmt: skip
-            if runner.is_dask(executor) and not resume:
-                chunk_size = _cluster.chunk_size(n_points, chunk_size, _cluster.total_threads(executor))
+            if executor is not None and not resume:
+                # Enough chunks to keep every worker busy to the end.
+                slots = _cluster.total_threads(executor) if runner.is_dask(executor) else runner.slots(executor)
+                chunk_size = _cluster.chunk_size(n_points, chunk_size, slots)
         plan = Plan(model, axes, strategy, settings, int(chunk_size), wear_reference, wear_calibration)
         if command is None:
             command = f"tribosweep.sweep(shape={plan.shape}, dims={plan.dims}, strategy={strategy!r})"

@@ -34,9 +34,12 @@ AXIS_ATTRS: dict[str, dict[str, str]] = {
 }
 #: Fields an extra axis may not sweep: set by the physics dimensions through the apparatus model.
 RESERVED_FIELDS: tuple[str, ...] = ("normal_load", "sliding_speed", "omega_normal", "omega_friction", "omega_torsion")
-#: Default points per chunk: the eigenvalue-only method is cheap, time integration is not.
+#: Default points per chunk: the eigenvalue-only method is cheap, time integration is not. 256
+#: for time integration: a chunk's census is one batched call whose lanes idle while its longest
+#: samples finish, and that tail costs less the more samples a call has (the default 2,000-point
+#: grid at K = 16 on 2 cores: 12.5 s with chunks of 64, 10.5 s with 256, 10.0 s with one chunk).
 DEFAULT_CHUNK_SIZE: dict[str, int] = {"linear": 4096}
-DEFAULT_CHUNK_SIZE_OTHER: int = 64
+DEFAULT_CHUNK_SIZE_OTHER: int = 256
 def check_axis(name: str, values, *, positive: bool = True, units: str = "") -> np.ndarray:
     """A non-empty, finite, strictly increasing 1-D float array (and > 0 if ``positive``)."""
     try:

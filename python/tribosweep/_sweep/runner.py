@@ -321,7 +321,8 @@ def _run_map(plan: Plan, chunks: list[int], threads, executor, asm: _Assembly) -
             asm.add(Piece(k, *plan.chunk_range(k)), res)
 
 
-def _slots(executor) -> int:
+def slots(executor) -> int:
+    """Workers of a ``concurrent.futures`` executor (else the cores of this machine)."""
     n = getattr(executor, "_max_workers", None)
     return int(n) if isinstance(n, int) and n > 0 else os.cpu_count() or 1
 
@@ -332,7 +333,7 @@ def _run_pool(plan, chunks, threads, executor, asm: _Assembly, markers: Path | N
     markers = Path(tempfile.mkdtemp(prefix="tribosweep-running-")) if own_markers else markers
     queue = collections.deque(Piece(k, *plan.chunk_range(k)) for k in chunks)
     alone = collections.deque(isolated)  # pieces to run alone in a fresh process
-    window = min(EXECUTOR_WINDOW, 2 * _slots(executor) + 2)
+    window = min(EXECUTOR_WINDOW, 2 * slots(executor) + 2)
     inflight: dict[concurrent.futures.Future, tuple[Piece, Path | None]] = {}
     owned: list = []  # pools made here to replace broken ones
     lone = concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix="tribosweep-isolate")
