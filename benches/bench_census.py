@@ -7,6 +7,7 @@ run in the same process (the machines are shared: absolute seconds drift with th
     python benches/bench_census.py --sweep-points 120 --samples 16 --threads 2
     python benches/bench_census.py --scipy 128 --sweep-points 0   # labels against scipy, 128 starts
     python benches/bench_census.py --compare --sweep-points 0     # the stationarity stop against t_max
+    python benches/bench_census.py --rtol 1e-6,1e-8,1e-10 --sweep-points 0   # the census's accuracy and cost
 """
 
 from __future__ import annotations
@@ -90,9 +91,7 @@ def compare_irregular_stop(n_loads: int, n_arms: int, k: int, threads: int | Non
     """
     import dataclasses
 
-    loads, arms = np.linspace(10, 150, n_loads), np.linspace(0.05, 0.127, n_arms)
-    ds = ts.sweep(normal_load=loads, arm_length=arms, sliding_speed=[0.3], samples=1, progress=False, threads=threads)
-    pts = [(a, b) for a in loads for b in arms if int(ds.census_samples.sel(normal_load=a, arm_length=b).item()) > 0]
+    pts = grid_points(n_loads, n_arms, threads)
     out = {}
     for block in (0, DEFAULTS.irregular.block):
         t0 = time.perf_counter()
@@ -123,6 +122,47 @@ def compare_irregular_stop(n_loads: int, n_arms: int, k: int, threads: int | Non
           f"at {load:.1f} N, {100 * arm:.1f} cm)")  # fmt: skip
 
 
+def grid_points(n_loads: int, n_arms: int, threads: int | None) -> list[tuple[float, float]]:
+    """The (load, arm) pairs the default sweep censuses (stable, with a saddle cycle) at 0.3 m/s."""
+    loads, arms = np.linspace(10, 150, n_loads), np.linspace(0.05, 0.127, n_arms)
+    ds = ts.sweep(normal_load=loads, arm_length=arms, sliding_speed=[0.3], samples=1, progress=False, threads=threads)
+    return [(a, b) for a in loads for b in arms if int(ds.census_samples.sel(normal_load=a, arm_length=b).item()) > 0]
+
+
+def rtol_agreement(rtols: list[float], k: int, threads: int | None) -> None:
+    """The census of the grid's points at each rtol, labels against the tightest rtol's, sample by sample.
+
+    A census is a work-precision problem like any other: its cost against the error of what it
+    reports (labels, fractions), the reference being the tightest tolerance.
+    """
+    import dataclasses
+
+    pts = grid_points(40, 10, threads)
+    models = [dataclasses.replace(ts.apparatus_model(a, b, 0.3), contact="unilateral") for a, b in pts]
+    runs = {}
+    for rt in sorted(rtols, reverse=True):
+        t0 = time.perf_counter()
+        res = [ts.census(m, samples=k, rtol=rt, threads=threads) for m in models]
+        runs[rt] = (time.perf_counter() - t0, np.array([r.attractor_reached.values for r in res]),
+                    np.array([r.t_end.values for r in res]))  # fmt: skip
+    ref = runs[min(rtols)][1]
+    names = ts.ATTRACTOR_NAMES
+
+    def fractions(a):
+        return np.array([np.bincount(r[r >= 0], minlength=len(names)) / max(int((r >= 0).sum()), 1) for r in a])
+
+    fr = fractions(ref)
+    print(f"census of {len(pts)} grid points x K = {k} by rtol (reference: rtol {min(rtols):g})")
+    print("  rtol    wall [s]  simulated [s]  " + "  ".join(f"{n:>9}" for n in names) + "  agree [%]  points >2/3 SE")
+    for rt, (w, a, t) in runs.items():
+        fa = fractions(a)
+        se = np.maximum(np.sqrt((fa * (1 - fa) + fr * (1 - fr)) / k), 1.0 / k)
+        z = np.max(np.abs(fa - fr) / se, axis=1)
+        counts = "  ".join(f"{int((a == i).sum()):>9}" for i in range(len(names)))
+        print(f"  {rt:<7g} {w:8.1f}  {t.sum():13.0f}  {counts}  {100 * (a == ref).mean():9.1f}  "
+              f"{int((z > 2).sum())}/{int((z > 3).sum())}")  # fmt: skip
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--samples-one", type=int, default=1024)
@@ -130,6 +170,8 @@ def main() -> None:
     ap.add_argument("--sweep-points", type=int, choices=(0, 120, 2000), default=2000)
     ap.add_argument("--scipy", type=int, default=0, help="compare this many census labels with scipy's")
     ap.add_argument("--threads", type=int, default=None)
+    ap.add_argument("--rtol", type=str, default="",
+                    help="comma-separated rtols: the census of the grid's points at each (K = --samples)")
     ap.add_argument("--compare", action="store_true",
                     help="the stationarity stop against runs to t_max (K = --samples)")  # fmt: skip
     a = ap.parse_args()
@@ -137,6 +179,8 @@ def main() -> None:
     one_point(a.samples_one, a.threads)
     if a.scipy:
         scipy_agreement(a.scipy)
+    if a.rtol:
+        rtol_agreement([float(x) for x in a.rtol.split(",")], a.samples, a.threads)
     if a.compare:
         compare_irregular_stop(40, 10, a.samples, a.threads)
     if a.sweep_points == 2000:

@@ -124,14 +124,14 @@ def test_census_flags_and_config(tmp_path, capsys):
     # Every census setting is a flag and a [census] key; the flag wins over the file.
     nc = tmp_path / "c.nc"
     cfg = tmp_path / "c.toml"
-    cfg.write_text("[census]\nsamples = 6\nt_max = 4.0\ndisturbance_scale = 2.5\n[solver]\nirregular_block = 64\n")
+    cfg.write_text("[census]\nsamples = 6\nt_max = 4.0\ndisturbance_scale = 2.5\nrtol = 1e-5\n[solver]\nirregular_block = 64\n")
     code, out, err = run(["sweep", "--normal-load", "84.46", "--config", cfg, "--samples", "4", "--rtol", "1e-7",
-                          "--irregular-block", "32", "-o", nc, "--no-progress"], capsys)  # fmt: skip
+                          "--irregular-block", "32", "--census-rtol", "2e-7", "-o", nc, "--no-progress"], capsys)  # fmt: skip
     assert code == 0, err
     with xr.open_dataset(nc) as ds:
         assert ds.attrs["solver_samples"] == 4 and ds.attrs["solver_census_t_max"] == 4.0
         assert ds.attrs["solver_disturbance_scale"] == 2.5 and ds.attrs["solver_rtol"] == 1e-7
-        assert ds.attrs["solver_irregular_block"] == 32
+        assert ds.attrs["solver_irregular_block"] == 32 and ds.attrs["solver_census_rtol"] == 2e-7
         assert int(ds.census_samples.item()) + int(ds.census_failed.item()) == 4
     assert "attractor census: 1 points, 4 disturbances each" in out
     code, _, err = run(["sweep", "--normal-load", "84.46", "--no-census", "-o", tmp_path / "n.nc", "--no-progress"],

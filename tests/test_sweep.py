@@ -97,6 +97,7 @@ def test_bad_extra_axes(extra, match):
         ({"samples": 0}, r"samples = 0 is out of range: must be an integer in \[1, 100000\]"),
         ({"disturbance_scale": -1.0}, "disturbance_scale"),
         ({"census_t_max": 0.0}, "census_t_max"),
+        ({"census_rtol": 1.5}, r"census_rtol = 1.5 is out of range: must be in \[1e-15, 1\)"),
         ({"irregular_block": -1}, r"irregular_block = -1 is out of range: must be an integer in \[0, "),
     ],
 )

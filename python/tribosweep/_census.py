@@ -487,7 +487,7 @@ def census(
     disturbance_scale: float = DEFAULTS.census.disturbance_scale,
     t_max: float = DEFAULTS.census.t_max,
     integrator: str = DEFAULTS.integration.integrator,
-    rtol: float = DEFAULTS.integration.rtol,
+    rtol: float = DEFAULTS.census.rtol,
     periodic_tol: float = DEFAULTS.steady.periodic_tol,
     cycle_tol: float = CYCLE_TOL,
     threads: int | None = None,
@@ -513,7 +513,8 @@ def census(
     integrator : {"dop853", "dopri5", "rodas4"}
         Time integrator.
     rtol : float
-        Relative tolerance of the integration.
+        Relative tolerance of the integration (1e-6: the census's default, see
+        ``tribosweep._settings.Census``).
     periodic_tol : float
         Relative repetition tolerance of the section state that declares a cycle.
     cycle_tol : float

@@ -120,6 +120,7 @@ _SETTINGS: dict[str, tuple[str, object, str, str]] = {
     "samples": ("census", int, "K", "census disturbances per point"),
     "census_t_max": ("census", float, "S", "longest run of one census disturbance [s]"),
     "disturbance_scale": ("census", float, "X", "largest modal amplitude of a census disturbance in units of |z_st|"),
+    "census_rtol": ("census", float, "R", "relative tolerance of the census disturbances' runs (1e-6)"),
     "irregular_block": ("irregular", int, "N", "sections per block of the stationarity test that ends a transient or a "
                         "census disturbance as irregular motion (0: run to t_max)"),
     "irregular_window": ("irregular", float, "S", "measurement window of irregular motion [s]"),
@@ -138,7 +139,7 @@ _DASK_KEYS = {"scheduler"}
 _SOLVER_KEYS = set(_SETTINGS) | {"census"}
 #: [census] keys -> sweep() arguments.
 _CENSUS_KEYS = {"enabled": "census", "samples": "samples", "t_max": "census_t_max",
-                "disturbance_scale": "disturbance_scale"}  # fmt: skip
+                "disturbance_scale": "disturbance_scale", "rtol": "census_rtol"}  # fmt: skip
 
 
 def _default(name: str):
@@ -228,7 +229,7 @@ def _add_sweep_arguments(p: argparse.ArgumentParser) -> None:
             "(about 0: quasi-periodic; > 0: chaotic) with its standard error.",
         ),
         "census": p.add_argument_group(
-            "attractor census (also the [census] table: enabled, samples, t_max, disturbance_scale)",
+            "attractor census (also the [census] table: enabled, samples, t_max, disturbance_scale, rtol)",
             "auto: at stable points with a saddle cycle, K disturbances on the torsion and normal modes are each run "
             "to their attractor; the sweep reports the fraction reaching sliding / a cycle / irregular motion / "
             "escape, with standard errors. It is most of an auto sweep's cost (about K runs of up to --census-t-max "

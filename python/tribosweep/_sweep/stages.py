@@ -434,7 +434,7 @@ def census(p: Points) -> None:
     res, per = _census.run(
         p.model_values, p.contact, p.friction_law, p.point_params, cand,
         samples=cs.samples, scale=cs.disturbance_scale, t_max=cs.t_max,
-        integrator=it.integrator, rtol=it.rtol, atol=None if it.atol is None else list(it.atol),
+        integrator=it.integrator, rtol=cs.rtol, atol=None if it.atol is None else list(it.atol),
         periodic_tol=p.settings.steady.periodic_tol, threads=p.threads,
         eigenvalues=p.eigenvalues[cand], linear_frequency=out["linear_frequency"][cand],
         saddle=p.saddle[cand], irregular_block=p.settings.irregular.block,
