@@ -34,11 +34,13 @@ pub enum Status {
     NotConverged = 9,
     /// The point was not computed (e.g. skipped because an earlier stage decided it).
     NotComputed = 10,
+    /// A contact event was missed: the run ended with the pin in free flight inside the disk.
+    EventMissed = 11,
 }
 
 impl Status {
     /// Every status, in code order (used to write `flag_values`/`flag_meanings`).
-    pub const ALL: [Status; 11] = [
+    pub const ALL: [Status; 12] = [
         Status::Success,
         Status::MaxSteps,
         Status::StepTooSmall,
@@ -50,6 +52,7 @@ impl Status {
         Status::Panic,
         Status::NotConverged,
         Status::NotComputed,
+        Status::EventMissed,
     ];
 
     /// Short machine name (CF `flag_meanings` token).
@@ -66,6 +69,7 @@ impl Status {
             Status::Panic => "panic",
             Status::NotConverged => "not_converged",
             Status::NotComputed => "not_computed",
+            Status::EventMissed => "event_missed",
         }
     }
 
@@ -183,6 +187,24 @@ pub enum Failure {
         z: f64,
         /// The escape limit [m].
         limit: f64,
+    },
+    /// The escape limit was reached in free flight inside the disk ([`Status::EventMissed`]):
+    /// the pin re-entered the disk without its contact event, and the load drove it on. A
+    /// numerical failure, not an escape.
+    #[error(
+        "|z| = {z:.4e} m reached the escape limit at t = {t:.6e} s in free flight inside the disk (gap {gap:.4e} m, \
+         law force {force:.4e} N): a contact event was missed (numerical failure, not an escape); a tighter rtol \
+         resolves it"
+    )]
+    EventMissed {
+        /// Time [s].
+        t: f64,
+        /// `z` there [m].
+        z: f64,
+        /// The gap `z_st + z` there [m] (negative: inside the disk).
+        gap: f64,
+        /// The contact law's normal force there [N] (positive: it would push the pin out).
+        force: f64,
     },
     /// A run to steady state reached `t_max` with neither decay nor a repeating section state
     /// ([`Status::NotConverged`]).
@@ -308,6 +330,7 @@ impl Failure {
             Failure::NonFinite { .. } | Failure::NonFiniteStart { .. } => Status::NonFinite,
             Failure::EventChatter { .. } => Status::EventChatter,
             Failure::Escaped { .. } => Status::Diverged,
+            Failure::EventMissed { .. } => Status::EventMissed,
             Failure::Unsettled { .. } => Status::NotConverged,
             Failure::PeriodRerun { status, .. } => {
                 if status.is_ok() {

@@ -126,3 +126,25 @@ fn stationary_irregular_motion_stops_after_three_blocks_and_nothing_else_does() 
     let jitter = |n: usize| two(0.0)(n) + 1e-5 * torus(1.0)(n);
     assert_eq!(watch(&tight, 3000, jitter), ("running", 3000));
 }
+
+#[test]
+fn an_escape_in_free_flight_inside_the_disk_is_a_missed_event() {
+    // The state a missed contact event leaves: the pin in free flight 1 mm inside the disk, its law
+    // force far positive. An escape in contact, or off the disk, stays an escape.
+    let s = Slider::new(Params { contact: crate::model::ContactModel::Unilateral, ..Params::seed() }).unwrap();
+    let lim = s.p.escape_limit;
+    let inside = State::new(-lim, -0.09, 0.0, 0.0, 0.0, 0.0);
+    let above = State::new(lim, 0.09, 0.0, 0.0, 0.0, 0.0);
+    let by = crate::ode::Outcome::StoppedByEvent;
+    assert_eq!(end_status(&s, by, &inside, ContactMode::Free), Status::EventMissed);
+    assert_eq!(end_status(&s, by, &inside, ContactMode::Contact), Status::Diverged);
+    assert_eq!(end_status(&s, by, &above, ContactMode::Free), Status::Diverged);
+    // Not at the limit: whatever the outcome says.
+    let near = State::new(-0.5 * lim, -0.09, 0.0, 0.0, 0.0, 0.0);
+    assert_eq!(end_status(&s, crate::ode::Outcome::Finished, &near, ContactMode::Free), Status::Success);
+    let opts = options_for(&s, &Tolerances::new(1e-8));
+    let f = run_failure(Status::EventMissed, &s, 2.07, &inside, 1e-4, 100, 30.0, &opts).unwrap();
+    assert_eq!(f.status(), Status::EventMissed);
+    let text = f.to_string();
+    assert!(text.contains("free flight inside the disk") && text.contains("a contact event was missed"), "{text}");
+}

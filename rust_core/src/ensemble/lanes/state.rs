@@ -9,7 +9,7 @@ use crate::ode::controller::initial_step;
 use crate::ode::lanes::{L, LN_ERR_FLOOR, V6, W};
 use crate::ode::{Control, Observer, OdeSystem, Options, Outcome, Sampler, Stats, StepView, MAX_EVENTS};
 use crate::steady::{
-    options_for, run_failure, status_of, summarize, Extremes, ExtremesObserver, RunResult, SteadyObserver,
+    end_status, options_for, run_failure, status_of, summarize, Extremes, ExtremesObserver, RunResult, SteadyObserver,
     SteadyOptions, Tolerances,
 };
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -153,8 +153,7 @@ pub(super) fn finish(
     stats.n_rhs += if ln.m8 { 11 * steps + ln.n_acc[l] + ln.n_extra[l] } else { 6 * steps };
     stats.n_accept = ln.n_acc[l];
     stats.n_reject = ln.n_rej[l];
-    let escaped = y[idx::Z].abs() >= sd.s.p.escape_limit * (1.0 - 1e-9);
-    let status = status_of(outcome, escaped);
+    let status = end_status(sd.s, outcome, &y, sd.mode);
     let failure = run_failure(status, sd.s, t, &y, h, steps, sd.t_end, &sd.opts);
     let run = RunResult { status, t, y, extremes: ext, stats, failure };
     out.push((sd.i, conclude(run, &mut sd)));
