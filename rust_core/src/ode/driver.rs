@@ -34,10 +34,13 @@
 //! takes the sign of the step end as its reference (it stays pending while that is 0 as well).
 //! Consequences: a restart on a root never re-fires at once; a genuine crossing within
 //! `max(event_guard, 1e-6 h)` after a switch is not seen (it is rounding-level, the grazing case the
-//! guard exists for); two crossings of one function inside one step cancel (as in every sign-based
-//! locator). Crossings located after the truncating event in the same step are discarded and
-//! looked for again in the new mode; one whose root lies within `event_tol` of the switch may by
-//! then be on its far side and go unreported (simultaneous events are not merged).
+//! guard exists for); two crossings of one function inside one step cancel at its ends (as in
+//! every sign-based locator), which is why steps are also checked inside when `interior_checks` is
+//! positive (at that many points, and at each event function's turning point where the system
+//! gives the rates of its event functions: `OdeSystem::event_rates`, `events::turn_point`).
+//! Crossings located after the truncating event in the same step are discarded and looked for
+//! again in the new mode; one whose root lies within `event_tol` of the switch may by then be on
+//! its far side and go unreported (simultaneous events are not merged).
 //!
 //! # Counting
 //! `n_rhs` counts the right-hand-side calls the integrator makes, including the starting-step

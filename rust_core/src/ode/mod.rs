@@ -186,7 +186,8 @@ pub struct Options<const N: usize> {
     /// Event functions are also checked at this many evenly spaced interior points of each step's
     /// dense output; a sign change inside a step that the step's ends do not show (a crossing and
     /// its return within one step: a short hop off the disk) makes the driver redo the step ending
-    /// at that interior point, so the excursion is located instead of stepped over. 0: ends only.
+    /// at that interior point, so the excursion is located instead of stepped over; the turning
+    /// points of systems with `event_rates` are checked with them. 0: ends only (no check inside).
     pub interior_checks: u32,
 }
 

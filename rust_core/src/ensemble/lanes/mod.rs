@@ -10,7 +10,8 @@
 //! - **Events per lane, never stepped across.** After every accepted step the four event
 //!   functions of the slider (gap, law normal force, sliding velocity, escape) are evaluated on all
 //!   lanes at once; for the unilateral model they are also evaluated at the three interior points of
-//!   each step's dense output (the scalar driver's hidden-crossing check), and a lane with a
+//!   each step's dense output and at the turning point of the function most likely to touch zero
+//!   (the scalar driver's hidden-crossing check), and a lane with a
 //!   crossing and its return inside its step redoes the step ending inside the excursion. A lane
 //!   whose step shows a crossing (or has an event pending after a switch) goes to a cold path that
 //!   builds that lane's Dormand–Prince interpolant and runs **the scalar driver's own event code**
