@@ -193,8 +193,7 @@ pub enum Failure {
     /// numerical failure, not an escape.
     #[error(
         "|z| = {z:.4e} m reached the escape limit at t = {t:.6e} s in free flight inside the disk (gap {gap:.4e} m, \
-         law force {force:.4e} N): a contact event was missed (numerical failure, not an escape); a tighter rtol \
-         resolves it"
+         law force {force:.4e} N): a contact event was missed (numerical failure, not an escape)"
     )]
     EventMissed {
         /// Time [s].

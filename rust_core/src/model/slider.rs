@@ -388,8 +388,7 @@ impl OdeSystem<6> for Slider {
         let (z, zd) = (y[idx::Z], y[idx::ZD]);
         d.fill(f64::NAN);
         d[event::GAP] = zd;
-        d[event::NORMAL] = (-self.k_s + 2.0 * p.contact_quadratic * z) * zd - p.contact_damping * f[idx::ZD]
-            + p.twist_coupling * y[idx::PHID];
+        d[event::NORMAL] = self.law_force_rate(y, f);
         if p.friction_law != FrictionLaw::Constant {
             d[event::SLIP] = self.slip_velocity_gradient().dot(f);
         }
@@ -555,7 +554,11 @@ impl Slider {
 
     /// Time derivative of the law's normal force along the flow in mode `mode`.
     fn normal_law_rate(&self, y: &State, mode: ContactMode) -> f64 {
-        let yd = Slider::rhs(self, y, mode);
+        self.law_force_rate(y, &Slider::rhs(self, y, mode))
+    }
+
+    /// Time derivative of the law's normal force at `y` along `yd` (the right-hand side there).
+    fn law_force_rate(&self, y: &State, yd: &State) -> f64 {
         let p = &self.p;
         let dfz_dz = -self.k_s + 2.0 * p.contact_quadratic * y[idx::Z];
         dfz_dz * yd[idx::Z] - p.contact_damping * yd[idx::ZD] + p.twist_coupling * yd[idx::PHI]

@@ -129,13 +129,13 @@ pub(crate) struct Switched {
 /// Where an event function that does not change sign between the ends of a step may still touch
 /// zero inside it: the turning point of its cubic Hermite model, from its values `g0`, `g1` and
 /// time derivatives `d0`, `d1` at the ends of a step of length `h`, as `x = (t - t0) / h` in
-/// `(0, 1)`. `None` unless the function heads towards zero at the start and away from it at the
+/// `(0, 1)`, with the model's value there. `None` unless the function heads towards zero at the start and away from it at the
 /// end (`g0 d0 < 0`, `g1 d1 > 0`, same signs at both ends): only then can a crossing and its return
 /// hide inside the step. Evenly spaced interior points miss an excursion shorter than their
 /// spacing (a pin that rises 50 nm above the disk for 0.1 ms of a 0.5 ms step); the turning
 /// point is where such an excursion peaks, to the model's accuracy (exact for a parabola).
 #[inline]
-pub(crate) fn turn_point(g0: f64, g1: f64, d0: f64, d1: f64, h: f64) -> Option<f64> {
+pub(crate) fn turn_point(g0: f64, g1: f64, d0: f64, d1: f64, h: f64) -> Option<(f64, f64)> {
     if !(g0 * g1 > 0.0 && g0 * d0 < 0.0 && g1 * d1 > 0.0) {
         return None;
     }
@@ -157,7 +157,12 @@ pub(crate) fn turn_point(g0: f64, g1: f64, d0: f64, d1: f64, h: f64) -> Option<f
             r2
         }
     };
-    (x > 0.0 && x < 1.0).then_some(x)
+    if !(x > 0.0 && x < 1.0) {
+        return None;
+    }
+    let x1 = 1.0 - x;
+    let p = g0 * (1.0 + 2.0 * x) * x1 * x1 + m0 * x * x1 * x1 + g1 * x * x * (3.0 - 2.0 * x) - m1 * x * x * x1;
+    Some((x, p))
 }
 
 /// A crossing and its return hidden inside a step: the earliest of the interior points (of
@@ -192,7 +197,7 @@ pub(crate) fn hidden_crossing<const N: usize, S: OdeSystem<N>, D: Dense<N>>(
             if pend[i].is_some() {
                 continue;
             }
-            if let Some(x) = turn_point(g0[i], g1[i], d0[i], d1[i], h) {
+            if let Some((x, _)) = turn_point(g0[i], g1[i], d0[i], d1[i], h) {
                 let tj = t + h * x;
                 if tj > t && tj < t_new && first.is_none_or(|f| tj < f) && hidden_at(tj) {
                     first = Some(tj);

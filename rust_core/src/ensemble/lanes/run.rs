@@ -527,11 +527,7 @@ fn near_events<const COUL: bool>(
                 if pend[e][l] {
                     continue;
                 }
-                if let Some(x) = turn_point(a, b, d0[e], d1[e], hh[l]) {
-                    let (m0, m1) = (hh[l] * d0[e], hh[l] * d1[e]);
-                    let x1 = 1.0 - x;
-                    let p = a * (1.0 + 2.0 * x) * x1 * x1 + m0 * x * x1 * x1 + b * x * x * (3.0 - 2.0 * x)
-                        - m1 * x * x * x1;
+                if let Some((x, p)) = turn_point(a, b, d0[e], d1[e], hh[l]) {
                     let left = p / a;
                     if left < best {
                         best = left;

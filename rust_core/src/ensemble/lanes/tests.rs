@@ -649,7 +649,9 @@ fn bouncing_never_misses_the_return_to_the_disk() {
             assert!(events > 20_000, "{m:?} {rtol}: {events} events: the runs do not bounce");
             for (k, x) in r.iter().enumerate() {
                 assert_eq!(x.run.status, crate::status::Status::Success, "{m:?} {rtol} start {k}: {:?}", x.run.failure);
-                assert!(x.run.extremes.max_abs_z < 2e-4, "{m:?} {rtol} start {k}: {}", x.run.extremes.max_abs_z);
+                // Half the escape limit: the motion peaks at 1.1-1.7e-4 m here, under every start
+                // moved by 1-2 ulps and rtol by 1 % (checked); the missed event drove it to 1e-3.
+                assert!(x.run.extremes.max_abs_z < 5e-4, "{m:?} {rtol} start {k}: {}", x.run.extremes.max_abs_z);
             }
         }
     }
@@ -657,6 +659,6 @@ fn bouncing_never_misses_the_return_to_the_disk() {
     for k in 0..8 {
         let r = crate::steady::run(&s, &y0[k], 5.0, Method::Dop853, &tol(1e-8));
         assert_eq!(r.status, crate::status::Status::Success, "scalar start {k}: {:?}", r.failure);
-        assert!(r.extremes.max_abs_z < 2e-4);
+        assert!(r.extremes.max_abs_z < 5e-4);
     }
 }

@@ -114,10 +114,11 @@ fn turning_points_find_excursions_that_evenly_spaced_checks_miss() {
 fn turning_point_of_a_parabola_is_its_vertex() {
     // g(t) = -1 + 4 (t - 0.3)^2 ... a parabola through g(0) = -0.64, peaking at t = 0.7 below zero:
     // g = -(t - 0.7)^2 - 0.01 on [0, 1] (h = 1): g0 = -0.5, g1 = -0.1, d0 = 1.4, d1 = -0.6.
-    let x = super::super::events::turn_point(-0.5, -0.1, 1.4, -0.6, 1.0).unwrap();
+    let (x, p) = super::super::events::turn_point(-0.5, -0.1, 1.4, -0.6, 1.0).unwrap();
     assert!((x - 0.7).abs() < 1e-9, "{x}");
-    // The same on a step of 2 s: x is the fraction of the step.
-    let x = super::super::events::turn_point(-0.5, -0.1, 0.7, -0.3, 2.0).unwrap();
+    assert!((p + 0.01).abs() < 1e-9, "{p}"); // the vertex's value
+                                             // The same on a step of 2 s: x is the fraction of the step.
+    let (x, _) = super::super::events::turn_point(-0.5, -0.1, 0.7, -0.3, 2.0).unwrap();
     assert!((x - 0.7).abs() < 1e-9, "{x}");
     // Heading away at the start, or a sign change at the ends: none.
     assert!(super::super::events::turn_point(-0.5, -0.1, -1.0, -0.6, 1.0).is_none());
