@@ -111,15 +111,25 @@ def compare_irregular_stop(n_loads: int, n_arms: int, k: int, threads: int | Non
         pairs[key] = pairs.get(key, 0) + 1
     print(f"  labels that differ: {int(moved.sum())} of {a0.size} ({100 * moved.mean():.1f} %): {pairs}; "
           f"cost {w0 / w1:.2f}x lower, simulated time {t0_.sum() / t1_.sum():.2f}x")  # fmt: skip
-    # Per point: the largest move of a fraction in standard errors of the difference (floored at one sample).
-    frac = [np.array([np.bincount(r[r >= 0], minlength=len(names)) / max(int((r >= 0).sum()), 1) for r in a])
-            for a in (a0, a1)]  # fmt: skip
-    se = np.maximum(np.sqrt((frac[0] * (1 - frac[0]) + frac[1] * (1 - frac[1])) / k), 1.0 / k)
-    z = np.max(np.abs(frac[0] - frac[1]) / se, axis=1)
+    z = fraction_shift(a0, a1, k)
     load, arm = pts[int(np.argmax(z))]
     print(f"  points where a fraction moves by more than 2 / 3 standard errors: {int((z > 2).sum())} / "
           f"{int((z > 3).sum())} of {len(pts)} (largest {z.max():.2f}, "
           f"at {load:.1f} N, {100 * arm:.1f} cm)")  # fmt: skip
+
+
+def fractions(labels: np.ndarray) -> np.ndarray:
+    """Per point (rows of ``labels``, K samples each), the fraction of its valid samples on each attractor."""
+    n = len(ts.ATTRACTOR_NAMES)
+    return np.array([np.bincount(r[r >= 0], minlength=n) / max(int((r >= 0).sum()), 1) for r in labels])
+
+
+def fraction_shift(a: np.ndarray, b: np.ndarray, k: int) -> np.ndarray:
+    """Per point, the largest move of a fraction between two censuses of the same samples, in standard
+    errors of the difference (floored at one sample)."""
+    fa, fb = fractions(a), fractions(b)
+    se = np.maximum(np.sqrt((fa * (1 - fa) + fb * (1 - fb)) / k), 1.0 / k)
+    return np.max(np.abs(fa - fb) / se, axis=1)
 
 
 def grid_points(n_loads: int, n_arms: int, threads: int | None) -> list[tuple[float, float]]:
@@ -147,17 +157,10 @@ def rtol_agreement(rtols: list[float], k: int, threads: int | None) -> None:
                     np.array([r.t_end.values for r in res]))  # fmt: skip
     ref = runs[min(rtols)][1]
     names = ts.ATTRACTOR_NAMES
-
-    def fractions(a):
-        return np.array([np.bincount(r[r >= 0], minlength=len(names)) / max(int((r >= 0).sum()), 1) for r in a])
-
-    fr = fractions(ref)
     print(f"census of {len(pts)} grid points x K = {k} by rtol (reference: rtol {min(rtols):g})")
     print("  rtol    wall [s]  simulated [s]  " + "  ".join(f"{n:>9}" for n in names) + "  agree [%]  points >2/3 SE")
     for rt, (w, a, t) in runs.items():
-        fa = fractions(a)
-        se = np.maximum(np.sqrt((fa * (1 - fa) + fr * (1 - fr)) / k), 1.0 / k)
-        z = np.max(np.abs(fa - fr) / se, axis=1)
+        z = fraction_shift(a, ref, k)
         counts = "  ".join(f"{int((a == i).sum()):>9}" for i in range(len(names)))
         print(f"  {rt:<7g} {w:8.1f}  {t.sum():13.0f}  {counts}  {100 * (a == ref).mean():9.1f}  "
               f"{int((z > 2).sum())}/{int((z > 3).sum())}")  # fmt: skip

@@ -54,13 +54,13 @@ Early stops
     (zero on any cycle of multiplicity up to 8, so an approach to a cycle shrinks it block after
     block) agrees within 25 % and stays above ``max(100 periodic_tol, 1e-3)`` (in characteristic
     sizes: a cycle that cannot repeat to a tight ``periodic_tol`` is not irregular), and each
-    component's largest excursion agrees within 5 % (a slow decay or growth shows there). Measured on the default
-    sweep's 361 censused points at K = 16 (5,776 samples, ``benches/bench_census.py --compare``),
-    the simulated time falls from 64,045 s to 28,329 s and 172 labels (3.0 %) differ from runs to
-    ``t_max`` = 30 s: 128 escapes, 34 cycles and 10 returns to sliding that came after a chaotic
-    transient longer than the three blocks (about 6 s at 130 Hz) are reported ``irregular``. A
-    transient's lifetime has no upper bound, so ``t_max`` = 30 s draws the same line later, not
-    more truly; the escape fraction is the one that moves (3.7 % to 1.4 % of samples there).
+    component's largest excursion agrees within 5 % (a slow decay or growth shows there).
+    Measured on the default sweep's 361 censused points at K = 16 (5,776 samples,
+    ``benches/bench_census.py --compare``, 2026-11-26), the simulated time falls from 67,377 s to
+    28,285 s and 59 labels (1.0 %) differ from runs to ``t_max`` = 30 s: 46 cycles and 13 returns
+    to sliding that came after a chaotic transient longer than the three blocks (about 6 s at
+    130 Hz) are reported ``irregular``; no sample escapes either way. A transient's lifetime has no
+    upper bound, so ``t_max`` = 30 s draws the same line later, not more truly.
 """
 
 from __future__ import annotations
