@@ -498,46 +498,58 @@ fn near_events<const COUL: bool>(
     hh: &[f64; W],
     turn: &mut L,
 ) -> [bool; W] {
+    // d/dt of each event function (`events_lanes`) at both ends, lane-wise (vectorised).
+    let (mut d0, mut d1) = ([[0.0; W]; NE], [[0.0; W]; NE]);
+    event_rates_lanes::<COUL>(c, y0, f0, &mut d0);
+    event_rates_lanes::<COUL>(c, y1, f1, &mut d1);
     let mut near = [false; W];
     for l in 0..W {
-        // d/dt of each event function (`events_lanes`) at one end.
-        let slopes = |y: &V6, f: &V6| {
-            let (z, zd) = (y[idx::Z][l], y[idx::ZD][l]);
-            let mut d = [0.0; NE];
-            d[event::GAP] = zd;
-            d[event::NORMAL] =
-                (-c.ks[l] + 2.0 * c.ka[l] * z) * zd - c.c[l] * f[idx::ZD][l] + c.kphi[l] * y[idx::PHID][l];
-            d[event::SLIP] = if COUL { -(f[idx::XD][l] + c.sl[l] * f[idx::PHID][l]) } else { 0.0 };
-            d[event::ESCAPE] = -z.signum() * zd;
-            d
-        };
-        let (d0, d1) = (slopes(y0, f0), slopes(y1, f1));
         let mut clear = true;
         for e in 0..NE {
-            let travel = FAR * hh[l] * (d0[e].abs() + d1[e].abs());
+            let travel = FAR * hh[l] * (d0[e][l].abs() + d1[e][l].abs());
             // NaN anywhere: not far (the check runs).
-            clear &= pend[e][l] || (g0[e][l].abs() > travel && g1[e][l].abs() > travel);
+            clear &= pend[e][l] | ((g0[e][l].abs() > travel) & (g1[e][l].abs() > travel));
         }
-        near[l] = !clear && ok[l];
-        if near[l] {
-            // The turning point whose cubic model dips deepest towards zero (fraction of g0 left).
-            let mut best = f64::INFINITY;
-            for e in 0..NE {
-                let (a, b) = (g0[e][l], g1[e][l]);
-                if pend[e][l] {
-                    continue;
-                }
-                if let Some((x, p)) = turn_point(a, b, d0[e], d1[e], hh[l]) {
-                    let left = p / a;
-                    if left < best {
-                        best = left;
-                        turn[l] = x;
-                    }
+        near[l] = !clear & ok[l];
+    }
+    if !near.iter().any(|&x| x) {
+        return near;
+    }
+    for l in 0..W {
+        if !near[l] {
+            continue;
+        }
+        // The turning point whose cubic model dips deepest towards zero (fraction of g0 left).
+        let mut best = f64::INFINITY;
+        for e in 0..NE {
+            let (a, b) = (g0[e][l], g1[e][l]);
+            if pend[e][l] {
+                continue;
+            }
+            if let Some((x, p)) = turn_point(a, b, d0[e][l], d1[e][l], hh[l]) {
+                let left = p / a;
+                if left < best {
+                    best = left;
+                    turn[l] = x;
                 }
             }
         }
     }
     near
+}
+
+/// The rates of the event functions of [`events_lanes`] on the lanes, from the state `y` and its
+/// derivative `f` (the slider's `event_rates`).
+#[inline(always)]
+fn event_rates_lanes<const COUL: bool>(c: &Coef, y: &V6, f: &V6, d: &mut [L; NE]) {
+    for l in 0..W {
+        let (z, zd) = (y[idx::Z][l], y[idx::ZD][l]);
+        d[event::GAP][l] = zd;
+        d[event::NORMAL][l] =
+            (-c.ks[l] + 2.0 * c.ka[l] * z) * zd - c.c[l] * f[idx::ZD][l] + c.kphi[l] * y[idx::PHID][l];
+        d[event::SLIP][l] = if COUL { -(f[idx::XD][l] + c.sl[l] * f[idx::PHID][l]) } else { 0.0 };
+        d[event::ESCAPE][l] = -z.signum() * zd;
+    }
 }
 
 /// Lane `l`'s samples inside its accepted step (before the lane's state is committed: `ln.y`
