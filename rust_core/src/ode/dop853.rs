@@ -191,7 +191,8 @@ pub(crate) struct Dop853<const N: usize> {
 pub(crate) struct Dop853Dense<'a, const N: usize, S: OdeSystem<N>> {
     sys: &'a S,
     mode: S::Mode,
-    k: &'a [SVector<f64, N>; 13],
+    /// The step's stages (`None` where the coefficients came with the interpolant).
+    k: Option<&'a [SVector<f64, N>; 13]>,
     y0: &'a SVector<f64, N>,
     y1: &'a SVector<f64, N>,
     t0: f64,
@@ -213,28 +214,26 @@ impl<'a, const N: usize, S: OdeSystem<N>> Dop853Dense<'a, N, S> {
         t0: f64,
         h: f64,
     ) -> Self {
-        Dop853Dense { sys, mode, k, y0, y1, t0, h, cont: OnceCell::new(), extra: Cell::new(0) }
+        Dop853Dense { sys, mode, k: Some(k), y0, y1, t0, h, cont: OnceCell::new(), extra: Cell::new(0) }
     }
 
-    /// The interpolant of a step from its stages and its three extra stages `k14, k15, k16`
-    /// (computed on the lanes for the hidden-crossing check): no right-hand side is evaluated.
-    #[allow(clippy::too_many_arguments)]
-    pub(crate) fn from_all_stages(
+    /// The interpolant of a step from its polynomial's coefficients `c0..c6` (Hairer's `contd8`,
+    /// as [`poly`] computes them; the lanes compute them for all their lanes at once, operation
+    /// for operation the same): no right-hand side is evaluated.
+    pub(crate) fn from_coefficients(
         sys: &'a S,
         mode: S::Mode,
-        k: &'a [SVector<f64, N>; 13],
-        extra: &[SVector<f64, N>; 3],
+        cont: [SVector<f64, N>; 7],
         y0: &'a SVector<f64, N>,
         y1: &'a SVector<f64, N>,
         t0: f64,
         h: f64,
     ) -> Self {
-        let cont = OnceCell::from(poly(k, extra, y0, y1, h));
-        Dop853Dense { sys, mode, k, y0, y1, t0, h, cont, extra: Cell::new(0) }
+        Dop853Dense { sys, mode, k: None, y0, y1, t0, h, cont: OnceCell::from(cont), extra: Cell::new(0) }
     }
 
     fn coefficients(&self) -> [SVector<f64, N>; 7] {
-        let k = self.k;
+        let k = self.k.expect("the stages, where the coefficients were not given");
         let (t, h, y) = (self.t0, self.h, self.y0);
         let k14 = self.sys.rhs(
             t + C14 * h,
@@ -297,15 +296,18 @@ impl<const N: usize, S: OdeSystem<N>> Dense<N> for Dop853Dense<'_, N, S> {
         let c = self.cont.get_or_init(|| self.coefficients());
         let x = (t - self.t0) / self.h;
         let x1 = 1.0 - x;
-        // y0 + x (F0 + (1-x) (F1 + x (F2 + (1-x) (F3 + x (F4 + (1-x) (F5 + x F6))))))
-        let mut p = c[6] * x;
-        p = (c[5] + p) * x1;
-        p = (c[4] + p) * x;
-        p = (c[3] + p) * x1;
-        p = (c[2] + p) * x;
-        p = (c[1] + p) * x1;
-        p = (c[0] + p) * x;
-        self.y0 + p
+        // y0 + x (F0 + (1-x) (F1 + x (F2 + (1-x) (F3 + x (F4 + (1-x) (F5 + x F6)))))), component
+        // by component (the lanes' `LaneDense` evaluates the same operations).
+        SVector::from_fn(|i, _| {
+            let mut p = c[6][i] * x;
+            p = (c[5][i] + p) * x1;
+            p = (c[4][i] + p) * x;
+            p = (c[3][i] + p) * x1;
+            p = (c[2][i] + p) * x;
+            p = (c[1][i] + p) * x1;
+            p = (c[0][i] + p) * x;
+            self.y0[i] + p
+        })
     }
 }
 

@@ -427,6 +427,12 @@ impl<const C: usize> LaneDense<C> {
         }
     }
 
+    /// Lane `l`'s coefficients `c0..c6`, each over the selected components.
+    #[inline]
+    pub(crate) fn coefficients_of(&self, l: usize) -> [[f64; C]; 7] {
+        std::array::from_fn(|r| std::array::from_fn(|j| self.c[r][j][l]))
+    }
+
     /// The selected components of lane `l` alone at `x = (t - t0) / h` of its own step.
     #[inline]
     pub(crate) fn eval_lane(&self, l: usize, x: f64) -> [f64; C] {
@@ -517,7 +523,25 @@ pub(crate) fn dop853_dense<F: LaneRhs, const C: usize>(
         &mut ys,
     );
     rhs.eval(&ys, k16);
-    let st = [k1, k(6), k(7), k(8), k(9), k(10), k(11), k(12), k(13), &*k14, &*k15, &*k16];
+    dop853_poly(comps, y, y1, k1, hh, kk, extra)
+}
+
+/// DOP853's interpolant on the lanes from the stages and the three extra stages `extra` (see
+/// [`dop853_dense`]), for the components `comps`: Hairer's `contd8` coefficients, operation for
+/// operation those of the scalar `dop853::poly`.
+#[inline(always)]
+pub(crate) fn dop853_poly<const C: usize>(
+    comps: &[usize; C],
+    y: &V6,
+    y1: &V6,
+    k1: &V6,
+    hh: &L,
+    kk: &[V6; 16],
+    extra: &[V6; 3],
+) -> LaneDense<C> {
+    let k = |j: usize| &kk[j - 1];
+    let [k14, k15, k16] = extra;
+    let st = [k1, k(6), k(7), k(8), k(9), k(10), k(11), k(12), k(13), k14, k15, k16];
     let rows = [
         [D4_1, D4_6, D4_7, D4_8, D4_9, D4_10, D4_11, D4_12, D4_13, D4_14, D4_15, D4_16],
         [D5_1, D5_6, D5_7, D5_8, D5_9, D5_10, D5_11, D5_12, D5_13, D5_14, D5_15, D5_16],

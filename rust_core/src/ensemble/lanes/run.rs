@@ -13,8 +13,8 @@ use crate::ode::dopri5::Dopri5Dense;
 use crate::ode::events::{step_events, turn_point, StepEnd};
 use crate::ode::lanes::LaneDense;
 use crate::ode::lanes::{
-    cross, dop853_dense, dop853_step, dopri5_dense, dopri5_step, each6, exp_lanes, lane_state, ln_lanes, sample_lane,
-    splat, ALL_COMPS, ALPHA, ALPHA8, BETA, L, LN_ERR_FLOOR, LN_SAFETY, V6, W,
+    cross, dop853_dense, dop853_poly, dop853_step, dopri5_dense, dopri5_step, each6, exp_lanes, lane_state, ln_lanes,
+    sample_lane, splat, ALL_COMPS, ALPHA, ALPHA8, BETA, L, LN_ERR_FLOOR, LN_SAFETY, V6, W,
 };
 use crate::ode::stepper::StepDense;
 use crate::ode::{Control, Observer, OdeSystem, Options, Outcome, StepView, MAX_EVENTS};
@@ -361,6 +361,14 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
 
         // ---- the cold path: events, observers, the end of a run ----
         if attn.iter().any(|&a| a) {
+            // DOP853's interpolant of every lane whose extra stages the hidden-crossing check
+            // built (and counted), all components at once: the cold path takes its lane's
+            // coefficients, the same numbers the scalar `Dop853Dense` would compute.
+            let full = if M8 && UNI && (0..W).any(|l| attn[l] && need[l]) {
+                Some(dop853_poly(&ALL_COMPS, &ln.y, &yn, &ln.f, &hh, &kk, &extra))
+            } else {
+                None
+            };
             for l in 0..W {
                 if !attn[l] {
                     continue;
@@ -369,11 +377,14 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
                 let y1 = lane_state(&yn, l);
                 // This lane's stages (DP5 uses the first seven): k1 = f(y0), then the attempt's.
                 let k1l = lane_state(&ln.f, l);
-                let ks: [State; 13] = std::array::from_fn(|j| match j {
-                    0 => k1l,
-                    _ if M8 => lane_state(&kk[j], l),
-                    _ => lane_state(&k[(j - 1).min(5)], l),
-                });
+                let gather = || -> [State; 13] {
+                    std::array::from_fn(|j| match j {
+                        0 => k1l,
+                        _ if M8 => lane_state(&kk[j], l),
+                        _ => lane_state(&k[(j - 1).min(5)], l),
+                    })
+                };
+                let ks: [State; 13];
                 let g0: [f64; MAX_EVENTS] = std::array::from_fn(|e| if e < NE { ln.g0[e][l] } else { 0.0 });
                 let g1l: [f64; MAX_EVENTS] = std::array::from_fn(|e| if e < NE { g1[e][l] } else { 0.0 });
                 let ln_ref = &mut ln;
@@ -387,18 +398,21 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
                 }
                 let span = ((t_start[l], &y0), (t_new[l], &y1));
                 let ev: StepEnd<6, ContactMode> = if M8 {
-                    let dense = if UNI && need[l] {
-                        // The lanes built the interpolant's extra stages for the hidden-crossing
-                        // check (and counted them): reuse them.
-                        let ext = [lane_state(&extra[0], l), lane_state(&extra[1], l), lane_state(&extra[2], l)];
-                        Dop853Dense::from_all_stages(sd.s, sd.mode, &ks, &ext, &y0, &y1, t_start[l], hh[l])
-                    } else {
-                        Dop853Dense::from_stages(sd.s, sd.mode, &ks, &y0, &y1, t_start[l], hh[l])
+                    let dense = match full.as_ref().filter(|_| need[l]) {
+                        Some(full) => {
+                            let c = full.coefficients_of(l).map(State::from);
+                            Dop853Dense::from_coefficients(sd.s, sd.mode, c, &y0, &y1, t_start[l], hh[l])
+                        }
+                        None => {
+                            ks = gather();
+                            Dop853Dense::from_stages(sd.s, sd.mode, &ks, &y0, &y1, t_start[l], hh[l])
+                        }
                     };
                     let ev = cold_step(sd, &dense, busy[l], span, &g0, &g1l);
                     sd.stats.n_rhs += dense.extra_rhs();
                     ev
                 } else {
+                    ks = gather();
                     let k7s: &[State; 7] = ks[..7].try_into().expect("seven stages");
                     let dense = Dopri5Dense::from_stages(k7s, &y0, &y1, t_start[l], hh[l]);
                     cold_step(sd, &dense, busy[l], span, &g0, &g1l)
