@@ -558,17 +558,22 @@ pub(crate) fn dop853_poly<const C: usize>(
             d.c[1][j][l] = k1[i][l] * h - dy;
             d.c[2][j][l] = dy * 2.0 - (k1[i][l] + k(13)[i][l]) * h;
         }
-        // Row by row, as in `comb`.
-        for (r, row) in rows.iter().enumerate() {
-            let mut s = [0.0; W];
-            for m in 0..12 {
-                let (a, km) = (row[m], &st[m][i]);
+    }
+    // Row by row, all components at once: C independent sums (each in the scalar `weighted`'s
+    // order, `0 + (a_1 h) k_1 + ... + (a_12 h) k_12`) held in registers, so that their adds
+    // overlap instead of each waiting on the one before.
+    for (r, row) in rows.iter().enumerate() {
+        let mut s = [[0.0; W]; C];
+        for m in 0..12 {
+            let a = row[m];
+            for (j, &i) in comps.iter().enumerate() {
+                let km = &st[m][i];
                 for l in 0..W {
-                    s[l] += (a * hh[l]) * km[l];
+                    s[j][l] += (a * hh[l]) * km[l];
                 }
             }
-            d.c[3 + r][j] = s;
         }
+        d.c[3 + r] = s;
     }
     d
 }
