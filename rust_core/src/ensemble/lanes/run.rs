@@ -303,16 +303,30 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
             }
         }
 
-        // ---- samples at t_eval inside an accepted DP5 step with nothing else to do: on the lanes ----
+        // ---- samples at t_eval inside an accepted step with nothing else to do: on the lanes ----
         // The scalar Sampler's rule on the same interpolant formula, so the samples are the bits
-        // the cold path would give; steps with an event, a pending event or the run's end, and
-        // DOP853 (its interpolant needs three more stages), take the cold path.
-        if sampled && !M8 {
+        // the cold path would give; steps with an event, a pending event or the run's end take
+        // the cold path. DOP853's interpolant needs three more stages: those the hidden-crossing
+        // check built this step where it ran (computed for every lane, counted for its own), else
+        // built here; a sampled lane that the check did not count counts them now.
+        if sampled {
             let due: [bool; W] =
                 std::array::from_fn(|l| acc_ok[l] & !busy[l] & !last[l] & (t_new[l] >= ln.next_sample[l]));
             if due.iter().any(|&d| d) {
-                let st = [&ln.f, &k[1], &k[2], &k[3], &k[4], &k[5]];
-                let dense = dopri5_dense(&ALL_COMPS, &ln.y, &yn, st, &hh);
+                let dense = if M8 {
+                    for l in 0..W {
+                        ln.n_extra[l] += 3 * (due[l] & !(ok[l] & need[l])) as u64;
+                    }
+                    if need.iter().any(|&x| x) {
+                        dop853_poly(&ALL_COMPS, &ln.y, &yn, &ln.f, &hh, &kk, &extra)
+                    } else {
+                        let mut f = SliderRhs::<UNI, COUL> { c: &ln.c, contact: &ln.contact, fzl: &mut fzl_scratch };
+                        dop853_dense(&mut f, &ALL_COMPS, &ln.y, &yn, &ln.f, &hh, &kk, &mut extra)
+                    }
+                } else {
+                    let st = [&ln.f, &k[1], &k[2], &k[3], &k[4], &k[5]];
+                    dopri5_dense(&ALL_COMPS, &ln.y, &yn, st, &hh)
+                };
                 for l in 0..W {
                     if due[l] {
                         sample_on_lane(&mut ln, l, &dense, (t_start[l], t_new[l], hh[l]), &yn);
