@@ -103,7 +103,8 @@ def main(argv=None) -> int:
 
 def paths_table(args, model, grid, y0, t_end, by) -> list[dict]:
     """Issue 10's paths at rtol 1e-6, one thread, against the numba DP5 end-state rate of this run:
-    the end state, t_eval = [t_end], t_eval of 501 points, and unilateral contact (all lane-batched)."""
+    the end state, t_eval = [t_end], t_eval of 501 points, unilateral contact and its t_eval of 501
+    points (all lane-batched), each with DP5 and with DOP853."""
     rtol = 1e-6
     atol = baselines.reference.default_atol(rtol)
     nb = by[("numba", "dp5", rtol, 1)]["per_s_core"]
@@ -111,24 +112,30 @@ def paths_table(args, model, grid, y0, t_end, by) -> list[dict]:
     ref_u = ts.ensemble(uni, t_end, grid, y0=y0, method="dop853", rtol=1e-13, atol=baselines.reference.default_atol(1e-13))
     ref_b = ts.ensemble(model, t_end, grid, y0=y0, method="dop853", rtol=1e-13,
                         atol=baselines.reference.default_atol(1e-13))
+    # Each path with DP5 and with DOP853 (the sweeps' default; more accurate at the same rtol).
     cases = [
-        ("bilateral end state", model, None, ref_b),
-        ("bilateral t_eval=[t_end]", model, np.array([t_end]), ref_b),
-        ("bilateral t_eval 501 points", model, np.linspace(0.0, t_end, 501), ref_b),
-        ("unilateral end state", uni, None, ref_u),
+        (f"{name}, {short}", m, te, ref, method)
+        for method, short in (("dopri5", "DP5"), ("dop853", "DOP853"))
+        for name, m, te, ref in (
+            ("bilateral end state", model, None, ref_b),
+            ("bilateral t_eval=[t_end]", model, np.array([t_end]), ref_b),
+            ("bilateral t_eval 501 points", model, np.linspace(0.0, t_end, 501), ref_b),
+            ("unilateral end state", uni, None, ref_u),
+            ("unilateral t_eval 501 points", uni, np.linspace(0.0, t_end, 501), ref_u),
+        )
     ]
     out = []
     print(f"\nlane-batched paths, rtol {rtol:.0e}, 1 thread ({args.n} trajectories; numba DP5 end state "
           f"{nb:.0f} traj/s in this run)")
-    print(f"{'path':30} {'traj/s/core':>12} {'vs numba':>9} {'max err':>9} {'rhs/traj':>9}")
-    for name, m, te, ref in cases:
-        t, ds = best_of(lambda m=m, te=te: ts.ensemble(m, t_end, grid, y0=y0, rtol=rtol, atol=atol, t_eval=te,
-                                                       threads=1))
+    print(f"{'path':38} {'traj/s/core':>12} {'vs numba':>9} {'max err':>9} {'rhs/traj':>9}")
+    for name, m, te, ref, method in cases:
+        t, ds = best_of(lambda m=m, te=te, method=method: ts.ensemble(m, t_end, grid, y0=y0, rtol=rtol, atol=atol,
+                                                                      t_eval=te, threads=1, method=method))
         scale = np.maximum(np.abs(ref.max_abs_z.values), 1e-12)
         err = float(np.max(np.abs(ds.z_end.values - ref.z_end.values) / scale))
         r = dict(impl="rust", method=name, rtol=rtol, threads=1, per_s_core=args.n / t, err=err,
                  n_rhs=float(ds.n_rhs.mean()), failed=int((ds.status != 0).sum()))
-        print(f"{name:30} {r['per_s_core']:12.0f} {r['per_s_core'] / nb:9.2f} {err:9.1e} {r['n_rhs']:9.0f}")
+        print(f"{name:38} {r['per_s_core']:12.0f} {r['per_s_core'] / nb:9.2f} {err:9.1e} {r['n_rhs']:9.0f}")
         out.append(r)
     return out
 
