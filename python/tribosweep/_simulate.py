@@ -83,7 +83,7 @@ def simulate(
     t_end: float,
     *,
     y0: Sequence[float] | None = None,
-    method: str = "dopri5",
+    method: str = DEFAULTS.integration.integrator,
     rtol: float = DEFAULTS.integration.rtol,
     atol: float | Sequence[float] | None = None,
     t_eval: Sequence[float] | None = None,
@@ -101,9 +101,11 @@ def simulate(
     y0 : array_like (6,), optional
         Initial state ``[z (m), z_dot (m/s), x (m), x_dot (m/s), phi (rad), phi_dot (rad/s)]``,
         measured from the static point. Default ``DEFAULT_Y0`` (``z = 1 um``).
-    method : {"dopri5", "dop853", "rodas4"}
-        Integrator: Dormand-Prince 5(4), DOP853 (8th order), or the stiffly accurate Rosenbrock
-        Rodas4 (for stiff friction regularisation).
+    method : {"dop853", "dopri5", "rodas4"}
+        Integrator: DOP853 (8th order; the default, as in sweeps: on the issue-10 ensemble at rtol
+        1e-6 it is 1.4-2.1x faster than Dormand-Prince 5(4) on every lane path, with a fifth of
+        its error), Dormand-Prince 5(4), or the stiffly accurate Rosenbrock Rodas4 (for stiff
+        friction regularisation).
     rtol : float
         Relative tolerance, in [1e-15, 1).
     atol : float or array_like (6,), optional
@@ -164,7 +166,7 @@ def ensemble(
     params: dict[str, Sequence[float]],
     *,
     y0: Sequence[float] | Sequence[Sequence[float]] | None = None,
-    method: str = "dopri5",
+    method: str = DEFAULTS.integration.integrator,
     rtol: float = DEFAULTS.integration.rtol,
     atol: float | Sequence[float] | None = None,
     t_eval: Sequence[float] | None = None,
