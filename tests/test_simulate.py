@@ -76,6 +76,23 @@ def test_threads_give_identical_results():
     assert np.all(a.status.values == 0)
 
 
+def test_simulate_and_ensemble_default_to_the_sweeps_integrator(seed_scipy):
+    # DOP853, as sweeps (Integration.integrator): at the default rtol its end state is within
+    # 1e-6 of scipy's DOP853 at 1e-13 (relative to max |z|), and an explicit method= gives the same bits.
+    from tribosweep._settings import DEFAULTS
+
+    assert DEFAULTS.integration.integrator == "dop853"
+    t, y_ref = seed_scipy
+    m = ts.SliderModel(contact="bilateral")
+    ds = ts.simulate(m, 0.5)
+    assert ds.attrs["method"] == "dop853"
+    assert abs(float(ds.z.values[-1]) - y_ref[-1, 0]) < 1e-6 * np.abs(y_ref[:, 0]).max()
+    explicit = ts.simulate(m, 0.5, method="dop853")
+    assert np.array_equal(ds.z.values, explicit.z.values)
+    ens = ts.ensemble(m, 0.05, {"mu": [0.2, 0.25]})
+    assert ens.attrs["method"] == "dop853"
+
+
 def test_ensemble_matches_single_runs():
     # The ensemble runs on the lane-batched path, a single run on the scalar driver: the same method,
     # tolerances and step sequence, so they agree far inside the integration tolerance (the two differ
