@@ -32,12 +32,11 @@ from . import disk, netcdf, runner, schema
 from .parts import Parts
 from .plan import (
     AXIS_ATTRS,
-    DEFAULT_CHUNK_SIZE,
-    DEFAULT_CHUNK_SIZE_OTHER,
     SEED_AXES,
     Plan,
     check_axis,
     check_extra_axes,
+    default_chunk_size,
     warn_units,
 )
 from .progress import Progress
@@ -125,8 +124,10 @@ def sweep(
         netCDF file to write (through ``<output>.tmp``); finished chunks are kept in
         ``<output>.parts/`` until it is complete. Without it the Dataset is built in memory.
     chunk_size : int, optional
-        Points per chunk (default 4096 for ``linear``, 256 otherwise; with an executor or on a
-        dask cluster at most that, and small enough for 4 chunks per worker). Results do not depend on it. Part
+        Points per chunk (default 4096 for ``linear``; otherwise 256 computations: 256 points,
+        or 256 times the number of speeds, at most 8192, under constant friction, where points
+        that differ only in speed share one; with an executor or on a dask cluster at most that,
+        and small enough for 4 chunks per worker). Results do not depend on it. Part
         of the configuration a resumed sweep must match; without it a resumed sweep keeps its own.
     threads : int, optional
         Rust worker threads inside a chunk (default ``TRIBOSWEEP_THREADS`` or all cores).
@@ -346,8 +347,8 @@ def sweep(
             _cluster.check_workers(executor)
             extra |= _cluster.provenance(executor)
         if chunk_size is None:
-            chunk_size = (Parts.saved_chunk_size(output) if resume else None) or DEFAULT_CHUNK_SIZE.get(
-                strategy, DEFAULT_CHUNK_SIZE_OTHER)  # fmt: skip
+            chunk_size = (Parts.saved_chunk_size(output) if resume else None) or default_chunk_size(
+                strategy, model.friction_law, axes["sliding_speed"].size)  # fmt: skip
             if executor is not None and not resume:
                 # Enough chunks to keep every worker busy to the end.
                 slots = _cluster.total_threads(executor) if runner.is_dask(executor) else runner.slots(executor)
