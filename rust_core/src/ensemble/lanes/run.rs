@@ -309,27 +309,35 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
         // the cold path. DOP853's interpolant needs three more stages: those the hidden-crossing
         // check built this step where it ran (computed for every lane, counted for its own), else
         // built here; a sampled lane that the check did not count counts them now.
+        // DOP853's interpolant of every lane, all components, from the extra stages the
+        // hidden-crossing check built this step: built at most once per step, for the samples
+        // here or the cold path below (which reads only lanes it leaves uncommitted).
+        let mut full: Option<LaneDense<6>> = None;
+        let checked = need.iter().any(|&x| x);
         if sampled {
             let due: [bool; W] =
                 std::array::from_fn(|l| acc_ok[l] & !busy[l] & !last[l] & (t_new[l] >= ln.next_sample[l]));
             if due.iter().any(|&d| d) {
-                let dense = if M8 {
+                let built;
+                let dense: &LaneDense<6> = if M8 {
                     for l in 0..W {
                         ln.n_extra[l] += 3 * (due[l] & !(ok[l] & need[l])) as u64;
                     }
-                    if need.iter().any(|&x| x) {
-                        dop853_poly(&ALL_COMPS, &ln.y, &yn, &ln.f, &hh, &kk, &extra)
+                    if checked {
+                        full.get_or_insert_with(|| dop853_poly(&ALL_COMPS, &ln.y, &yn, &ln.f, &hh, &kk, &extra))
                     } else {
                         let mut f = SliderRhs::<UNI, COUL> { c: &ln.c, contact: &ln.contact, fzl: &mut fzl_scratch };
-                        dop853_dense(&mut f, &ALL_COMPS, &ln.y, &yn, &ln.f, &hh, &kk, &mut extra)
+                        built = dop853_dense(&mut f, &ALL_COMPS, &ln.y, &yn, &ln.f, &hh, &kk, &mut extra);
+                        &built
                     }
                 } else {
                     let st = [&ln.f, &k[1], &k[2], &k[3], &k[4], &k[5]];
-                    dopri5_dense(&ALL_COMPS, &ln.y, &yn, st, &hh)
+                    built = dopri5_dense(&ALL_COMPS, &ln.y, &yn, st, &hh);
+                    &built
                 };
                 for l in 0..W {
                     if due[l] {
-                        sample_on_lane(&mut ln, l, &dense, (t_start[l], t_new[l], hh[l]), &yn);
+                        sample_on_lane(&mut ln, l, dense, (t_start[l], t_new[l], hh[l]), &yn);
                         attn[l] = false;
                     }
                 }
@@ -375,14 +383,11 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
 
         // ---- the cold path: events, observers, the end of a run ----
         if attn.iter().any(|&a| a) {
-            // DOP853's interpolant of every lane whose extra stages the hidden-crossing check
-            // built (and counted), all components at once: the cold path takes its lane's
-            // coefficients, the same numbers the scalar `Dop853Dense` would compute.
-            let full = if M8 && UNI && (0..W).any(|l| attn[l] && need[l]) {
-                Some(dop853_poly(&ALL_COMPS, &ln.y, &yn, &ln.f, &hh, &kk, &extra))
-            } else {
-                None
-            };
+            // A lane whose extra stages the hidden-crossing check built (and counted) takes its
+            // coefficients from `full`, the same numbers the scalar `Dop853Dense` would compute.
+            if M8 && UNI && full.is_none() && (0..W).any(|l| attn[l] && need[l]) {
+                full = Some(dop853_poly(&ALL_COMPS, &ln.y, &yn, &ln.f, &hh, &kk, &extra));
+            }
             for l in 0..W {
                 if !attn[l] {
                     continue;
