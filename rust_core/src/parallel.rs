@@ -41,6 +41,60 @@ fn pool(threads: usize) -> Arc<rayon::ThreadPool> {
         .clone()
 }
 
+/// `f(i)` for every `i` in `0..n`, in blocks of `block` indices on `threads` threads (`None`:
+/// [`default_threads`]), each value written in place into the result: no serial gather, and the
+/// pages of the new vector are first touched by the threads that fill them. On many cores a serial
+/// copy of per-trajectory data caps the speed-up of short runs (Amdahl). The error is that of the
+/// lowest failing index, as a serial loop would return. A panic in `f` propagates. On an error
+/// the values already written are leaked, not dropped (meant for plain data).
+pub fn par_fill<T, E, F>(n: usize, threads: Option<usize>, block: usize, f: F) -> Result<Vec<T>, E>
+where
+    T: Send,
+    E: Send,
+    F: Fn(usize) -> Result<T, E> + Sync,
+{
+    let block = block.max(1);
+    let threads = threads.unwrap_or_else(default_threads).max(1);
+    let mut out: Vec<T> = Vec::with_capacity(n);
+    let slots = &mut out.spare_capacity_mut()[..n];
+    let fill = |(b, chunk): (usize, &mut [std::mem::MaybeUninit<T>])| -> Result<(), E> {
+        for (k, slot) in chunk.iter_mut().enumerate() {
+            slot.write(f(b * block + k)?);
+        }
+        Ok(())
+    };
+    let done: Vec<Result<(), E>> = if threads == 1 || n <= block {
+        slots.chunks_mut(block).enumerate().map(fill).collect()
+    } else {
+        pool(threads).install(|| slots.par_chunks_mut(block).enumerate().map(fill).collect())
+    };
+    // Blocks are in index order and each stops at its first error: the first `Err` is the lowest.
+    done.into_iter().collect::<Result<(), E>>()?;
+    // SAFETY: every block returned `Ok`, so each of the first `n` slots was written once.
+    unsafe { out.set_len(n) };
+    Ok(out)
+}
+
+/// Results by index from `(index, result)` pairs, moved once into place: `missing(i)` for every
+/// index in `0..n` that no pair holds. Panics on an index twice or out of range (the values
+/// already placed are then leaked, not dropped).
+pub fn scatter<R>(n: usize, pairs: impl IntoIterator<Item = (usize, R)>, missing: impl Fn(usize) -> R) -> Vec<R> {
+    let mut out: Vec<R> = Vec::with_capacity(n);
+    let mut filled = vec![false; n];
+    let slots = &mut out.spare_capacity_mut()[..n];
+    for (i, r) in pairs {
+        assert!(!filled[i], "scatter: index {i} given twice");
+        slots[i].write(r);
+        filled[i] = true;
+    }
+    for (i, _) in filled.iter().enumerate().filter(|(_, f)| !**f) {
+        slots[i].write(missing(i));
+    }
+    // SAFETY: each of the first `n` slots was written exactly once, by a pair or by `missing`.
+    unsafe { out.set_len(n) };
+    out
+}
+
 /// Message of a caught panic payload.
 pub fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
     if let Some(s) = payload.downcast_ref::<&str>() {
@@ -170,5 +224,29 @@ mod tests {
         let c = par_map(&items, Some(7), f, |_| f64::NAN);
         assert!(a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()));
         assert!(a.iter().zip(&c).all(|(x, y)| x.to_bits() == y.to_bits()));
+    }
+
+    #[test]
+    fn par_fill_is_in_order_and_reports_the_lowest_failing_index() {
+        let f = |i: usize| if i % 1000 == 777 { Err(i) } else { Ok((i as f64 * 0.37).sin()) };
+        for (threads, block) in [(1, 64), (2, 64), (7, 5), (3, 10_000)] {
+            // Every failing index is reported as the lowest would be by a serial loop.
+            assert_eq!(par_fill(5000, Some(threads), block, f), Err(777), "{threads} threads, block {block}");
+            let ok = par_fill(700, Some(threads), block, |i| Ok::<_, ()>((i as f64 * 0.37).sin())).unwrap();
+            assert_eq!(ok.len(), 700);
+            assert!(ok.iter().enumerate().all(|(i, v)| v.to_bits() == (i as f64 * 0.37).sin().to_bits()));
+        }
+        assert_eq!(par_fill(0, Some(2), 8, |_| Ok::<u8, ()>(1)), Ok(vec![]));
+    }
+
+    #[test]
+    fn scatter_places_every_pair_and_fills_the_rest() {
+        let pairs = vec![(3, "c".to_string()), (0, "a".to_string()), (4, "d".to_string())];
+        let out = scatter(6, pairs, |i| format!("missing {i}"));
+        assert_eq!(out, ["a", "missing 1", "missing 2", "c", "d", "missing 5"]);
+        let twice = std::panic::catch_unwind(|| scatter(3, [(1, 1u8), (1, 2u8)], |_| 0));
+        assert!(twice.is_err(), "an index given twice is a bug, not data");
+        let outside = std::panic::catch_unwind(|| scatter(3, [(3, 1u8)], |_| 0));
+        assert!(outside.is_err());
     }
 }

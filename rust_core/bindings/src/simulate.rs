@@ -53,7 +53,7 @@ fn simulate<'py>(
     let d = PyDict::new(py);
     d.set_item("t", Array1::from_vec(t).into_pyarray(py))?;
     d.set_item("y", states(ys.iter(), ys.len()).into_pyarray(py))?;
-    runs_into(&d, &[run], &[reason_of(run.failure)])?;
+    runs_into(&d, &[&run], vec![reason_of(run.failure)])?;
     Ok(d)
 }
 
@@ -118,16 +118,17 @@ fn decays(
     }
 }
 
-/// Results with their reasons (the run's failure, or for `steady` the summary's): a trajectory
-/// whose computation panicked gets `Status::Panic` and the message.
-fn with_reasons(out: Vec<Result<TrajectoryResult, String>>, steady: bool) -> Vec<(TrajectoryResult, String)> {
+/// The summaries of runs to steady state with their reasons (the summary's failure): a trajectory
+/// whose computation panicked gets a failed summary (`Status::Panic`) and the message.
+fn summaries(out: Vec<Result<TrajectoryResult, String>>) -> Vec<(Summary, String)> {
     out.into_iter()
         .map(|r| match r {
             Ok(x) => {
-                let failure = if steady { x.summary.as_ref().and_then(|s| s.failure) } else { x.run.failure };
-                (x, reason_of(failure))
+                let s = x.summary.map_or_else(|| Summary::failed(x.run.status, x.run.failure), |s| *s);
+                let reason = reason_of(s.failure);
+                (s, reason)
             }
-            Err(msg) => (TrajectoryResult::failed(Status::Panic), format!("panic: {msg}")),
+            Err(msg) => (Summary::failed(Status::Panic, None), format!("panic: {msg}")),
         })
         .collect()
 }
@@ -182,14 +183,24 @@ fn ensemble<'py>(
         Kind::Plain => {
             let te = t_eval.unwrap_or_default();
             let task = if te.is_empty() { Task::Final } else { Task::Sampled(&te) };
-            let out = with_reasons(call.detach(|| run_ensemble(&sliders, &y0s, &settings, task))?, false);
-            let runs: Vec<RunResult> = out.iter().map(|o| o.0.run).collect();
-            let reasons: Vec<String> = out.iter().map(|o| o.1.clone()).collect();
-            runs_into(&d, &runs, &reasons)?;
+            let out = call.detach(|| run_ensemble(&sliders, &y0s, &settings, task))?;
+            // Columns straight from the results: with every run 0.5 s long, moving the results
+            // once more on this one thread was a tenth of a 16-thread call.
+            let panicked = RunResult::failed(Status::Panic, None);
+            let runs: Vec<&RunResult> = out.iter().map(|o| o.as_ref().map_or(&panicked, |x| &x.run)).collect();
+            let reasons: Vec<String> = out
+                .iter()
+                .map(|o| match o {
+                    Ok(x) => reason_of(x.run.failure),
+                    Err(msg) => format!("panic: {msg}"),
+                })
+                .collect();
+            runs_into(&d, &runs, reasons)?;
             if !te.is_empty() {
                 let mut y = Array3::<f64>::from_elem((n, te.len(), 6), f64::NAN);
                 for (i, o) in out.iter().enumerate() {
-                    for (j, s) in o.0.samples.iter().enumerate() {
+                    let samples = o.as_ref().map_or(&[][..], |x| &x.samples[..]);
+                    for (j, s) in samples.iter().enumerate() {
                         for c in 0..6 {
                             y[(i, j, c)] = s[c];
                         }
@@ -211,11 +222,7 @@ fn ensemble<'py>(
                 ..SteadyOptions::default()
             };
             let task = Task::Steady { opts: &opts, decay: decays.as_deref() };
-            let out = with_reasons(call.detach(|| run_ensemble(&sliders, &y0s, &settings, task))?, true);
-            let sums: Vec<(Summary, String)> = out
-                .into_iter()
-                .map(|(r, reason)| (r.summary.unwrap_or_else(|| Summary::failed(r.run.status, r.run.failure)), reason))
-                .collect();
+            let sums = summaries(call.detach(|| run_ensemble(&sliders, &y0s, &settings, task))?);
             summaries_into(&d, &sums)?;
         }
     }

@@ -61,8 +61,9 @@ pub struct TrajectoryResult {
     pub run: RunResult,
     /// States at `t_eval` (`Sampled` only).
     pub samples: Vec<State>,
-    /// Summary (`Steady` only).
-    pub summary: Option<Summary>,
+    /// Summary (`Steady` only); boxed, so that a plain run's result stays small (an ensemble's
+    /// results are moved several times on their way to Python, one thread for all of them).
+    pub summary: Option<Box<Summary>>,
     /// Located events `(index, time)` (`Events` only).
     pub events: Vec<(usize, f64)>,
 }
@@ -82,7 +83,7 @@ impl TrajectoryResult {
     /// [`TrajectoryResult::failed`] with the failure behind it.
     pub fn failed_because(status: Status, failure: Option<Failure>) -> Self {
         let run = RunResult::failed(status, failure);
-        TrajectoryResult { summary: Some(Summary::failed(status, failure)), ..Self::from_run(run) }
+        TrajectoryResult { summary: Some(Box::new(Summary::failed(status, failure))), ..Self::from_run(run) }
     }
 
     /// The result of a trajectory that a cancelled call never started (`NotComputed`).
@@ -221,18 +222,19 @@ pub fn run_on(
                 |msg| Some(Err(msg)),
                 || None,
             );
-            parts
-                .into_iter()
-                .zip(&ranges)
-                .flat_map(|(p, r)| match p {
-                    Some(Ok(v)) => v
-                        .into_iter()
-                        .map(|(run, samples)| Ok(TrajectoryResult { samples, ..TrajectoryResult::from_run(run) }))
-                        .collect::<Vec<_>>(),
-                    Some(Err(msg)) => vec![Err(msg); r.len()],
-                    None => vec![Ok(TrajectoryResult::not_started()); r.len()],
-                })
-                .collect()
+            // Sized once: a collected `flat_map` grows by doubling, copying every result again.
+            let mut out = Vec::with_capacity(sliders.len());
+            for (p, r) in parts.into_iter().zip(&ranges) {
+                match p {
+                    Some(Ok(v)) => out.extend(
+                        v.into_iter()
+                            .map(|(run, samples)| Ok(TrajectoryResult { samples, ..TrajectoryResult::from_run(run) })),
+                    ),
+                    Some(Err(msg)) => out.extend(std::iter::repeat_n(Err(msg), r.len())),
+                    None => out.extend(std::iter::repeat_n(Ok(TrajectoryResult::not_started()), r.len())),
+                }
+            }
+            out
         }
         Route::Lanes => lanes::run_lanes_threads(sliders, y0s, settings.t_end, method, &tol, task, threads),
         Route::Scalar => {
@@ -278,7 +280,7 @@ fn scalar(
                 stats: sum.stats,
                 failure: sum.failure,
             };
-            TrajectoryResult { summary: Some(sum), ..TrajectoryResult::from_run(run) }
+            TrajectoryResult { summary: Some(Box::new(sum)), ..TrajectoryResult::from_run(run) }
         }
         Task::Events => {
             let (run, log) = steady::run_observed(s, y0, t_end, method, tol, EventLog(Vec::new()));

@@ -209,7 +209,8 @@ fn samples_and_steady_states_agree_across_routes() {
         let lanes = unwrap(run_on(Route::Lanes, &s, &y0, &set, task));
         let scalar = unwrap(run_on(Route::Scalar, &s, &y0, &set, task));
         for i in 0..s.len() {
-            let (m, sc) = (lanes[i].summary.expect("steady"), scalar[i].summary.expect("steady"));
+            let (m, sc) =
+                (*lanes[i].summary.as_deref().expect("steady"), *scalar[i].summary.as_deref().expect("steady"));
             assert_eq!(m.outcome, sc.outcome, "{:?} #{i}", base.contact);
             assert_eq!(m.status, sc.status, "{:?} #{i}", base.contact);
             if m.outcome == SteadyOutcome::Periodic {
@@ -286,7 +287,7 @@ fn failed_results_carry_the_status_and_no_numbers() {
     let f = TrajectoryResult::failed(Status::Panic);
     assert_eq!(f.run.status, Status::Panic);
     assert!(f.run.t.is_nan() && f.run.y.iter().all(|v| v.is_nan()));
-    assert_eq!(f.summary.map(|s| (s.status, s.outcome)), Some((Status::Panic, SteadyOutcome::Failed)));
+    assert_eq!(f.summary.as_deref().map(|s| (s.status, s.outcome)), Some((Status::Panic, SteadyOutcome::Failed)));
 }
 
 #[test]
@@ -418,7 +419,7 @@ fn a_long_trajectory_is_cancelled_inside_its_run() {
     for r in [Route::Lanes, Route::Scalar] {
         let task = Task::Steady { opts: &so, decay: None };
         let out = cancelled_after(std::time::Duration::from_millis(100), r, &s, &y0, &set, task);
-        let sum = out[0].summary.expect("a summary");
+        let sum = *out[0].summary.as_deref().expect("a summary");
         assert_eq!(sum.status, Status::NotComputed, "{r:?}");
         match sum.failure {
             Some(crate::status::Failure::Cancelled { t }) => assert!(t > 0.0 && t < 1e4, "{r:?}: t = {t}"),

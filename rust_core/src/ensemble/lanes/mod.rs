@@ -127,27 +127,21 @@ pub fn run_lanes_threads(
         Err,
         || Ok(Vec::new()),
     );
-    let mut out: Vec<Option<Result<TrajectoryResult, String>>> = vec![None; n];
+    let mut done = Vec::with_capacity(parts.len());
     let mut panic = None;
     for p in parts {
         match p {
-            Ok(v) => {
-                for (i, r) in v {
-                    out[i] = Some(Ok(r));
-                }
-            }
+            Ok(v) => done.push(v),
             Err(msg) => panic = Some(msg),
         }
     }
+    // Each result moves once, on this one thread: the lanes' results are gathered serially, and
+    // for short runs on many cores every pass over them counts (Amdahl).
     // Without a panic, only a cancelled call leaves trajectories without a result.
-    out.into_iter()
-        .map(|r| {
-            r.unwrap_or_else(|| match &panic {
-                Some(msg) => Err(msg.clone()),
-                None => Ok(TrajectoryResult::not_started()),
-            })
-        })
-        .collect()
+    crate::parallel::scatter(n, done.into_iter().flatten().map(|(i, r)| (i, Ok(r))), |_| match &panic {
+        Some(msg) => Err(msg.clone()),
+        None => Ok(TrajectoryResult::not_started()),
+    })
 }
 
 fn check(sliders: &[Slider], y0s: &[State], method: Method, task: &Task<'_>) {

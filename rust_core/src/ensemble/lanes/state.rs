@@ -169,7 +169,7 @@ fn conclude(run: RunResult, sd: &mut Side<'_>) -> TrajectoryResult {
             v.resize(s.t_eval.len(), State::repeat(f64::NAN));
             res.samples = v;
         }
-        Watch::Steady(o, opts) => res.summary = Some(summarize(sd.s, &res.run, &o.w, &opts)),
+        Watch::Steady(o, opts) => res.summary = Some(Box::new(summarize(sd.s, &res.run, &o.w, &opts))),
         Watch::Log(v) => res.events = v,
         Watch::Nothing => {}
     }

@@ -246,7 +246,7 @@ fn seed_bouncing_cycle_on_the_lane_path() {
     let r8 = run_lanes(&sliders, &starts, 0.0, Method::Dop853, &tol(1e-9), Task::Steady { opts: &opts8, decay: None });
     for (k, x) in r5.iter().chain(&r8).enumerate() {
         let k = k % 3;
-        let m = x.summary.expect("steady");
+        let m = *x.summary.as_deref().expect("steady");
         println!(
             "start {k}: {:?} w {:.4} A1 {:.4e} off {:.4} t {:.2} steps {}",
             m.outcome, m.omega, m.z_amp[0], m.fraction_off_disk, m.t_end, m.stats.n_accept
@@ -290,7 +290,7 @@ fn steady_outcomes_agree_with_the_scalar_path() {
     let r: Vec<TrajectoryResult> = r.into_iter().map(|x| x.unwrap()).collect();
     let mut outcomes = Vec::new();
     for i in 0..s.len() {
-        let m = r[i].summary.expect("steady");
+        let m = *r[i].summary.as_deref().expect("steady");
         let sc = run_to_steady(&s[i], &y0[i], &opts);
         println!(
             "mu {:.2} {:?}: lanes {:?} w {:.3} A1 {:.4e} t {:.3}; scalar {:?} w {:.3} A1 {:.4e} t {:.3}",
