@@ -8,6 +8,11 @@ largest |z(0.5) - z_ref(0.5)| / max|z_ref| over the ensemble, against the Rust D
 the printed ratios hold on a noisy shared machine; absolute times do not.
 
     python benches/bench_trajectories.py [--n 1000] [--n-scipy 20] [--json out.json]
+    python benches/bench_trajectories.py --scaling-only --threads 1,8,16 --scaling-n 128000  # many cores
+
+The scaling table (``--threads``) ends with the machine's own ceiling, measured in the same run: as
+many separate one-thread processes as the largest thread count, started together, each running the
+ensemble; their rates summed. One call's threads can at best match it.
 """
 
 from __future__ import annotations
@@ -15,6 +20,8 @@ from __future__ import annotations
 import argparse
 import json
 import pathlib
+import subprocess
+import sys
 import time
 
 import numpy as np
@@ -39,7 +46,25 @@ def main(argv=None) -> int:
     ap.add_argument("--json", type=pathlib.Path)
     ap.add_argument("--threads", default="",
                     help="comma-separated thread counts for a scaling table (e.g. 1,2,4,8,16); empty: none")
+    ap.add_argument("--scaling-n", type=int, default=0,
+                    help="trajectories per call of the scaling table (default 2,000 per thread of the largest count)")
+    ap.add_argument("--scaling-only", action="store_true", help="only the scaling table")
+    ap.add_argument("--child", nargs=3, metavar=("N", "CONTACT", "START"), help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
+    if args.child:
+        n, contact, start = args.child
+        print(child_rate(int(n), contact, float(start)))
+        return 0
+    if args.scaling_only:
+        if not args.threads:
+            ap.error("--scaling-only needs --threads")
+        args.n = 1000
+        params_list, y0, _ = baselines.seed_ensemble_params(args.n)
+        grid = {"mu": np.array([p["mu"] for p in params_list]),
+                "normal_load": np.array([p["normal_load"] for p in params_list])}  # fmt: skip
+        scaling_table(args, ts.SliderModel(contact="bilateral"), grid, y0, baselines.seed_ensemble_params(1)[2],
+                      [int(x) for x in args.threads.split(",")])  # fmt: skip
+        return 0
 
     params_list, y0, t_end = baselines.seed_ensemble_params(args.n)
     mu = np.array([p["mu"] for p in params_list])
@@ -140,30 +165,72 @@ def paths_table(args, model, grid, y0, t_end, by) -> list[dict]:
     return out
 
 
+def big_ensemble(n: int):
+    """The issue-2 ensemble of 1,000 repeated to ``n`` trajectories: (grid, y0, t_end)."""
+    params_list, y0, t_end = baselines.seed_ensemble_params(1000)
+    reps = max(1, n // 1000)
+    grid = {"mu": np.tile([p["mu"] for p in params_list], reps),
+            "normal_load": np.tile([p["normal_load"] for p in params_list], reps)}  # fmt: skip
+    yb = np.tile(y0, (reps, 1)) if np.ndim(y0) == 2 else y0
+    return grid, yb, t_end
+
+
+def rate(model, t_end, grid, y0, threads: int) -> float:
+    """Trajectories per second of one ``ensemble`` call at rtol 1e-6, best of 3."""
+    atol = baselines.reference.default_atol(1e-6)
+    t, _ = best_of(lambda: ts.ensemble(model, t_end, grid, y0=y0, rtol=1e-6, atol=atol, threads=threads))
+    return len(grid["mu"]) / t
+
+
+def child_rate(n: int, contact: str, start: float) -> float:
+    """One process of the ceiling: waits for the common start (every process imported and ready),
+    then the one-thread rate of its own ensemble."""
+    grid, yb, t_end = big_ensemble(n)
+    model = ts.SliderModel(contact=contact)
+    rate(model, t_end, {k: v[:1000] for k, v in grid.items()}, yb[:1000] if np.ndim(yb) == 2 else yb, 1)  # warm
+    time.sleep(max(0.0, start - time.time()))
+    return rate(model, t_end, grid, yb, 1)
+
+
+def ceiling(processes: int, n: int, contact: str) -> float:
+    """The summed one-thread rates of ``processes`` separate processes running together."""
+    start = time.time() + 10.0
+    procs = [subprocess.Popen([sys.executable, __file__, "--child", str(n), contact, repr(start)],
+                              stdout=subprocess.PIPE, text=True) for _ in range(processes)]  # fmt: skip
+    return sum(float(p.communicate()[0].strip().splitlines()[-1]) for p in procs)
+
+
 def scaling_table(args, model, grid, y0, t_end, threads: list[int]) -> list[dict]:
     """Trajectories per second, all threads together, bilateral and unilateral end states at rtol 1e-6
-    (the ensemble repeated to keep every thread busy)."""
-    rtol = 1e-6
-    atol = baselines.reference.default_atol(rtol)
-    reps = max(1, max(threads) * 2000 // args.n)
-    big = {k: np.tile(v, reps) for k, v in grid.items()}
-    yb = np.tile(y0, (reps, 1)) if np.ndim(y0) == 2 else y0
+    (the ensemble repeated to keep every thread busy), and the machine's ceiling: separate
+    processes, one per thread of the largest count."""
+    n = args.scaling_n or max(threads) * 2000
+    big, yb, t_end = big_ensemble(n)
     n = len(big["mu"])
-    print(f"\nscaling ({n} trajectories, rtol {rtol:.0e}; total trajectories/s over all threads)")
+    models = (("bilateral", model.replace(contact="bilateral")), ("unilateral", model.replace(contact="unilateral")))
+    print(f"\nscaling ({n} trajectories per call, rtol 1e-06; total trajectories/s over all threads)")
     print(f"{'threads':>7} {'bilateral':>12} {'unilateral':>12}")
     out = []
     base = {}
     for th in threads:
         rates = []
-        for name, m in (("bilateral", model), ("unilateral", model.replace(contact="unilateral"))):
-            t, _ = best_of(lambda m=m, th=th: ts.ensemble(m, t_end, big, y0=yb, rtol=rtol, atol=atol, threads=th))
-            rates.append(n / t)
-            base.setdefault(name, n / t)
-            out.append(dict(impl="rust", method=f"{name} end state", rtol=rtol, threads=th, per_s_total=n / t))
+        for name, m in models:
+            r = rate(m, t_end, big, yb, th)
+            rates.append(r)
+            base.setdefault(name, r)
+            out.append(dict(impl="rust", method=f"{name} end state", rtol=1e-6, threads=th, per_s_total=r))
         print(f"{th:7d} {rates[0]:12.0f} {rates[1]:12.0f}   (x{rates[0] / base['bilateral']:.1f}, "
               f"x{rates[1] / base['unilateral']:.1f} of 1 thread)")
+    p = max(threads)
+    if p > 1:
+        per = max(1000, n // p)
+        ceil = [ceiling(p, per, name) for name, _ in models]
+        last = {r["method"].split()[0]: r["per_s_total"] for r in out if r["threads"] == p}
+        print(f"{'ceiling':>7} {ceil[0]:12.0f} {ceil[1]:12.0f}   ({p} one-thread processes of {per} trajectories "
+              f"at once; {p} threads reach {last['bilateral'] / ceil[0]:.0%}, {last['unilateral'] / ceil[1]:.0%})")
+        for (name, _), c in zip(models, ceil):
+            out.append(dict(impl="processes", method=f"{name} end state", rtol=1e-6, threads=p, per_s_total=c))
     return out
-
 
 if __name__ == "__main__":
     raise SystemExit(main())
