@@ -189,6 +189,42 @@ def test_writers_agree_and_the_file_appears_only_when_complete(tmp_path):
         assert f.v.values.tolist() == [[0.0, 1.0], [2.0, 3.0], [4.0, 5.0]]
 
 
+def test_the_writer_holds_xarrays_lock_of_the_netcdf_libraries_while_it_writes(tmp_path):
+    """netCDF-C and HDF5 are not thread-safe. xarray closes a file it opened when the garbage
+    collector finds it, in whatever thread, but only if it can take its lock at once: the writer
+    holds that same lock around every library call, so such a close never runs beside a slab
+    (it crashed a dask-client sweep with a segmentation fault, fresh-clone CI of 2026-11-26)."""
+    from xarray.backends.netCDF4_ import NETCDF4_PYTHON_LOCK
+
+    def xarray_could_close() -> bool:
+        if NETCDF4_PYTHON_LOCK.acquire(blocking=False):
+            NETCDF4_PYTHON_LOCK.release()
+            return True
+        return False
+
+    class Watched:
+        """Values that record, each time the writer reads them, whether xarray could close a file."""
+
+        def __init__(self, a):
+            self.a, self.seen = a, []
+
+        def __array__(self, dtype=None, copy=None):
+            self.seen.append(xarray_could_close())
+            return np.asarray(self.a, dtype=dtype)
+
+    w = NetCDFWriter(tmp_path / "w.nc", *_writer_args())
+    v = Watched(np.arange(6.0))
+    w.write(0, 6, {"v": v, "t": np.array([f"p{i}" for i in range(6)])})
+    assert False in v.seen  # read inside the slab loop, under the lock
+    assert xarray_could_close()  # and released after
+    with w.lock:
+        assert not xarray_could_close()
+    w.close()
+    assert xarray_could_close()
+    with xr.open_dataset(tmp_path / "w.nc") as f:
+        assert f.v.values.ravel().tolist() == list(range(6))
+
+
 def test_abort_leaves_nothing(tmp_path):
     path = tmp_path / "w.nc"
     w = NetCDFWriter(path, *_writer_args())

@@ -27,6 +27,20 @@ CHUNK_BYTES: int = 512 << 10
 DEFAULT_TEXT_WIDTH: int = 256
 
 
+def _library_lock():
+    """xarray's lock of the netCDF-C and HDF5 libraries, which are not thread-safe.
+
+    The writer holds it around every call into netCDF4. Without it, the garbage collector closed a
+    file that xarray had opened, in another thread of the process (a dask client's event loop),
+    while this writer was handing a slab to HDF5: a segmentation fault (fresh-clone CI, 2026-11-26,
+    ``tests/test_faults.py``). xarray closes a collected file only when it can take this lock at
+    once, so holding it makes that close wait for a later collection.
+    """
+    from xarray.backends.locks import HDF5_LOCK, NETCDFC_LOCK, combine_locks
+
+    return combine_locks([NETCDFC_LOCK, HDF5_LOCK])
+
+
 def flat_slabs(start: int, stop: int, shape: tuple[int, ...]) -> Iterator[tuple[tuple[slice, ...], slice]]:
     """Split the C-order flat index range ``[start, stop)`` of an array of ``shape`` into hyperslabs.
 
@@ -166,10 +180,12 @@ class NetCDFWriter:
         n = int(np.prod(self.schema.shape))
         self.total = n * disk.fixed_point_bytes(points, self.schema.trailing)
         self.total += n * sum(int(self.text_widths.get(p.name, DEFAULT_TEXT_WIDTH)) for p in points if p.dtype == "str")
+        self.lock = _library_lock()
         self._reserve(disk.MARGIN)
         try:
-            self.nc = netCDF4.Dataset(self.tmp, "w", format="NETCDF4")
-            self._define()
+            with self.lock:
+                self.nc = netCDF4.Dataset(self.tmp, "w", format="NETCDF4")
+                self._define()
         except (RuntimeError, OSError) as e:
             err = self._library_error(e)
             self.abort()
@@ -234,7 +250,8 @@ class NetCDFWriter:
         if free >= self.unsynced + nbytes + disk.MARGIN:
             return
         if self.unsynced > self.slack and free >= self.unsynced + disk.MARGIN:
-            self.nc.sync()  # the library's buffers go to disk now, while they still fit
+            with self.lock:
+                self.nc.sync()  # the library's buffers go to disk now, while they still fit
             # A chunk flushed half-written is written again, whole, when it is finished.
             self.unsynced = self.slack
             free = disk.free_bytes(self.tmp)
@@ -276,12 +293,13 @@ class NetCDFWriter:
                 nbytes += a.size * np.dtype(spec.dtype).itemsize
         self._reserve(nbytes)
         try:
-            for idx, part in flat_slabs(start, stop, self.schema.shape):
-                shape = _slab_shape(idx)
-                for name, (spec, var) in self.vars.items():
-                    tail = (var.shape[-1],) if spec.dtype == "str" else self.schema.tail(spec)
-                    data = np.asarray(arrays[name])[part].reshape(shape + tail)
-                    var[idx + (slice(None),) * len(tail)] = data
+            with self.lock:
+                for idx, part in flat_slabs(start, stop, self.schema.shape):
+                    shape = _slab_shape(idx)
+                    for name, (spec, var) in self.vars.items():
+                        tail = (var.shape[-1],) if spec.dtype == "str" else self.schema.tail(spec)
+                        data = np.asarray(arrays[name])[part].reshape(shape + tail)
+                        var[idx + (slice(None),) * len(tail)] = data
         except (RuntimeError, OSError) as e:
             raise self._library_error(e) from e
         self.unsynced += nbytes
@@ -293,7 +311,8 @@ class NetCDFWriter:
         try:
             self._reserve(0)
             try:
-                self.nc.close()
+                with self.lock:
+                    self.nc.close()
             except (RuntimeError, OSError) as e:
                 raise self._library_error(e) from e
             os.replace(self.tmp, self.path)
@@ -315,7 +334,8 @@ class NetCDFWriter:
             pass
         try:
             if nc is not None and nc.isopen():
-                nc.close()
+                with getattr(self, "lock", None) or _library_lock():
+                    nc.close()
         except Exception:  # noqa: BLE001 - the file is deleted anyway
             pass
         finally:
