@@ -334,7 +334,7 @@ class NetCDFWriter:
             pass
         try:
             if nc is not None and nc.isopen():
-                with getattr(self, "lock", None) or _library_lock():
+                with self.lock:
                     nc.close()
         except Exception:  # noqa: BLE001 - the file is deleted anyway
             pass

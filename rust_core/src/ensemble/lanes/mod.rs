@@ -90,12 +90,9 @@ pub fn run_lanes(
 ) -> Vec<TrajectoryResult> {
     check(sliders, y0s, method, &task);
     let feed = AtomicUsize::new(0);
-    let mut out: Vec<Option<TrajectoryResult>> = vec![None; sliders.len()];
-    for (i, r) in dispatch(sliders, y0s, t_end, method, tol, task, &feed) {
-        out[i] = Some(r);
-    }
     // Only a cancelled call leaves trajectories without a result.
-    out.into_iter().map(|r| r.unwrap_or_else(TrajectoryResult::not_started)).collect()
+    let done = dispatch(sliders, y0s, t_end, method, tol, task, &feed);
+    crate::parallel::scatter(sliders.len(), done, |_| TrajectoryResult::not_started())
 }
 
 /// [`run_lanes`] on `threads` threads (`None`: [`crate::parallel::default_threads`]): every
