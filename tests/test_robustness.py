@@ -15,6 +15,7 @@ import pytest
 
 import tribosweep as ts
 from conftest import RTOL_FACTORS, ULPS, moved
+from tribosweep._codes import DECIDED_BY
 
 
 def ulp_family(y0, mu):
@@ -48,7 +49,9 @@ def test_bouncing_cycle_from_just_outside_it(seed_values):
 
 def test_bilateral_decay_from_a_small_disturbance():
     # test_simulate.py::test_bilateral_seed_decays_to_sliding_from_small_disturbance
-    names, _ = steady_outcomes(ts.SliderModel(contact="bilateral"), 60.0, [0.5e-6, 0, 0, 0, 0, 0], 0.215, 1e-8, decay_amplitude=0.2e-6)
+    names, _ = steady_outcomes(
+        ts.SliderModel(contact="bilateral"), 60.0, [0.5e-6, 0, 0, 0, 0, 0], 0.215, 1e-8, decay_amplitude=0.2e-6
+    )
     assert set(names) == {"decayed"}, names
 
 
@@ -75,20 +78,27 @@ def test_followed_bouncing_cycle():
 def test_auto_regimes():
     # test_sweep.py::test_auto_agrees_with_transient_where_the_transient_settles compares auto's
     # regimes with the transient's; the transient's are checked for robustness in that test itself
-    # (robust_transient_regimes: only robust ones are compared). auto's must be robust everywhere:
-    # it decides from the linearisation, the describing function and shooting, not from one
-    # trajectory's fate.
+    # (robust_transient_regimes: only robust ones are compared). auto's must be robust wherever it
+    # decides from the linearisation, the describing function or shooting, not from one
+    # trajectory's fate. Where no cheaper stage decides (on this grid, every point at mu 0.3 and
+    # 0.4), auto runs one transient, whose fate is not a property of the point: at 140 N, mu 0.4 it
+    # goes to the stick-slip cycle, but escapes for 1 to 2 of 61 loads moved by up to +-30 ulps
+    # (with either event root finder of 2026-11-26). Those points are left out here: which of them
+    # are robust, and agree with auto, is test_sweep's robust_transient_regimes.
     from test_sweep import AGREE_GRID
 
-    def regimes(**kw):
-        return ts.sweep(strategy="auto", census=False, **(dict(AGREE_GRID) | kw)).regime.values
+    def sweep(**kw):
+        return ts.sweep(strategy="auto", census=False, **(dict(AGREE_GRID) | kw))
 
-    ref = regimes()
+    ref_ds = sweep()
+    ref = ref_ds.regime.values
+    cheap = ref_ds.decided_by.values != DECIDED_BY["transient"]
+    assert cheap.sum() == 4, ref_ds.decided_by.values  # mu 0.2: decided by the linearisation
     loads = np.asarray(AGREE_GRID["normal_load"])
     for k in ULPS:
-        np.testing.assert_array_equal(regimes(normal_load=moved(loads, k)), ref)
+        np.testing.assert_array_equal(sweep(normal_load=moved(loads, k)).regime.values[cheap], ref[cheap])
     for f in RTOL_FACTORS:
-        np.testing.assert_array_equal(regimes(rtol=1e-8 * f), ref)
+        np.testing.assert_array_equal(sweep(rtol=1e-8 * f).regime.values[cheap], ref[cheap])
 
 
 def test_census_early_stop_point_returns_for_every_sample():

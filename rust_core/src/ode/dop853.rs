@@ -193,6 +193,8 @@ pub(crate) struct Dop853Dense<'a, const N: usize, S: OdeSystem<N>> {
     mode: S::Mode,
     /// The step's stages (`None` where the coefficients came with the interpolant).
     k: Option<&'a [SVector<f64, N>; 13]>,
+    /// The right-hand side at both ends (the stages `k[0]` and `k[12]`).
+    ends: (SVector<f64, N>, SVector<f64, N>),
     y0: &'a SVector<f64, N>,
     y1: &'a SVector<f64, N>,
     t0: f64,
@@ -214,22 +216,26 @@ impl<'a, const N: usize, S: OdeSystem<N>> Dop853Dense<'a, N, S> {
         t0: f64,
         h: f64,
     ) -> Self {
-        Dop853Dense { sys, mode, k: Some(k), y0, y1, t0, h, cont: OnceCell::new(), extra: Cell::new(0) }
+        let ends = (k[0], k[12]);
+        Dop853Dense { sys, mode, k: Some(k), ends, y0, y1, t0, h, cont: OnceCell::new(), extra: Cell::new(0) }
     }
 
     /// The interpolant of a step from its polynomial's coefficients `c0..c6` (Hairer's `contd8`,
     /// as [`poly`] computes them; the lanes compute them for all their lanes at once, operation
-    /// for operation the same): no right-hand side is evaluated.
+    /// for operation the same): no right-hand side is evaluated. `ends`: the right-hand side at
+    /// both ends (the stages `k[0]` and `k[12]` of [`Self::from_stages`]).
+    #[allow(clippy::too_many_arguments)]
     pub(crate) fn from_coefficients(
         sys: &'a S,
         mode: S::Mode,
         cont: [SVector<f64, N>; 7],
+        ends: (SVector<f64, N>, SVector<f64, N>),
         y0: &'a SVector<f64, N>,
         y1: &'a SVector<f64, N>,
         t0: f64,
         h: f64,
     ) -> Self {
-        Dop853Dense { sys, mode, k: None, y0, y1, t0, h, cont: OnceCell::from(cont), extra: Cell::new(0) }
+        Dop853Dense { sys, mode, k: None, ends, y0, y1, t0, h, cont: OnceCell::from(cont), extra: Cell::new(0) }
     }
 
     fn coefficients(&self) -> [SVector<f64, N>; 7] {
@@ -308,6 +314,10 @@ impl<const N: usize, S: OdeSystem<N>> Dense<N> for Dop853Dense<'_, N, S> {
             p = (c[0][i] + p) * x;
             self.y0[i] + p
         })
+    }
+
+    fn end_rates(&self) -> Option<super::EndRates<N>> {
+        Some(((self.t0, self.t0 + self.h), self.ends))
     }
 }
 

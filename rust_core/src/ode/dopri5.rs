@@ -92,6 +92,11 @@ impl<const N: usize> Dense<N> for Dopri5Dense<'_, N> {
         let r5 = weighted([D1 * h, D3 * h, D4 * h, D5 * h, D6 * h, D7 * h], [&k[0], &k[2], &k[3], &k[4], &k[5], &k[6]]);
         self.y0 + (dy + (bspl + (r4 + r5 * th1) * th) * th1) * th
     }
+
+    fn end_rates(&self) -> Option<super::EndRates<N>> {
+        // First same as last: k7 is f(t0 + h, y1).
+        Some(((self.t0, self.t0 + self.h), (self.k[0], self.k[6])))
+    }
 }
 
 impl<const N: usize> StepDense<N> for Dopri5Dense<'_, N> {}

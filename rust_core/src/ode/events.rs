@@ -25,12 +25,70 @@ pub(crate) fn crosses(a: f64, b: f64) -> bool {
 /// onto one end the next point lands just past the root and the bracket collapses to `tol`,
 /// instead of creeping in from the far end as plain regula falsi does. On the slider's contact
 /// events this takes about 4 evaluations where Illinois took about 20.
-pub(crate) fn locate(mut g: impl FnMut(f64) -> f64, mut a: f64, mut ga: f64, mut b: f64, mut gb: f64, tol: f64) -> f64 {
+pub(crate) fn locate(g: impl FnMut(f64) -> f64, a: f64, ga: f64, b: f64, gb: f64, tol: f64) -> f64 {
+    locate_from(g, a, ga, b, gb, tol, None)
+}
+
+/// [`locate`] started from a model of `g`: `guess = (t, slope)`, a time near the root and the
+/// model's `dg/dt` there (from [`hermite_root`]). The first point is the guess; the second a
+/// Newton step from it with the model's slope, aimed `tol/2` past the predicted root so that it
+/// lands on the root's far side and the bracket collapses to the guess's error at once. Then
+/// [`locate`]'s iteration, on a bracket that is already small. With the slider's contact events
+/// and sections this takes about 3 evaluations of `g` where `locate` took about 6. The result
+/// obeys `locate`'s contract whatever the guess (a poor one costs at most two evaluations).
+pub(crate) fn locate_from(
+    mut g: impl FnMut(f64) -> f64,
+    mut a: f64,
+    mut ga: f64,
+    mut b: f64,
+    mut gb: f64,
+    tol: f64,
+    guess: Option<(f64, f64)>,
+) -> f64 {
     if gb == 0.0 {
         return b;
     }
     // The last point dropped from the bracket (NaN: none yet, or not usable).
     let (mut d, mut gd) = (f64::NAN, f64::NAN);
+    // `c` replaces the end of the bracket on its side of the root (a NaN value: the right end).
+    macro_rules! take {
+        ($c:expr, $gc:expr) => {{
+            let (c, gc) = ($c, $gc);
+            if gc.is_nan() {
+                b = c;
+                (d, gd) = (f64::NAN, f64::NAN);
+            } else if (gc > 0.0) == (gb > 0.0) {
+                (d, gd) = (b, gb);
+                (b, gb) = (c, gc);
+            } else {
+                (d, gd) = (a, ga);
+                (a, ga) = (c, gc);
+            }
+        }};
+    }
+    if let Some((tg, slope)) = guess {
+        let (lo, hi) = (a + 0.5 * tol, b - 0.5 * tol);
+        if tg.is_finite() && lo < hi {
+            let c = tg.clamp(lo, hi);
+            let gc = g(c);
+            if gc == 0.0 {
+                return c;
+            }
+            take!(c, gc);
+            if gc.is_finite() && slope.is_finite() && slope != 0.0 && b - a > tol {
+                // The root lies after `c` where `c` became the left end.
+                let past = if a == c { 0.5 * tol } else { -0.5 * tol };
+                let c2 = c - gc / slope + past;
+                if c2 > a + 0.5 * tol && c2 < b - 0.5 * tol {
+                    let g2 = g(c2);
+                    if g2 == 0.0 {
+                        return c2;
+                    }
+                    take!(c2, g2);
+                }
+            }
+        }
+    }
     let mut width_2ago = f64::INFINITY;
     let mut width_1ago = f64::INFINITY;
     for _ in 0..300 {
@@ -66,18 +124,50 @@ pub(crate) fn locate(mut g: impl FnMut(f64) -> f64, mut a: f64, mut ga: f64, mut
             return c;
         }
         // A NaN value is treated as lying on the far side (shrinks from the right).
-        if gc.is_nan() {
-            b = c;
-            (d, gd) = (f64::NAN, f64::NAN);
-        } else if (gc > 0.0) == (gb > 0.0) {
-            (d, gd) = (b, gb);
-            (b, gb) = (c, gc);
-        } else {
-            (d, gd) = (a, ga);
-            (a, ga) = (c, gc);
-        }
+        take!(c, gc);
     }
     b
+}
+
+/// The root of the cubic Hermite model of a function on a step of length `h`, from its values
+/// `g0`, `g1` (of opposite signs, or `g1 == 0`) and time derivatives `d0`, `d1` at the ends: the
+/// time `t0 + x h` of the model's sign change in `(0, 1)` (safeguarded Newton on the cubic from
+/// the secant point) and the model's `dg/dt` there. `None` when an input is not finite. The
+/// model's error is that of a cubic over the step, far below the step: a start for
+/// [`locate_from`], which checks it against the function itself.
+pub(crate) fn hermite_root(t0: f64, h: f64, g0: f64, g1: f64, d0: f64, d1: f64) -> Option<(f64, f64)> {
+    let (m0, m1) = (h * d0, h * d1);
+    if !(g0.is_finite() && g1.is_finite() && m0.is_finite() && m1.is_finite() && h > 0.0) || g0 == 0.0 {
+        return None;
+    }
+    // p(x) = a3 x^3 + a2 x^2 + m0 x + g0 with p(1) = g1, p'(1) = m1.
+    let a2 = 3.0 * (g1 - g0) - 2.0 * m0 - m1;
+    let a3 = 2.0 * (g0 - g1) + m0 + m1;
+    let (mut lo, mut hi) = (0.0f64, 1.0f64);
+    let mut x = g0 / (g0 - g1);
+    for _ in 0..8 {
+        let p = ((a3 * x + a2) * x + m0) * x + g0;
+        let dp = (3.0 * a3 * x + 2.0 * a2) * x + m0;
+        if p == 0.0 {
+            break;
+        }
+        if (p > 0.0) == (g0 > 0.0) {
+            lo = x;
+        } else {
+            hi = x;
+        }
+        let mut xn = x - p / dp;
+        if !(xn > lo && xn < hi) {
+            xn = 0.5 * (lo + hi);
+        }
+        let step = (xn - x).abs();
+        x = xn;
+        if step <= 1e-12 {
+            break;
+        }
+    }
+    let dp = (3.0 * a3 * x + 2.0 * a2) * x + m0;
+    Some((t0 + h * x, dp / h))
 }
 
 /// `sys.on_event`, kept out of line: it runs only at events (the slider's evaluates its
@@ -253,6 +343,15 @@ where
         sys.events(tt, &yy, mode, &mut gbuf);
         gbuf[i]
     };
+    // The event functions' rates at both ends (for the cubic model each crossing's search starts
+    // from), computed at the first crossing that needs them.
+    let mut rates: Option<Option<([f64; MAX_EVENTS], [f64; MAX_EVENTS])>> = None;
+    let mut rates_of = || -> Option<([f64; MAX_EVENTS], [f64; MAX_EVENTS])> {
+        let (_, (f0, f1)) = dense.end_rates()?;
+        let (mut d0, mut d1) = ([f64::NAN; MAX_EVENTS], [f64::NAN; MAX_EVENTS]);
+        (sys.event_rates(t, y, &f0, mode, &mut d0) && sys.event_rates(t_new, y_new, &f1, mode, &mut d1))
+            .then_some((d0, d1))
+    };
     for i in 0..n_ev {
         let (ta, ga) = match pend[i] {
             None => (t, g0[i]),
@@ -274,7 +373,16 @@ where
             }
         };
         if crosses(ga, g1[i]) {
-            let te = locate(|tt| g_at(i, tt), ta, ga, t_new, g1[i], opts.event_tol);
+            // From the start of the step, the search starts at the root of the function's cubic
+            // model (after a pending event's check time, the model's root may be that event's).
+            let guess = if ta == t {
+                rates
+                    .get_or_insert_with(&mut rates_of)
+                    .and_then(|(d0, d1)| hermite_root(t, t_new - t, ga, g1[i], d0[i], d1[i]))
+            } else {
+                None
+            };
+            let te = locate_from(|tt| g_at(i, tt), ta, ga, t_new, g1[i], opts.event_tol, guess);
             found[n_found] = Some(Found { t: te, index: i, y: *y_new, action: EventAction::Continue });
             n_found += 1;
         }

@@ -276,10 +276,20 @@ pub struct Solution<const N: usize, M> {
     pub h: f64,
 }
 
+/// A step `(t0, t1)` and the right-hand side at both of its ends (see [`Dense::end_rates`]).
+pub type EndRates<const N: usize> = ((f64, f64), (SVector<f64, N>, SVector<f64, N>));
+
 /// Dense output of one accepted step on `[t0, t1]`.
 pub trait Dense<const N: usize> {
     /// Interpolated state at `t` in `[t0, t1]`.
     fn eval(&self, t: f64) -> SVector<f64, N>;
+
+    /// The step `(t0, t1)` this interpolant spans and the right-hand side at both of its ends,
+    /// where the method keeps them (the explicit methods' first and last stages): root finders
+    /// start from a cubic model of an event function with them. `None`: not kept.
+    fn end_rates(&self) -> Option<EndRates<N>> {
+        None
+    }
 }
 
 /// One accepted (possibly event-truncated) step, as an observer sees it.

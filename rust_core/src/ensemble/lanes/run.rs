@@ -420,7 +420,8 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
                     let dense = match full.as_ref().filter(|_| need[l]) {
                         Some(full) => {
                             let c = full.coefficients_of(l).map(State::from);
-                            Dop853Dense::from_coefficients(sd.s, sd.mode, c, &y0, &y1, t_start[l], hh[l])
+                            let ends = (k1l, lane_state(fnew, l));
+                            Dop853Dense::from_coefficients(sd.s, sd.mode, c, ends, &y0, &y1, t_start[l], hh[l])
                         }
                         None => {
                             ks = gather();

@@ -1,5 +1,5 @@
 use super::*;
-use crate::ode::events::locate;
+use crate::ode::events::{hermite_root, locate, locate_from};
 use crate::ode::test_systems::*;
 use crate::ode::{NoObserver, Sampler};
 use std::f64::consts::PI;
@@ -310,6 +310,59 @@ fn the_root_finder_brackets_roots_in_few_evaluations() {
     }
     // Exactly zero at the end: the end.
     assert_eq!(locate(|t| t - 1.0, 0.0, -1.0, 1.0, 0.0, 1e-12), 1.0);
+}
+
+#[test]
+fn the_cubic_model_root_is_exact_for_a_cubic_and_close_for_a_smooth_function() {
+    // A cubic is its own Hermite model: the root to rounding, and the slope there.
+    let g = |t: f64| (t - 0.3) * (t * t + 1.0);
+    let dg = |t: f64| 3.0 * t * t - 0.6 * t + 1.0;
+    let (t, s) = hermite_root(0.0, 1.0, g(0.0), g(1.0), dg(0.0), dg(1.0)).expect("a root");
+    assert!((t - 0.3).abs() < 1e-15, "{t}");
+    assert!((s - dg(0.3)).abs() < 1e-14, "{s}");
+    // On a step and away from zero: sin over a tenth of its period, error of order h^4.
+    let (t0, h) = (3.0, 0.3);
+    let (t, s) = hermite_root(t0, h, t0.sin(), (t0 + h).sin(), t0.cos(), (t0 + h).cos()).expect("a root");
+    assert!((t - std::f64::consts::PI).abs() < 1e-5 * h, "{t}");
+    assert!((s + 1.0).abs() < 1e-3, "{s}");
+    // No model from non-finite input or a start on the root.
+    assert!(hermite_root(0.0, 1.0, 1.0, -1.0, f64::NAN, 0.0).is_none());
+    assert!(hermite_root(0.0, 1.0, 0.0, -1.0, 1.0, 1.0).is_none());
+}
+
+#[test]
+fn the_root_finder_started_from_the_cubic_model_keeps_its_contract_in_fewer_evaluations() {
+    // (g, g', [a, b], root): a nearly linear function, a strongly curved one, sin across a root.
+    type Case = (fn(f64) -> f64, fn(f64) -> f64, f64, f64, f64);
+    let cases: [Case; 3] = [
+        (|t| 2.0 * (t - 0.3) + 0.1 * (t - 0.3) * (t - 0.3), |t| 2.0 + 0.2 * (t - 0.3), 0.0, 1.0, 0.3),
+        (|t| (t - 0.999) * (3.0 - t * t), |t| 3.0 - 3.0 * t * t + 1.998 * t, 0.0, 1.0, 0.999),
+        (f64::sin, f64::cos, 3.0, 3.3, std::f64::consts::PI),
+    ];
+    for (k, (g, dg, a, b, root)) in cases.into_iter().enumerate() {
+        for tol in [1e-9, 1e-14] {
+            let run = |guess: Option<(f64, f64)>| {
+                let mut calls = 0;
+                let counted = |t| {
+                    calls += 1;
+                    g(t)
+                };
+                let t = locate_from(counted, a, g(a), b, g(b), tol, guess);
+                assert!(t >= root - 1e-15 && t - root <= tol + 1e-15, "case {k}, tol {tol:e}: {t} against {root}");
+                assert!(g(t).signum() == g(b).signum() || g(t) == 0.0, "case {k}: the near side");
+                (t, calls)
+            };
+            let (_, plain) = run(None);
+            let guess = hermite_root(a, b - a, g(a), g(b), dg(a), dg(b));
+            let (_, guided) = run(guess);
+            assert!(guided <= 4 && guided <= plain, "case {k}, tol {tol:e}: {guided} evaluations against {plain}");
+            // A useless guess (an end, a wrong or missing slope) costs evaluations, not the contract.
+            for bad in [Some((a, 1.0)), Some((b, -1e300)), Some((0.5 * (a + b), f64::NAN)), Some((f64::NAN, 1.0))] {
+                let (_, n) = run(bad);
+                assert!(n <= plain + 2, "case {k}, tol {tol:e}, guess {bad:?}: {n} evaluations against {plain}");
+            }
+        }
+    }
 }
 
 #[test]
