@@ -109,6 +109,24 @@ def test_ensemble_matches_single_runs():
             assert int(ens.n_accept.values[i]) == int(one.n_accept.values)
 
 
+def test_ensemble_samples_of_runs_that_escape_end_in_nan():
+    # The ensemble writes its samples straight into the returned array; a run that escapes has the
+    # samples up to its end and NaN after it, as a single run's. Past the bilateral law's saddle
+    # (300 um at rest) z escapes at about 2.04 ms; 30 um stays bounded.
+    t = np.linspace(0, 4e-3, 41)
+    y0 = np.array([[300e-6, 0, 0, 0, 0, 0], [30e-6, 0, 0, 0, 0, 0]])
+    for method in ["dopri5", "dop853"]:
+        m = ts.SliderModel(contact="bilateral")
+        ens = ts.ensemble(m, 4e-3, {"mu": [0.3, 0.3]}, y0=y0, t_eval=t, method=method, rtol=1e-9)
+        t_esc = float(ens.t_reached.values[0])
+        assert 2.0e-3 < t_esc < 2.1e-3 and ens.status.values[0] == ts.STATUS["diverged"]
+        assert np.isnan(ens.z.values[0, t > t_esc]).all() and np.isfinite(ens.z.values[0, t <= t_esc]).all()
+        assert np.isfinite(ens.z.values[1]).all()
+        for i in range(2):
+            one = ts.simulate(m.replace(mu=0.3), 4e-3, y0=y0[i], t_eval=t, method=method, rtol=1e-9)
+            np.testing.assert_allclose(ens.z.values[i], one.z.values, rtol=1e-9, atol=0, equal_nan=True)
+
+
 def bouncing_start(factor: float = 1.05) -> np.ndarray:
     """A state 5 % outside the seed's bouncing cycle (on its section), found by following the cycle from mu = 0.30."""
     orb, _ = ts.follow_cycle(ts.SliderModel(contact="unilateral"))

@@ -2,12 +2,12 @@
 
 use crate::convert::{method_from, reason_of, runs_into, states, summaries_into, tolerances, y0_rows, Call};
 use crate::errors::CoreError;
-use numpy::ndarray::{Array1, Array3};
-use numpy::{IntoPyArray, PyReadonlyArray1, PyReadonlyArray2};
+use numpy::ndarray::Array1;
+use numpy::{IntoPyArray, PyArray3, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::collections::HashMap;
-use tribosweep_core::ensemble::{run as run_ensemble, Settings, Task, TrajectoryResult};
+use tribosweep_core::ensemble::{run as run_ensemble, run_sampled_into, Settings, Task, TrajectoryResult};
 use tribosweep_core::model::State;
 use tribosweep_core::status::Status;
 use tribosweep_core::steady::{self, DecayTest, RunResult, SteadyOptions, Summary};
@@ -182,8 +182,16 @@ fn ensemble<'py>(
     match kind {
         Kind::Plain => {
             let te = t_eval.unwrap_or_default();
-            let task = if te.is_empty() { Task::Final } else { Task::Sampled(&te) };
-            let out = call.detach(|| run_ensemble(&sliders, &y0s, &settings, task))?;
+            // The samples go straight into the array's buffer, allocated by numpy (which asks for
+            // huge pages for a large one: the run's writes fault a few pages, not every 4 KiB).
+            let (out, y) = if te.is_empty() {
+                (call.detach(|| run_ensemble(&sliders, &y0s, &settings, Task::Final))?, None)
+            } else {
+                let y = PyArray3::<f64>::zeros(py, [n, te.len(), 6], false);
+                let mut rw = y.readwrite();
+                let flat = rw.as_slice_mut().expect("a new array is contiguous");
+                (call.detach(|| run_sampled_into(&sliders, &y0s, &settings, &te, flat))?, Some(y.clone()))
+            };
             // Columns straight from the results: with every run 0.5 s long, moving the results
             // once more on this one thread was a tenth of a 16-thread call.
             let panicked = RunResult::failed(Status::Panic, None);
@@ -196,17 +204,8 @@ fn ensemble<'py>(
                 })
                 .collect();
             runs_into(&d, &runs, reasons)?;
-            if !te.is_empty() {
-                let mut y = Array3::<f64>::from_elem((n, te.len(), 6), f64::NAN);
-                for (i, o) in out.iter().enumerate() {
-                    let samples = o.as_ref().map_or(&[][..], |x| &x.samples[..]);
-                    for (j, s) in samples.iter().enumerate() {
-                        for c in 0..6 {
-                            y[(i, j, c)] = s[c];
-                        }
-                    }
-                }
-                d.set_item("y", y.into_pyarray(py))?;
+            if let Some(y) = y {
+                d.set_item("y", y)?;
             }
         }
         Kind::Steady => {

@@ -55,7 +55,7 @@ use crate::ode::dopri5::Dopri5Dense;
 use crate::ode::events::locate;
 use crate::ode::lanes::{
     dop853_dense, dop853_step, dopri5_dense, dopri5_step, each6, exp_lanes, lane_state, ln_lanes, sample_lane, splat,
-    LaneRhs, ALL_COMPS, ALPHA, ALPHA8, BETA, L, LN_ERR_FLOOR, LN_SAFETY, V6, W,
+    LaneRhs, Row, ALL_COMPS, ALPHA, ALPHA8, BETA, L, LN_ERR_FLOOR, LN_SAFETY, V6, W,
 };
 use crate::ode::stepper::StepDense;
 use crate::ode::{Dense, Method, Options, Stats};
@@ -144,24 +144,44 @@ pub fn run_bilateral_batch_sampled(
     tol: &Tolerances,
     t_eval: &[f64],
 ) -> Vec<(RunResult, Vec<State>)> {
+    let nt = t_eval.len();
+    let mut flat = vec![0.0; sliders.len() * nt * 6];
+    let runs = run_bilateral_batch_into(sliders, y0s, t_end, method, tol, t_eval, &mut flat);
+    let rows = flat.chunks_exact(6 * nt.max(1));
+    let samples =
+        rows.map(|r| r.chunks_exact(6).map(State::from_column_slice).collect()).chain(std::iter::repeat(Vec::new()));
+    runs.into_iter().zip(samples).collect()
+}
+
+/// [`run_bilateral_batch_sampled`] writing the samples into `out`, a row of `6 t_eval.len()`
+/// values per trajectory (state by state): the samples the run reached, NaN after them.
+pub fn run_bilateral_batch_into(
+    sliders: &[Slider],
+    y0s: &[State],
+    t_end: f64,
+    method: Method,
+    tol: &Tolerances,
+    t_eval: &[f64],
+    out: &mut [f64],
+) -> Vec<RunResult> {
     assert_eq!(sliders.len(), y0s.len(), "run_bilateral_batch: one initial state per slider");
     assert!(supports_method(method), "run_bilateral_batch: method {method:?} is not batched");
+    assert_eq!(out.len(), sliders.len() * t_eval.len() * 6, "run_bilateral_batch: one row of samples per slider");
     for s in sliders {
         assert!(
             s.p.contact == ContactModel::Bilateral && s.p.friction_law == FrictionLaw::Constant,
             "run_bilateral_batch: only bilateral contact with constant friction"
         );
     }
-    let mut samples: Vec<Vec<State>> = (0..sliders.len()).map(|_| Vec::with_capacity(t_eval.len())).collect();
-    let job = Job { sliders, y0s, t_end, tol, t_eval, samples: &mut samples };
+    let mut counts = vec![0usize; if t_eval.is_empty() { 0 } else { sliders.len() }];
+    let job = Job { sliders, y0s, t_end, tol, t_eval, samples: out, counts: &mut counts };
     let runs = if method == Method::Dop853 { dispatch::<true>(job) } else { dispatch::<false>(job) };
-    if !t_eval.is_empty() {
-        // As the scalar `run_sampled`: a run that stopped early has NaN at the times it did not reach.
-        for v in &mut samples {
-            v.resize(t_eval.len(), State::repeat(f64::NAN));
-        }
+    // As the scalar `run_sampled`: a run that stopped early has NaN at the times it did not reach.
+    let stride = 6 * t_eval.len();
+    for (i, &k) in counts.iter().enumerate() {
+        out[i * stride + 6 * k..(i + 1) * stride].fill(f64::NAN);
     }
-    runs.into_iter().zip(samples).collect()
+    runs
 }
 
 /// Whether [`run_bilateral_batch`] integrates with this method.
@@ -177,7 +197,9 @@ struct Job<'a> {
     t_end: f64,
     tol: &'a Tolerances,
     t_eval: &'a [f64],
-    samples: &'a mut [Vec<State>],
+    /// A row of `6 t_eval.len()` values per trajectory, and the samples written to each.
+    samples: &'a mut [f64],
+    counts: &'a mut [usize],
 }
 
 fn dispatch<const M8: bool>(job: Job<'_>) -> Vec<RunResult> {
@@ -211,7 +233,8 @@ unsafe fn run_avx2<const M8: bool>(job: Job<'_>) -> Vec<RunResult> {
 /// `M8`: DOP853, else Dormand–Prince 5(4).
 #[inline(always)]
 fn run_impl<const M8: bool>(job: Job<'_>) -> Vec<RunResult> {
-    let Job { sliders, y0s, t_end, tol, t_eval, samples } = job;
+    let Job { sliders, y0s, t_end, tol, t_eval, samples, counts } = job;
+    let stride = 6 * t_eval.len();
     let n = sliders.len();
     let sampled = !t_eval.is_empty();
     let first_sample = t_eval.first().copied().unwrap_or(f64::INFINITY);
@@ -400,7 +423,10 @@ fn run_impl<const M8: bool>(job: Job<'_>) -> Vec<RunResult> {
                 }
                 // The step as it ends (an escape ends it at the crossing).
                 let span = (t_start[l], ln.t[l], hh[l]);
-                next_t[l] = sample_lane(t_eval, &mut samples[ln.who[l]], d, l, span, &ln.y, &yn);
+                let w = ln.who[l];
+                let mut row = Row { vals: &mut samples[w * stride..(w + 1) * stride], n: counts[w] };
+                next_t[l] = sample_lane(t_eval, &mut row, d, l, span, &ln.y, &yn);
+                counts[w] = row.n;
             }
         }
         for l in 0..W {

@@ -202,36 +202,15 @@ pub fn run_on(
     let threads = settings.threads;
     match route {
         Route::Batch => {
-            let group = group_size(sliders.len(), threads);
-            let ranges: Vec<std::ops::Range<usize>> =
-                (0..sliders.len()).step_by(group).map(|a| a..(a + group).min(sliders.len())).collect();
-            let parts = par_map_or(
-                &ranges,
-                threads,
-                |r| {
-                    let t_eval: &[f64] = if let Task::Sampled(te) = task { te } else { &[] };
-                    Some(Ok(batch::run_bilateral_batch_sampled(
-                        &sliders[r.clone()],
-                        &y0s[r.clone()],
-                        settings.t_end,
-                        method,
-                        &tol,
-                        t_eval,
-                    )))
-                },
-                |msg| Some(Err(msg)),
-                || None,
-            );
-            // Sized once: a collected `flat_map` grows by doubling, copying every result again.
-            let mut out = Vec::with_capacity(sliders.len());
-            for (p, r) in parts.into_iter().zip(&ranges) {
-                match p {
-                    Some(Ok(v)) => out.extend(
-                        v.into_iter()
-                            .map(|(run, samples)| Ok(TrajectoryResult { samples, ..TrajectoryResult::from_run(run) })),
-                    ),
-                    Some(Err(msg)) => out.extend(std::iter::repeat_n(Err(msg), r.len())),
-                    None => out.extend(std::iter::repeat_n(Ok(TrajectoryResult::not_started()), r.len())),
+            let t_eval: &[f64] = if let Task::Sampled(te) = task { te } else { &[] };
+            let stride = 6 * t_eval.len();
+            let mut flat = vec![0.0; sliders.len() * stride];
+            let mut out = run_batch(sliders, y0s, settings.t_end, method, &tol, threads, t_eval, &mut flat);
+            if stride > 0 {
+                for (o, row) in out.iter_mut().zip(flat.chunks_exact(stride)) {
+                    if let Ok(x) = o {
+                        x.samples = row.chunks_exact(6).map(State::from_column_slice).collect();
+                    }
                 }
             }
             out
@@ -248,6 +227,104 @@ pub fn run_on(
             )
         }
     }
+}
+
+/// [`run`] of `Task::Sampled(t_eval)` with every trajectory's samples written into `out`, a row
+/// of `6 t_eval.len()` values per trajectory (state by state, in input order), instead of into the
+/// results' `samples` (left empty): the samples each run reached, NaN after them and for a
+/// trajectory that failed or was not started. The batched routes write into `out` as they
+/// sample; the scalar route copies each result's samples into its row.
+pub fn run_sampled_into(
+    sliders: &[Slider],
+    y0s: &[State],
+    settings: &Settings,
+    t_eval: &[f64],
+    out: &mut [f64],
+) -> Vec<Result<TrajectoryResult, String>> {
+    let task = Task::Sampled(t_eval);
+    let stride = 6 * t_eval.len();
+    assert_eq!(out.len(), sliders.len() * stride, "ensemble: one row of samples per trajectory");
+    let route = route(sliders, settings, &task);
+    let (method, tol, threads) = (settings.method, settings.tol, settings.threads);
+    match route {
+        Route::Batch => {
+            assert_eq!(sliders.len(), y0s.len(), "ensemble: one initial state per slider");
+            return run_batch(sliders, y0s, settings.t_end, method, &tol, threads, t_eval, out);
+        }
+        Route::Lanes => return lanes::run_lanes_into(sliders, y0s, settings.t_end, method, &tol, t_eval, threads, out),
+        Route::Scalar => {}
+    }
+    let mut res = run_on(route, sliders, y0s, settings, task);
+    if stride > 0 {
+        for (o, row) in res.iter_mut().zip(out.chunks_exact_mut(stride)) {
+            let samples = o.as_mut().map(|x| std::mem::take(&mut x.samples)).unwrap_or_default();
+            let k = samples.len().min(t_eval.len());
+            for (dst, v) in row.chunks_exact_mut(6).zip(&samples[..k]) {
+                dst.copy_from_slice(v.as_slice());
+            }
+            row[6 * k..].fill(f64::NAN);
+        }
+    }
+    res
+}
+
+/// The bilateral batch on groups of [`group_size`] trajectories in parallel, the samples at
+/// `t_eval` into `out` (rows of `6 t_eval.len()` values; NaN for a group that panicked or was not
+/// started).
+#[allow(clippy::too_many_arguments)]
+fn run_batch(
+    sliders: &[Slider],
+    y0s: &[State],
+    t_end: f64,
+    method: Method,
+    tol: &Tolerances,
+    threads: Option<usize>,
+    t_eval: &[f64],
+    out: &mut [f64],
+) -> Vec<Result<TrajectoryResult, String>> {
+    let stride = 6 * t_eval.len();
+    let group = group_size(sliders.len(), threads);
+    let ranges: Vec<std::ops::Range<usize>> =
+        (0..sliders.len()).step_by(group).map(|a| a..(a + group).min(sliders.len())).collect();
+    // Each group's rows, handed to the worker that runs it (once).
+    let rows: Vec<std::sync::Mutex<Option<&mut [f64]>>> = {
+        let mut rest = &mut *out;
+        ranges
+            .iter()
+            .map(|r| {
+                let (head, tail) = std::mem::take(&mut rest).split_at_mut(r.len() * stride);
+                rest = tail;
+                std::sync::Mutex::new(Some(head))
+            })
+            .collect()
+    };
+    let groups: Vec<usize> = (0..ranges.len()).collect();
+    let parts = par_map_or(
+        &groups,
+        threads,
+        |&g| {
+            let r = ranges[g].clone();
+            let buf = rows[g].lock().unwrap_or_else(|e| e.into_inner()).take().expect("each group runs once");
+            Some(Ok(batch::run_bilateral_batch_into(&sliders[r.clone()], &y0s[r], t_end, method, tol, t_eval, buf)))
+        },
+        |msg| Some(Err(msg)),
+        || None,
+    );
+    drop(rows);
+    let mut res = Vec::with_capacity(sliders.len());
+    for (p, r) in parts.into_iter().zip(&ranges) {
+        match p {
+            Some(Ok(v)) => res.extend(v.into_iter().map(|run| Ok(TrajectoryResult::from_run(run)))),
+            failed => {
+                out[r.start * stride..r.end * stride].fill(f64::NAN);
+                match failed {
+                    Some(Err(msg)) => res.extend(std::iter::repeat_n(Err(msg), r.len())),
+                    _ => res.extend(std::iter::repeat_n(Ok(TrajectoryResult::not_started()), r.len())),
+                }
+            }
+        }
+    }
+    res
 }
 
 /// One trajectory on the scalar driver.

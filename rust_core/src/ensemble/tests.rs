@@ -427,3 +427,41 @@ fn a_long_trajectory_is_cancelled_inside_its_run() {
         }
     }
 }
+
+/// `run_sampled_into` writes, row by row, bitwise the samples `run` returns (NaN where a run
+/// stopped early), on each route it takes (the bilateral batch, the unilateral lanes, the scalar
+/// driver for Rodas4) and on 1 or 3 threads; the results are the same but carry no samples.
+#[test]
+fn samples_written_into_a_buffer_are_those_the_results_carry() {
+    let mus: Vec<f64> = (0..24).map(|k| 0.18 + 0.006 * k as f64).collect();
+    let te: Vec<f64> = (0..=40).map(|k| k as f64 * 2.5e-3).collect();
+    // Large starts on both models: some bilateral runs escape inside the span (NaN tails).
+    let cases = [
+        (seed_bilateral(), 300e-6, Method::Dopri5, Route::Batch),
+        (seed_bilateral(), 300e-6, Method::Dop853, Route::Batch),
+        (unilateral(), 30e-6, Method::Dop853, Route::Lanes),
+        (unilateral(), 30e-6, Method::Rodas4, Route::Scalar),
+    ];
+    let mut nan_tails = 0;
+    for (base, z0, m, want) in cases {
+        let s = sliders(base, &mus);
+        let y0 = starts(s.len(), z0);
+        for th in [1, 3] {
+            let set = settings(0.1, m, 1e-7, Some(th));
+            assert_eq!(route(&s, &set, &Task::Sampled(&te)), want);
+            let reference = unwrap(run(&s, &y0, &set, Task::Sampled(&te)));
+            let mut flat = vec![0.0; s.len() * te.len() * 6];
+            let res = unwrap(run_sampled_into(&s, &y0, &set, &te, &mut flat));
+            for (i, (a, b)) in reference.iter().zip(&res).enumerate() {
+                assert!(b.samples.is_empty(), "{want:?}: samples left in the result");
+                let row: Vec<u64> =
+                    flat[i * te.len() * 6..(i + 1) * te.len() * 6].iter().map(|x| x.to_bits()).collect();
+                let want_row: Vec<u64> = a.samples.iter().flat_map(|y| y.iter().map(|x| x.to_bits())).collect();
+                assert_eq!(row, want_row, "{want:?}, {th} threads: trajectory {i}'s samples");
+                assert_eq!(bits(a), [bits(b), want_row].concat(), "{want:?}, {th} threads: trajectory {i}'s result");
+                nan_tails += (a.samples.last().is_some_and(|y| y[0].is_nan())) as usize;
+            }
+        }
+    }
+    assert!(nan_tails > 0, "no run stopped early: the NaN tails are not tested");
+}

@@ -333,22 +333,45 @@ pub trait Observer<const N: usize, M> {
 pub struct NoObserver;
 impl<const N: usize, M> Observer<N, M> for NoObserver {}
 
-/// Samples the dense output at increasing times `t_eval` (an observer).
-pub struct Sampler<'a, const N: usize> {
+/// Where a run's samples go, in order (a vector, or a row of a flat buffer).
+pub trait SampleStore<const N: usize> {
+    /// Samples stored so far (the index of the next one).
+    fn len(&self) -> usize;
+    /// Store the next sample.
+    fn push(&mut self, v: SVector<f64, N>);
+    /// No sample stored yet.
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+impl<const N: usize> SampleStore<N> for Vec<SVector<f64, N>> {
+    #[inline]
+    fn len(&self) -> usize {
+        Vec::len(self)
+    }
+    #[inline]
+    fn push(&mut self, v: SVector<f64, N>) {
+        Vec::push(self, v)
+    }
+}
+
+/// Samples the dense output at increasing times `t_eval` (an observer), into `out`.
+pub struct Sampler<'a, const N: usize, S: SampleStore<N> = Vec<SVector<f64, N>>> {
     /// Requested times (increasing).
     pub t_eval: &'a [f64],
     /// Samples taken so far, one per requested time in order.
-    pub out: Vec<SVector<f64, N>>,
+    pub out: S,
 }
 
 impl<'a, const N: usize> Sampler<'a, N> {
-    /// A sampler for `t_eval` (increasing).
+    /// A sampler for `t_eval` (increasing), into a vector.
     pub fn new(t_eval: &'a [f64]) -> Self {
         Sampler { t_eval, out: Vec::with_capacity(t_eval.len()) }
     }
 }
 
-impl<const N: usize, M> Observer<N, M> for Sampler<'_, N> {
+impl<const N: usize, M, S: SampleStore<N>> Observer<N, M> for Sampler<'_, N, S> {
     fn on_step(&mut self, s: &StepView<'_, N, M>) -> Control {
         while let Some(&t) = self.t_eval.get(self.out.len()) {
             if t > s.t1 {

@@ -24,7 +24,7 @@ fn ensemble(n: usize, seed: u64) -> (Vec<Slider>, Vec<State>) {
 impl<'a> Job<'a> {
     /// The end states of `sliders` from `y0s`, no samples.
     fn end_states(sliders: &'a [Slider], y0s: &'a [State], t_end: f64, tol: &'a Tolerances) -> Self {
-        Job { sliders, y0s, t_end, tol, t_eval: &[], samples: &mut [] }
+        Job { sliders, y0s, t_end, tol, t_eval: &[], samples: &mut [], counts: &mut [] }
     }
 }
 

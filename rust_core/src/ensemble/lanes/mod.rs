@@ -56,11 +56,12 @@ pub(crate) use slider::Coef;
 
 use super::{Task, TrajectoryResult};
 use crate::model::{ContactModel, FrictionLaw, Params, Slider, State};
+use crate::ode::lanes::Rows;
 use crate::ode::lanes::W;
 use crate::ode::Method;
 use crate::steady::Tolerances;
 use run::run_impl;
-use std::sync::atomic::AtomicUsize;
+use state::Feed;
 
 /// Whether [`run_lanes`] integrates sliders with these parameters (the contact models and
 /// friction laws it knows).
@@ -89,7 +90,7 @@ pub fn run_lanes(
     task: Task<'_>,
 ) -> Vec<TrajectoryResult> {
     check(sliders, y0s, method, &task);
-    let feed = AtomicUsize::new(0);
+    let feed = Feed::new(None);
     // Only a cancelled call leaves trajectories without a result.
     let done = dispatch(sliders, y0s, t_end, method, tol, task, &feed);
     crate::parallel::scatter(sliders.len(), done, |_| TrajectoryResult::not_started())
@@ -112,10 +113,54 @@ pub fn run_lanes_threads(
     task: Task<'_>,
     threads: Option<usize>,
 ) -> Vec<Result<TrajectoryResult, String>> {
+    run_lanes_fed(sliders, y0s, t_end, method, tol, task, threads, Feed::new(None))
+}
+
+/// [`run_lanes_threads`] of `Task::Sampled(t_eval)` with the samples written into `out`, a row of
+/// `6 t_eval.len()` values per trajectory (the results' `samples` left empty): those the run
+/// reached, NaN after them. Rows of trajectories that were not started or whose thread panicked
+/// are NaN.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn run_lanes_into(
+    sliders: &[Slider],
+    y0s: &[State],
+    t_end: f64,
+    method: Method,
+    tol: &Tolerances,
+    t_eval: &[f64],
+    threads: Option<usize>,
+    out: &mut [f64],
+) -> Vec<Result<TrajectoryResult, String>> {
+    let stride = 6 * t_eval.len();
+    assert_eq!(out.len(), sliders.len() * stride, "run_lanes: one row of samples per slider");
+    if stride == 0 {
+        return run_lanes_threads(sliders, y0s, t_end, method, tol, Task::Sampled(t_eval), threads);
+    }
+    let rows = Rows::new(out, stride);
+    let feed = Feed::new(Some(rows));
+    let res = run_lanes_fed(sliders, y0s, t_end, method, tol, Task::Sampled(t_eval), threads, feed);
+    for (r, row) in res.iter().zip(out.chunks_exact_mut(stride)) {
+        if r.is_err() || matches!(r, Ok(x) if x.run.failure == Some(crate::status::Failure::NotStarted)) {
+            row.fill(f64::NAN);
+        }
+    }
+    res
+}
+
+#[allow(clippy::too_many_arguments)]
+fn run_lanes_fed(
+    sliders: &[Slider],
+    y0s: &[State],
+    t_end: f64,
+    method: Method,
+    tol: &Tolerances,
+    task: Task<'_>,
+    threads: Option<usize>,
+    feed: Feed<'_>,
+) -> Vec<Result<TrajectoryResult, String>> {
     check(sliders, y0s, method, &task);
     let n = sliders.len();
     let nthreads = threads.unwrap_or_else(crate::parallel::default_threads).max(1).min(n.div_ceil(W).max(1));
-    let feed = AtomicUsize::new(0);
     let workers: Vec<usize> = (0..nthreads).collect();
     let parts = crate::parallel::par_map_or(
         &workers,
@@ -166,7 +211,7 @@ fn dispatch(
     method: Method,
     tol: &Tolerances,
     task: Task<'_>,
-    feed: &AtomicUsize,
+    feed: &Feed<'_>,
 ) -> Vec<(usize, TrajectoryResult)> {
     let Some(first) = sliders.first() else { return Vec::new() };
     let uni = first.p.contact == ContactModel::Unilateral;
@@ -195,7 +240,7 @@ fn dispatch_cpu<const UNI: bool, const COUL: bool, const M8: bool>(
     t_end: f64,
     tol: &Tolerances,
     task: Task<'_>,
-    feed: &AtomicUsize,
+    feed: &Feed<'_>,
 ) -> Vec<(usize, TrajectoryResult)> {
     #[cfg(target_arch = "x86_64")]
     {
@@ -219,7 +264,7 @@ unsafe fn run_avx512<const UNI: bool, const COUL: bool, const M8: bool>(
     t_end: f64,
     tol: &Tolerances,
     task: Task<'_>,
-    feed: &AtomicUsize,
+    feed: &Feed<'_>,
 ) -> Vec<(usize, TrajectoryResult)> {
     run_impl::<UNI, COUL, M8>(sliders, y0s, t_end, tol, task, feed)
 }
@@ -232,7 +277,7 @@ unsafe fn run_avx2<const UNI: bool, const COUL: bool, const M8: bool>(
     t_end: f64,
     tol: &Tolerances,
     task: Task<'_>,
-    feed: &AtomicUsize,
+    feed: &Feed<'_>,
 ) -> Vec<(usize, TrajectoryResult)> {
     run_impl::<UNI, COUL, M8>(sliders, y0s, t_end, tol, task, feed)
 }

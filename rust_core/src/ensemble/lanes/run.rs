@@ -3,7 +3,7 @@
 //! their scalar side (the scalar driver's event code, observers, the end of a run).
 
 use super::slider::{events_lanes, hidden_crossings, Coef, SliderRhs, EV_COMPS, EV_COMPS_CONST, NE};
-use super::state::{finish, refill, sync_from_side, sync_to_side, Input, Lanes, Side, Watch};
+use super::state::{finish, refill, sync_from_side, sync_to_side, Feed, Input, Lanes, Side, Watch};
 use crate::cancel;
 use crate::ensemble::{Task, TrajectoryResult};
 use crate::model::{event, idx, ContactMode, Slider, State};
@@ -19,7 +19,6 @@ use crate::ode::lanes::{
 use crate::ode::stepper::StepDense;
 use crate::ode::{Control, Observer, OdeSystem, Options, Outcome, StepView, MAX_EVENTS};
 use crate::steady::Tolerances;
-use std::sync::atomic::AtomicUsize;
 
 /// The portable path (the tests check that the SIMD copies agree bitwise).
 #[inline(always)]
@@ -29,7 +28,7 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
     t_end: f64,
     tol: &Tolerances,
     task: Task<'_>,
-    feed: &AtomicUsize,
+    feed: &Feed<'_>,
 ) -> Vec<(usize, TrajectoryResult)> {
     let (t_end, tol) = match task {
         Task::Steady { opts, .. } => (opts.t_max, opts.tol),

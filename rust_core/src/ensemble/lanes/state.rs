@@ -6,8 +6,8 @@ use super::slider::{Coef, NE};
 use crate::ensemble::{Task, TrajectoryResult};
 use crate::model::{idx, ContactMode, Slider, State};
 use crate::ode::controller::initial_step;
-use crate::ode::lanes::{L, LN_ERR_FLOOR, V6, W};
-use crate::ode::{Control, Observer, OdeSystem, Options, Outcome, Sampler, Stats, StepView, MAX_EVENTS};
+use crate::ode::lanes::{Row, Rows, L, LN_ERR_FLOOR, V6, W};
+use crate::ode::{Control, Observer, OdeSystem, Options, Outcome, SampleStore, Sampler, Stats, StepView, MAX_EVENTS};
 use crate::steady::{
     end_status, options_for, run_failure, status_of, summarize, Extremes, ExtremesObserver, RunResult, SteadyObserver,
     SteadyOptions, Tolerances,
@@ -17,7 +17,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 /// What a lane's observer watches.
 pub(super) enum Watch<'a> {
     Nothing,
-    Sample(Sampler<'a, 6>),
+    Sample(Sampler<'a, 6, Store<'a>>),
     Steady(Box<SteadyObserver>, SteadyOptions),
     Log(Vec<(usize, f64)>),
 }
@@ -39,6 +39,43 @@ impl Observer<6, ContactMode> for Watch<'_> {
             Watch::Steady(o, _) => o.on_event(i, t, y, before, after),
             _ => Control::Continue,
         }
+    }
+}
+
+/// Where a lane's samples go: a vector for the result, or the trajectory's row of the caller's
+/// buffer.
+pub(super) enum Store<'a> {
+    Own(Vec<State>),
+    Row(Row<'a>),
+}
+
+impl SampleStore<6> for Store<'_> {
+    #[inline]
+    fn len(&self) -> usize {
+        match self {
+            Store::Own(v) => v.len(),
+            Store::Row(r) => r.len(),
+        }
+    }
+    #[inline]
+    fn push(&mut self, v: State) {
+        match self {
+            Store::Own(o) => o.push(v),
+            Store::Row(r) => r.push(v),
+        }
+    }
+}
+
+/// The trajectories of a call: the index of the next to start (shared by the workers of a
+/// threaded call), and the rows their samples go to where the caller gave a buffer.
+pub(crate) struct Feed<'r> {
+    pub(crate) next: AtomicUsize,
+    pub(crate) rows: Option<Rows<'r>>,
+}
+
+impl<'r> Feed<'r> {
+    pub(crate) fn new(rows: Option<Rows<'r>>) -> Self {
+        Feed { next: AtomicUsize::new(0), rows }
     }
 }
 
@@ -96,8 +133,8 @@ pub(super) struct Input<'a, 'b> {
     pub(super) t_end: f64,
     pub(super) tol: Tolerances,
     pub(super) task: Task<'a>,
-    /// Index of the next trajectory to start (shared by the workers of a threaded call).
-    pub(super) feed: &'b AtomicUsize,
+    /// The next trajectory to start and where samples go.
+    pub(super) feed: &'b Feed<'a>,
 }
 
 pub(super) fn sync_to_side(min_n: &L, max_gap: &L, min_vr: &L, max_z: &L, l: usize, sd: &mut Side<'_>) {
@@ -164,11 +201,13 @@ pub(super) fn finish(
 fn conclude(run: RunResult, sd: &mut Side<'_>) -> TrajectoryResult {
     let mut res = TrajectoryResult { run, samples: Vec::new(), summary: None, events: Vec::new() };
     match std::mem::replace(&mut sd.obs.inner, Watch::Nothing) {
-        Watch::Sample(s) => {
-            let mut v = s.out;
-            v.resize(s.t_eval.len(), State::repeat(f64::NAN));
-            res.samples = v;
-        }
+        Watch::Sample(s) => match s.out {
+            Store::Own(mut v) => {
+                v.resize(s.t_eval.len(), State::repeat(f64::NAN));
+                res.samples = v;
+            }
+            Store::Row(r) => r.finish(),
+        },
         Watch::Steady(o, opts) => res.summary = Some(Box::new(summarize(sd.s, &res.run, &o.w, &opts))),
         Watch::Log(v) => res.events = v,
         Watch::Nothing => {}
@@ -201,7 +240,7 @@ fn idle(ln: &mut Lanes<'_>, l: usize) {
 pub(super) fn refill<'a>(ln: &mut Lanes<'a>, l: usize, inp: &Input<'a, '_>, out: &mut Vec<(usize, TrajectoryResult)>) {
     loop {
         // The next trajectory of the call, shared by every worker of it.
-        let i = inp.feed.fetch_add(1, Ordering::Relaxed);
+        let i = inp.feed.next.fetch_add(1, Ordering::Relaxed);
         if i >= inp.sliders.len() {
             break;
         }
@@ -211,7 +250,13 @@ pub(super) fn refill<'a>(ln: &mut Lanes<'a>, l: usize, inp: &Input<'a, '_>, out:
         let mode = s.mode_at(&y0);
         let watch = match inp.task {
             Task::Final => Watch::Nothing,
-            Task::Sampled(te) => Watch::Sample(Sampler::new(te)),
+            Task::Sampled(te) => {
+                let out = match &inp.feed.rows {
+                    Some(rows) => Store::Row(rows.take(i)),
+                    None => Store::Own(Vec::with_capacity(te.len())),
+                };
+                Watch::Sample(Sampler { t_eval: te, out })
+            }
             Task::Steady { opts, decay } => {
                 let o = match decay {
                     Some(d) => d[i].apply(opts),

@@ -345,10 +345,10 @@ fn results_do_not_depend_on_the_batch() {
                 assert_eq!(bits(&rp[j]), bits(&all[k]), "{name} permuted #{k}");
             }
             let portable = match (s[0].p.contact == ContactModel::Unilateral, method == Method::Dop853) {
-                (true, false) => sorted(run_impl::<true, false, false>(&s, &y0, 0.1, &t, task, &AtomicUsize::new(0))),
-                (false, false) => sorted(run_impl::<false, false, false>(&s, &y0, 0.1, &t, task, &AtomicUsize::new(0))),
-                (true, true) => sorted(run_impl::<true, false, true>(&s, &y0, 0.1, &t, task, &AtomicUsize::new(0))),
-                (false, true) => sorted(run_impl::<false, false, true>(&s, &y0, 0.1, &t, task, &AtomicUsize::new(0))),
+                (true, false) => sorted(run_impl::<true, false, false>(&s, &y0, 0.1, &t, task, &Feed::new(None))),
+                (false, false) => sorted(run_impl::<false, false, false>(&s, &y0, 0.1, &t, task, &Feed::new(None))),
+                (true, true) => sorted(run_impl::<true, false, true>(&s, &y0, 0.1, &t, task, &Feed::new(None))),
+                (false, true) => sorted(run_impl::<false, false, true>(&s, &y0, 0.1, &t, task, &Feed::new(None))),
             };
             for i in 0..s.len() {
                 assert_eq!(bits(&portable[i]), bits(&all[i]), "{name} portable #{i}");
