@@ -54,8 +54,8 @@ use crate::ode::dop853::Dop853Dense;
 use crate::ode::dopri5::Dopri5Dense;
 use crate::ode::events::locate;
 use crate::ode::lanes::{
-    dop853_dense, dop853_step, dopri5_dense, dopri5_step, each6, exp_lanes, lane_state, ln_lanes, sample_lane, splat,
-    LaneRhs, Row, ALL_COMPS, ALPHA, ALPHA8, BETA, L, LN_ERR_FLOOR, LN_SAFETY, V6, W,
+    dop853_dense_into, dop853_step, dopri5_dense_into, dopri5_step, each6, exp_lanes, lane_state, ln_lanes,
+    sample_lane, splat, LaneDense, LaneRhs, Row, ALL_COMPS, ALPHA, ALPHA8, BETA, L, LN_ERR_FLOOR, LN_SAFETY, V6, W,
 };
 use crate::ode::stepper::StepDense;
 use crate::ode::{Dense, Method, Options, Stats};
@@ -279,6 +279,7 @@ fn run_impl<const M8: bool>(job: Job<'_>) -> Vec<RunResult> {
     let mut fz = zero;
     let mut fz_scratch = zero;
     let mut extra = [[zero; 6]; 3];
+    let mut dense = LaneDense::<6>::new();
 
     while ln.who.iter().any(|&w| w != usize::MAX) {
         rounds += 1;
@@ -391,18 +392,20 @@ fn run_impl<const M8: bool>(job: Job<'_>) -> Vec<RunResult> {
         // sample time (before an escape cuts the step: the crossing is located on it) ----
         let due: [bool; W] =
             std::array::from_fn(|l| sampled & ok[l] & (ln.who[l] != usize::MAX) & (ln.t[l] >= next_t[l]));
-        let dense = if due.iter().any(|&d| d) {
-            Some(if M8 {
+        // Built into one buffer kept across steps (an interpolant built and moved per step cost
+        // a tenth of a sampled run in copies and zeroing).
+        let have_dense = due.iter().any(|&d| d);
+        if have_dense {
+            if M8 {
                 for l in 0..W {
                     ln.n_extra[l] += 3 * due[l] as u64;
                 }
-                dop853_dense(&mut BatchRhs { c, fz: &mut fz_scratch }, &ALL_COMPS, y, &yn, k1, &hh, &kk, &mut extra)
+                let f = &mut BatchRhs { c, fz: &mut fz_scratch };
+                dop853_dense_into(&mut dense, f, &ALL_COMPS, y, &yn, k1, &hh, &kk, &mut extra);
             } else {
-                dopri5_dense(&ALL_COMPS, y, &yn, [k1, &k[1], &k[2], &k[3], &k[4], &k[5]], &hh)
-            })
-        } else {
-            None
-        };
+                dopri5_dense_into(&mut dense, &ALL_COMPS, y, &yn, [k1, &k[1], &k[2], &k[3], &k[4], &k[5]], &hh);
+            }
+        }
 
         // Off the common path: only when some lane ends this step.
         let attention = ended.iter().fold(false, |a, &b| a | b);
@@ -416,7 +419,8 @@ fn run_impl<const M8: bool>(job: Job<'_>) -> Vec<RunResult> {
             let esc = Escapes { c, who: &ln.who, y: &ln.y, stages: &stages, step: &step, sliders, event_tol, m8: M8 };
             locate_escapes(&esc, &mut yn, &mut fz, &mut ln.t, &mut ln.n_extra);
         }
-        if let Some(d) = &dense {
+        if have_dense {
+            let d = &dense;
             for l in 0..W {
                 if !due[l] {
                     continue;

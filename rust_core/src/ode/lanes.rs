@@ -474,6 +474,11 @@ pub(crate) struct LaneDense<const C: usize> {
 }
 
 impl<const C: usize> LaneDense<C> {
+    /// An interpolant to be filled by the `*_into` builders (zeros until then).
+    pub(crate) fn new() -> Self {
+        LaneDense { y0: [[0.0; W]; C], c: [[[0.0; W]; C]; 7], eight: false }
+    }
+
     /// Component `j` of lane `l` at `x` (`x1 = 1 - x`): the scalar interpolants' formula,
     /// operation for operation (DP5's `y0 + (dy + (bspl + (r4 + r5 (1-x)) x) (1-x)) x`,
     /// DOP853's `contd8` Horner scheme).
@@ -522,11 +527,19 @@ impl<const C: usize> LaneDense<C> {
 }
 
 /// The DP5 interpolant of each lane's step from `y0` to `y1`, for the components `comps`, from the
-/// stages `k = [k1, k3, k4, k5, k6, k7]`.
+/// stages `k = [k1, k3, k4, k5, k6, k7]`, into `d` (a buffer the driver keeps across steps:
+/// an interpolant built and moved per step cost copies and zeroing).
 #[inline(always)]
-pub(crate) fn dopri5_dense<const C: usize>(comps: &[usize; C], y0: &V6, y1: &V6, k: [&V6; 6], hh: &L) -> LaneDense<C> {
+pub(crate) fn dopri5_dense_into<const C: usize>(
+    d: &mut LaneDense<C>,
+    comps: &[usize; C],
+    y0: &V6,
+    y1: &V6,
+    k: [&V6; 6],
+    hh: &L,
+) {
     let [k1, k3, k4, k5, k6, k7] = k;
-    let mut d = LaneDense { y0: [[0.0; W]; C], c: [[[0.0; W]; C]; 7], eight: false };
+    d.eight = false;
     for (j, &i) in comps.iter().enumerate() {
         for l in 0..W {
             let h = hh[l];
@@ -544,13 +557,13 @@ pub(crate) fn dopri5_dense<const C: usize>(comps: &[usize; C], y0: &V6, y1: &V6,
                 + (D7 * h) * k7[i][l];
         }
     }
-    d
 }
 
 /// The DOP853 interpolant of each lane's step from `y` to `y1`, for the components `comps`: the
 /// three extra stages (three evaluations of `rhs`, left in `extra` for the cold path's full
 /// interpolant), then the seven coefficients of each component. `k1` and `kk` are the stages of
-/// [`dop853_step`].
+/// [`dop853_step`]. (Tests; the drivers build into a buffer with [`dop853_dense_into`].)
+#[cfg(test)]
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn dop853_dense<F: LaneRhs, const C: usize>(
@@ -563,6 +576,26 @@ pub(crate) fn dop853_dense<F: LaneRhs, const C: usize>(
     kk: &[V6; 16],
     extra: &mut [V6; 3],
 ) -> LaneDense<C> {
+    let mut d = LaneDense::new();
+    dop853_dense_into(&mut d, rhs, comps, y, y1, k1, hh, kk, extra);
+    d
+}
+
+/// The DOP853 interpolant of each lane's step (the three extra stages into `extra`, then the
+/// coefficients, see [`dop853_poly_into`]) into `d`, a buffer the driver keeps across steps.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn dop853_dense_into<F: LaneRhs, const C: usize>(
+    d: &mut LaneDense<C>,
+    rhs: &mut F,
+    comps: &[usize; C],
+    y: &V6,
+    y1: &V6,
+    k1: &V6,
+    hh: &L,
+    kk: &[V6; 16],
+    extra: &mut [V6; 3],
+) {
     let mut ys = [[0.0; W]; 6];
     let [k14, k15, k16] = extra;
     let k = |j: usize| &kk[j - 1];
@@ -590,14 +623,16 @@ pub(crate) fn dop853_dense<F: LaneRhs, const C: usize>(
         &mut ys,
     );
     rhs.eval(&ys, k16);
-    dop853_poly(comps, y, y1, k1, hh, kk, extra)
+    dop853_poly_into(d, comps, y, y1, k1, hh, kk, extra);
 }
 
 /// DOP853's interpolant on the lanes from the stages and the three extra stages `extra` (see
-/// [`dop853_dense`]), for the components `comps`: Hairer's `contd8` coefficients, operation for
-/// operation those of the scalar `dop853::poly`.
+/// [`dop853_dense_into`]), for the components `comps`, into `d`: Hairer's `contd8` coefficients, operation
+/// for operation those of the scalar `dop853::poly`.
 #[inline(always)]
-pub(crate) fn dop853_poly<const C: usize>(
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn dop853_poly_into<const C: usize>(
+    d: &mut LaneDense<C>,
     comps: &[usize; C],
     y: &V6,
     y1: &V6,
@@ -605,7 +640,7 @@ pub(crate) fn dop853_poly<const C: usize>(
     hh: &L,
     kk: &[V6; 16],
     extra: &[V6; 3],
-) -> LaneDense<C> {
+) {
     let k = |j: usize| &kk[j - 1];
     let [k14, k15, k16] = extra;
     let st = [k1, k(6), k(7), k(8), k(9), k(10), k(11), k(12), k(13), k14, k15, k16];
@@ -615,7 +650,7 @@ pub(crate) fn dop853_poly<const C: usize>(
         [D6_1, D6_6, D6_7, D6_8, D6_9, D6_10, D6_11, D6_12, D6_13, D6_14, D6_15, D6_16],
         [D7_1, D7_6, D7_7, D7_8, D7_9, D7_10, D7_11, D7_12, D7_13, D7_14, D7_15, D7_16],
     ];
-    let mut d = LaneDense { y0: [[0.0; W]; C], c: [[[0.0; W]; C]; 7], eight: true };
+    d.eight = true;
     for (j, &i) in comps.iter().enumerate() {
         for l in 0..W {
             let h = hh[l];
@@ -642,5 +677,4 @@ pub(crate) fn dop853_poly<const C: usize>(
         }
         d.c[3 + r] = s;
     }
-    d
 }

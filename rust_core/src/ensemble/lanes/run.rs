@@ -13,8 +13,8 @@ use crate::ode::dopri5::Dopri5Dense;
 use crate::ode::events::{step_events, turn_point, StepEnd};
 use crate::ode::lanes::LaneDense;
 use crate::ode::lanes::{
-    cross, dop853_dense, dop853_poly, dop853_step, dopri5_dense, dopri5_step, each6, exp_lanes, lane_state, ln_lanes,
-    sample_lane, splat, ALL_COMPS, ALPHA, ALPHA8, BETA, L, LN_ERR_FLOOR, LN_SAFETY, V6, W,
+    cross, dop853_dense_into, dop853_poly_into, dop853_step, dopri5_dense_into, dopri5_step, each6, exp_lanes,
+    lane_state, ln_lanes, sample_lane, splat, ALL_COMPS, ALPHA, ALPHA8, BETA, L, LN_ERR_FLOOR, LN_SAFETY, V6, W,
 };
 use crate::ode::stepper::StepDense;
 use crate::ode::{Control, Observer, OdeSystem, Options, Outcome, StepView, MAX_EVENTS};
@@ -76,6 +76,14 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
     let mut kk = [[zero; 6]; 16];
     // DOP853's three extra stages of the interpolant (unilateral: built on the lanes every step).
     let mut extra = [[zero; 6]; 3];
+    // The step's interpolants, built into buffers kept across steps (built and moved per step,
+    // they cost copies and zeroing): for the hidden-crossing check (the components its event
+    // functions read), for samples, and DOP853's of all components shared by samples and the cold
+    // path (`full`, valid where `full_built`).
+    let mut ev5 = LaneDense::<5>::new();
+    let mut ev3 = LaneDense::<3>::new();
+    let mut samp = LaneDense::<6>::new();
+    let mut full = LaneDense::<6>::new();
     let mut yn = [zero; 6];
     let mut fzl = zero;
     let mut fzl_scratch = zero;
@@ -200,20 +208,21 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
             }
             // One body for both component sets (their count is a const generic).
             macro_rules! check {
-                ($comps:expr) => {{
-                    let dense = if M8 {
+                ($comps:expr, $dense:expr) => {{
+                    let dense = $dense;
+                    if M8 {
                         let mut f = SliderRhs::<UNI, COUL> { c, contact: cm, fzl: &mut fzl_scratch };
-                        dop853_dense(&mut f, $comps, y, &yn, k1, &hh, &kk, &mut extra)
+                        dop853_dense_into(dense, &mut f, $comps, y, &yn, k1, &hh, &kk, &mut extra);
                     } else {
-                        dopri5_dense($comps, y, &yn, [k1, &k[1], &k[2], &k[3], &k[4], &k[5]], &hh)
-                    };
-                    hidden_crossings::<COUL, _>(c, &dense, &ln.g0, &g1, &ln.pend, &ok, &turn, &mut hidden);
+                        dopri5_dense_into(dense, $comps, y, &yn, [k1, &k[1], &k[2], &k[3], &k[4], &k[5]], &hh);
+                    }
+                    hidden_crossings::<COUL, _>(c, dense, &ln.g0, &g1, &ln.pend, &ok, &turn, &mut hidden);
                 }};
             }
             if COUL {
-                check!(&EV_COMPS)
+                check!(&EV_COMPS, &mut ev5)
             } else {
-                check!(&EV_COMPS_CONST)
+                check!(&EV_COMPS_CONST, &mut ev3)
             }
         }
 
@@ -311,28 +320,29 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
         // DOP853's interpolant of every lane, all components, from the extra stages the
         // hidden-crossing check built this step: built at most once per step, for the samples
         // here or the cold path below (which reads only lanes it leaves uncommitted).
-        let mut full: Option<LaneDense<6>> = None;
+        let mut full_built = false;
         let checked = need.iter().any(|&x| x);
         if sampled {
             let due: [bool; W] =
                 std::array::from_fn(|l| acc_ok[l] & !busy[l] & !last[l] & (t_new[l] >= ln.next_sample[l]));
             if due.iter().any(|&d| d) {
-                let built;
                 let dense: &LaneDense<6> = if M8 {
                     for l in 0..W {
                         ln.n_extra[l] += 3 * (due[l] & !(ok[l] & need[l])) as u64;
                     }
                     if checked {
-                        full.get_or_insert_with(|| dop853_poly(&ALL_COMPS, &ln.y, &yn, &ln.f, &hh, &kk, &extra))
+                        dop853_poly_into(&mut full, &ALL_COMPS, &ln.y, &yn, &ln.f, &hh, &kk, &extra);
+                        full_built = true;
+                        &full
                     } else {
                         let mut f = SliderRhs::<UNI, COUL> { c: &ln.c, contact: &ln.contact, fzl: &mut fzl_scratch };
-                        built = dop853_dense(&mut f, &ALL_COMPS, &ln.y, &yn, &ln.f, &hh, &kk, &mut extra);
-                        &built
+                        dop853_dense_into(&mut samp, &mut f, &ALL_COMPS, &ln.y, &yn, &ln.f, &hh, &kk, &mut extra);
+                        &samp
                     }
                 } else {
                     let st = [&ln.f, &k[1], &k[2], &k[3], &k[4], &k[5]];
-                    built = dopri5_dense(&ALL_COMPS, &ln.y, &yn, st, &hh);
-                    &built
+                    dopri5_dense_into(&mut samp, &ALL_COMPS, &ln.y, &yn, st, &hh);
+                    &samp
                 };
                 for l in 0..W {
                     if due[l] {
@@ -384,8 +394,9 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
         if attn.iter().any(|&a| a) {
             // A lane whose extra stages the hidden-crossing check built (and counted) takes its
             // coefficients from `full`, the same numbers the scalar `Dop853Dense` would compute.
-            if M8 && UNI && full.is_none() && (0..W).any(|l| attn[l] && need[l]) {
-                full = Some(dop853_poly(&ALL_COMPS, &ln.y, &yn, &ln.f, &hh, &kk, &extra));
+            if M8 && UNI && !full_built && (0..W).any(|l| attn[l] && need[l]) {
+                dop853_poly_into(&mut full, &ALL_COMPS, &ln.y, &yn, &ln.f, &hh, &kk, &extra);
+                full_built = true;
             }
             for l in 0..W {
                 if !attn[l] {
@@ -416,7 +427,7 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
                 }
                 let span = ((t_start[l], &y0), (t_new[l], &y1));
                 let ev: StepEnd<6, ContactMode> = if M8 {
-                    let dense = match full.as_ref().filter(|_| need[l]) {
+                    let dense = match (full_built && need[l]).then_some(&full) {
                         Some(full) => {
                             let c = full.coefficients_of(l).map(State::from);
                             let ends = (k1l, lane_state(fnew, l));
