@@ -147,10 +147,13 @@ pub fn run_bilateral_batch_sampled(
     let nt = t_eval.len();
     let mut flat = vec![0.0; sliders.len() * nt * 6];
     let runs = run_bilateral_batch_into(sliders, y0s, t_end, method, tol, t_eval, &mut flat);
-    let rows = flat.chunks_exact(6 * nt.max(1));
-    let samples =
-        rows.map(|r| r.chunks_exact(6).map(State::from_column_slice).collect()).chain(std::iter::repeat(Vec::new()));
+    let samples = flat.chunks_exact(6 * nt.max(1)).map(states_of).chain(std::iter::repeat(Vec::new()));
     runs.into_iter().zip(samples).collect()
+}
+
+/// The states of a row of samples (6 values each).
+pub(crate) fn states_of(row: &[f64]) -> Vec<State> {
+    row.chunks_exact(6).map(State::from_column_slice).collect()
 }
 
 /// [`run_bilateral_batch_sampled`] writing the samples into `out`, a row of `6 t_eval.len()`

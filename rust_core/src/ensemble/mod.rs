@@ -209,7 +209,7 @@ pub fn run_on(
             if stride > 0 {
                 for (o, row) in out.iter_mut().zip(flat.chunks_exact(stride)) {
                     if let Ok(x) = o {
-                        x.samples = row.chunks_exact(6).map(State::from_column_slice).collect();
+                        x.samples = batch::states_of(row);
                     }
                 }
             }

@@ -559,30 +559,10 @@ pub(crate) fn dopri5_dense_into<const C: usize>(
     }
 }
 
-/// The DOP853 interpolant of each lane's step from `y` to `y1`, for the components `comps`: the
-/// three extra stages (three evaluations of `rhs`, left in `extra` for the cold path's full
-/// interpolant), then the seven coefficients of each component. `k1` and `kk` are the stages of
-/// [`dop853_step`]. (Tests; the drivers build into a buffer with [`dop853_dense_into`].)
-#[cfg(test)]
-#[inline(always)]
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn dop853_dense<F: LaneRhs, const C: usize>(
-    rhs: &mut F,
-    comps: &[usize; C],
-    y: &V6,
-    y1: &V6,
-    k1: &V6,
-    hh: &L,
-    kk: &[V6; 16],
-    extra: &mut [V6; 3],
-) -> LaneDense<C> {
-    let mut d = LaneDense::new();
-    dop853_dense_into(&mut d, rhs, comps, y, y1, k1, hh, kk, extra);
-    d
-}
-
-/// The DOP853 interpolant of each lane's step (the three extra stages into `extra`, then the
-/// coefficients, see [`dop853_poly_into`]) into `d`, a buffer the driver keeps across steps.
+/// The DOP853 interpolant of each lane's step from `y` to `y1`, for the components `comps`, into
+/// `d` (a buffer the driver keeps across steps): the three extra stages (three evaluations of
+/// `rhs`, left in `extra` for the cold path's full interpolant), then the seven coefficients of
+/// each component ([`dop853_poly_into`]). `k1` and `kk` are the stages of [`dop853_step`].
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn dop853_dense_into<F: LaneRhs, const C: usize>(

@@ -510,7 +510,7 @@ unsafe fn kernels_avx512() -> String {
 
 #[inline(always)]
 fn kernels() -> String {
-    use crate::ode::lanes::{dop853_dense, dop853_step, dopri5_step, V6};
+    use crate::ode::lanes::{dop853_dense_into, dop853_step, dopri5_step, LaneDense, V6};
     use std::time::Instant;
     let s = Slider::new(Params::seed()).unwrap();
     let mut c = Coef::zero();
@@ -550,10 +550,11 @@ fn kernels() -> String {
     }
     let d8 = t0.elapsed().as_secs_f64() / n as f64 * 1e9;
     let mut extra = [[[0.0; W]; 6]; 3];
+    let mut d = LaneDense::new();
     let t0 = Instant::now();
     for _ in 0..n {
         let mut f = super::slider::SliderRhs::<false, false> { c: &c, contact: &contact, fzl: &mut fzl };
-        let d = dop853_dense(&mut f, &super::slider::EV_COMPS, &y, &yn, &k1, &hh, &kk, &mut extra);
+        dop853_dense_into(&mut d, &mut f, &super::slider::EV_COMPS, &y, &yn, &k1, &hh, &kk, &mut extra);
         acc += d.eval(0.5)[0][0];
         y[0][0] += 1e-30;
     }
