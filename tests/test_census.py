@@ -177,8 +177,9 @@ def test_irregular_motion_stops_early_with_the_same_fractions():
     """
     k = 64
     m = ts.apparatus_model(20.7692, 0.1099, 0.3, base=SEED_U)
-    on, off = ts.census(m, samples=k), ts.census(m, samples=k, irregular_block=0)
+    on, off = ts.census(m, samples=k, recurrence=False), ts.census(m, samples=k, irregular_block=0)
     assert on.attrs["irregular_block"] == 256 and off.attrs["irregular_block"] == 0
+    assert on.attrs["pilots"] == off.attrs["pilots"] == k and not on.recurrence.any()
     _within_3_se(on, off, k)
     irr_on, irr_off = on.attractor_reached.values == 2, off.attractor_reached.values == 2
     assert irr_on.sum() >= k // 3 and irr_off.sum() >= k // 3  # the comparison covers many early stops
@@ -192,17 +193,48 @@ def test_irregular_motion_stops_early_with_the_same_fractions():
     np.testing.assert_array_equal(on.t_end.values[settled], off.t_end.values[settled])
 
 
+def test_recurrence_on_a_pilots_attractor_stops_irregular_samples_after_one_block_with_the_same_fractions():
+    """Samples after the pilots stop on one block that matches a pilot's irregular attractor.
+
+    The same point as above: its second pilot ends stationary-irregular, so most later irregular
+    samples need one block of 256 sections (at least 264 crossings: above 0.9 s at about 275 per
+    second) instead of three. Against the same census deciding every sample by its own three
+    blocks, the pilots and every sample that is not irregular in either end exactly alike, each
+    recurrence stop comes earlier on a sample that census also calls irregular, and the fractions
+    agree within 3 standard errors of their difference.
+    """
+    k = 64
+    m = ts.apparatus_model(20.7692, 0.1099, 0.3, base=SEED_U)
+    rec, own = ts.census(m, samples=k), ts.census(m, samples=k, recurrence=False)
+    assert rec.attrs["pilots"] == _census.PILOTS == 2
+    _within_3_se(rec, own, k)
+    pil = slice(0, _census.PILOTS)
+    assert (rec.attractor_reached.values[pil] == 2).any()  # a pilot established the attractor
+    np.testing.assert_array_equal(rec.t_end.values[pil], own.t_end.values[pil])
+    assert not rec.recurrence.values[pil].any()
+    r = rec.recurrence.values == 1
+    assert r.sum() >= k // 4, r.sum()
+    assert np.all(rec.attractor_reached.values[r] == 2) and np.all(own.attractor_reached.values[r] == 2)
+    assert np.all(rec.t_end.values[r] < own.t_end.values[r])
+    assert rec.t_end.values[r].min() > 0.9, rec.t_end.values[r].min()
+    # Right-hand sides saved: the recurrence samples cost less than half of their own-test runs.
+    assert rec.n_rhs.values[r].sum() < 0.6 * own.n_rhs.values[r].sum()
+    neither = (rec.attractor_reached.values != 2) & (own.attractor_reached.values != 2)
+    np.testing.assert_array_equal(rec.t_end.values[neither], own.t_end.values[neither])
+    np.testing.assert_array_equal(rec.attractor_reached.values[neither], own.attractor_reached.values[neither])
+
+
 def test_a_sweep_point_says_how_its_irregular_samples_were_decided():
-    # The reason counts the irregular samples stopped as stationary and those that reached t_max,
+    # The reason counts the irregular samples stopped as stationary, by recurrence, and those that reached t_max,
     # as the standalone census's per-sample end times tell (K = 16 at the point above).
     ds = ts.sweep(normal_load=[20.7692], arm_length=[0.1099], sliding_speed=[0.3], samples=16, progress=False)
     alone = ts.census(ts.apparatus_model(20.7692, 0.1099, 0.3, base=SEED_U), samples=16)
     irr = alone.attractor_reached.values == 2
     late = int(np.sum(alone.t_end.values[irr] >= alone.attrs["t_max"]))
-    assert irr.sum() >= 4, irr.sum()
-    assert f"irregular {irr.sum()}/16 ({irr.sum() - late} stationary, {late} at the census t_max)" in str(
-        ds.reason.item()
-    ), ds.reason.item()
+    known = int(alone.recurrence.values.sum())
+    assert irr.sum() >= 4 and known >= 1, (irr.sum(), known)
+    text = f"irregular {irr.sum()}/16 ({irr.sum() - late - known} stationary, {known} by recurrence on a pilot's "
+    assert text + f"attractor, {late} at the census t_max)" in str(ds.reason.item()), ds.reason.item()
 
 
 def test_the_return_to_sliding_is_measured_in_the_saddle_cycles_own_shape(seed64):

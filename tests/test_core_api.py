@@ -47,6 +47,17 @@ def test_the_exception_hierarchy():
                                    1e-6),
             r"method = \"euler\" is not valid: must be one of dopri5, dop853, rodas4",
         ),
+        (
+            lambda: _core.ensemble({}, "unilateral", "constant", [], np.zeros((1, 0)), np.zeros((1, 6)), 0.1, "dop853",
+                                   1e-6, kind="steady", irregular_block=256, known_irregular=np.zeros((1, 2, 7))),
+            r"known_irregular must be an \(1, 2, 7\) array whose rows are all NaN \(no fingerprint\) or finite values "
+            r">= 0 with a residual > 0; got shape \[1, 2, 7\]",
+        ),
+        (
+            lambda: _core.ensemble({}, "unilateral", "constant", [], np.zeros((2, 0)), np.zeros((2, 6)), 0.1, "dop853",
+                                   1e-6, kind="steady", known_irregular=np.full((1, 2, 7), np.nan)),
+            r"known_irregular must be an \(2, 2, 7\) array .* got shape \[1, 2, 7\]",
+        ),
     ],
 )
 def test_bad_input_raises_invalid_argument_naming_it(call, message):

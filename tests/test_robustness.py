@@ -120,3 +120,28 @@ def test_most_census_samples_compared_with_scipy_keep_their_fate(seed_census_fat
     assert robust.sum() >= 12, (ref, robust)
     names = {ts.ATTRACTOR_NAMES[a] for a in ref[robust]}
     assert {"sliding", "cycle"} <= names, (ref, robust)
+
+
+def test_the_recurrence_tests_pilot_is_irregular_under_moved_inputs():
+    # test_census.py::test_recurrence_on_a_pilots_attractor_stops_irregular_samples_after_one_block_...
+    # asserts that a pilot at 20.8 N, 11 cm ends irregular (and so establishes the attractor the
+    # later samples stop on). Its starts moved by +-1 and +-2 ulps, and rtol by +-1 %: the pilots'
+    # fates stand, and so does the number of samples stopped by recurrence (39 of 64 measured).
+    from conftest import moved
+    from tribosweep import _census
+
+    m = ts.apparatus_model(20.7692, 0.1099, 0.3, base=ts.SliderModel(contact="unilateral"))
+    ref = ts.census(m, samples=64)
+    pil = slice(0, _census.PILOTS)
+    assert (ref.attractor_reached.values[pil] == 2).any()
+    runs = [ts.census(m, samples=64, rtol=1e-6 * f) for f in RTOL_FACTORS]
+    orig = _census.starts
+    try:
+        for u in ULPS:
+            _census.starts = lambda *a, u=u, **kw: moved(orig(*a, **kw), u)
+            runs.append(ts.census(m, samples=64))
+    finally:
+        _census.starts = orig
+    for d in runs:
+        np.testing.assert_array_equal(d.attractor_reached.values[pil], ref.attractor_reached.values[pil])
+        assert int(d.recurrence.sum()) >= 64 // 4, int(d.recurrence.sum())

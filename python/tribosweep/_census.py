@@ -66,6 +66,21 @@ Early stops
     to sliding that came after a chaotic transient longer than the three blocks (about 6 s at
     130 Hz) are reported ``irregular``; no sample escapes either way. A transient's lifetime has no
     upper bound, so ``t_max`` = 30 s draws the same line later, not more truly.
+
+    Recurrence on a known attractor (the idea of Attractors.jl's recurrence method: a trajectory
+    that keeps visiting an attractor already found is on it). The first ``PILOTS`` (2) samples of
+    each point run first, with the stationarity test alone. Each one that ends irregular leaves its
+    fingerprint: the mean residual and each component's largest excursion over its three blocks.
+    The other samples then also stop as ``irregular`` on one block of their own that matches a
+    fingerprint within the same tolerances (25 % and 5 %, residual above the floor): one block
+    instead of three. The pilots are fixed samples of the point, so this depends on nothing but
+    the point. ``recurrence=False`` (or ``irregular_block=0``) turns it off. Measured on the default
+    sweep's 361 censused points at K = 16 (2026-11-26, 169 points with an irregular pilot): the
+    simulated time falls from 26,086 s to 20,903 s (right-hand sides 0.78x) and the 2,000-point
+    sweep from 7.8 s to 5.8 s on 2 cores; 3 of 5,776 labels change (2 cycles and 1 return to
+    sliding that came after a long chaotic transient are reported ``irregular``), no point's
+    fraction moves by 2 standard errors; against runs to ``t_max`` = 30 s, 67 labels differ (64
+    without recurrence) and the same 5 points move by more than 2 (none by 3).
 """
 
 from __future__ import annotations
@@ -90,6 +105,11 @@ CYCLE_TOL: float = 1e-2
 #: A returning sample stops once its motion is below this fraction of the saddle cycle's A1 (and
 #: half of |z_st|), and shrinking.
 RETURN_FRACTION: float = 0.4
+
+#: The first samples of each point (Halton indices 1, 2) are its pilots: run first, with the
+#: three-block stationarity test alone; their irregular attractors' fingerprints let the other
+#: samples stop on one matching block. As many as the core compares (``KNOWN_MAX``).
+PILOTS: int = 2
 
 _HALTON_BASES = (2, 3, 5, 7)
 
@@ -341,6 +361,7 @@ def run(
     saddle: np.ndarray | None = None,
     cycle_tol: float = CYCLE_TOL,
     irregular_block: int = DEFAULTS.irregular.block,
+    recurrence: bool = True,
 ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
     """Census of the points ``sel`` of a chunk: one batched call for every sample of every point.
 
@@ -369,26 +390,41 @@ def run(
     y0 = starts(sub, friction_law, samples, scale, eigenvalues)  # (m, K, 6)
     values = np.column_stack([np.asarray(point_params[k], dtype=np.float64)[sel] for k in names])
     decay = return_thresholds(sub, saddle)
-    res = _core.ensemble(
-        {k: float(v) for k, v in model_values.items()}, contact, friction_law, names,
-        np.repeat(values, samples, axis=0), np.ascontiguousarray(y0.reshape(m * samples, 6)), float(t_max),
-        integrator, float(rtol), atol=None if atol is None else np.asarray(atol, dtype=np.float64), threads=threads,
-        kind="steady", periodic_tol=float(periodic_tol), n_fourier=512,
-        decay_thresholds=np.ascontiguousarray(np.repeat(decay, samples, axis=0)),
-        watch_x=False,  # x is left out only where it is slaved (constant friction); the core decides
-        irregular_block=int(irregular_block),
-    )  # fmt: skip
-    outcome = np.asarray(res["outcome"]).reshape(m, samples)
-    status = np.asarray(res["status"]).reshape(m, samples)
+
+    def batch(cols: slice, known: np.ndarray | None) -> dict[str, np.ndarray]:
+        """The samples ``cols`` of every point, in one call; arrays shaped ``(m, k, ...)``."""
+        k = len(range(samples)[cols])
+        r = _core.ensemble(
+            {kk: float(v) for kk, v in model_values.items()}, contact, friction_law, names,
+            np.repeat(values, k, axis=0), np.ascontiguousarray(y0[:, cols].reshape(m * k, 6)), float(t_max),
+            integrator, float(rtol), atol=None if atol is None else np.asarray(atol, dtype=np.float64),
+            threads=threads, kind="steady", periodic_tol=float(periodic_tol), n_fourier=512,
+            decay_thresholds=np.ascontiguousarray(np.repeat(decay, k, axis=0)),
+            watch_x=False,  # x is left out only where it is slaved (constant friction); the core decides
+            irregular_block=int(irregular_block),
+            known_irregular=None if known is None else np.ascontiguousarray(np.repeat(known, k, axis=0)),
+        )  # fmt: skip
+        return {key: np.asarray(v).reshape((m, k) + np.shape(v)[1:]) for key, v in r.items()}
+
+    # Two phases: the pilots establish each point's irregular attractors; the other samples stop
+    # as soon as a block of their sections matches one (recurrence), instead of three blocks.
+    pilots = min(PILOTS, samples) if irregular_block > 0 and recurrence else samples
+    first = batch(slice(0, pilots), None)
+    if pilots < samples:
+        rest = batch(slice(pilots, samples), fingerprints(first))
+        res = {key: np.concatenate([first[key], rest[key]], axis=1) for key in first}
+    else:
+        res = first
+    outcome, status = res["outcome"], res["status"]
     attractor = np.vectorize(lambda o: _ATTRACTOR_OF[OUTCOME_NAMES[o]], otypes=[np.int64])(outcome)
     # A run that stopped at t_max is bounded motion (irregular) only if it was not a numerical failure.
     unsettled = outcome == OUTCOME_NAMES.index("unsettled")
     attractor[unsettled & (status != STATUS["not_converged"])] = -1
-    omega = np.asarray(res["omega"]).reshape(m, samples)
-    a1 = np.asarray(res["z1_amplitude"]).reshape(m, samples)
-    mult = np.asarray(res["multiplicity"]).reshape(m, samples)
-    off = np.asarray(res["fraction_off_disk"]).reshape(m, samples)
-    max_z = np.asarray(res["max_abs_z"]).reshape(m, samples)
+    omega = res["omega"]
+    a1 = res["z1_amplitude"]
+    mult = res["multiplicity"]
+    off = res["fraction_off_disk"]
+    max_z = res["max_abs_z"]
     cycle = np.full((m, samples), -1)
     k = len(ATTRACTOR_NAMES)
     for i in range(m):
@@ -421,11 +457,23 @@ def run(
     per_sample = {
         "outcome": outcome, "status": status, "attractor": attractor, "cycle": cycle, "omega": omega,
         "z1_amplitude": a1, "multiplicity": mult, "fraction_off_disk": off, "max_abs_z": max_z,
-        "t_end": np.asarray(res["t_end"]).reshape(m, samples),
-        "n_rhs": np.asarray(res["n_rhs"], dtype=np.int64).reshape(m, samples), "y0": y0,
-        "reason": np.asarray(res["reason"], dtype=str).reshape(m, samples),
+        "t_end": res["t_end"], "matched": res["irregular_matched"],
+        "n_rhs": res["n_rhs"].astype(np.int64), "y0": y0,
+        "reason": res["reason"].astype(str),
     }  # fmt: skip
     return out, per_sample
+
+
+def fingerprints(pilots: Mapping[str, np.ndarray]) -> np.ndarray:
+    """The fingerprints ``(m, PILOTS, 7)`` of the pilots that ended stationary-irregular (residual, then
+    the six largest excursions; NaN rows for the others), as the core's ``known_irregular``."""
+    res, peaks = pilots["irregular_residual"], pilots["irregular_peaks"]
+    m, k = res.shape
+    out = np.full((m, PILOTS, 7), np.nan)
+    own = np.isfinite(res) & ~pilots["irregular_matched"]
+    out[:, :k, 0] = np.where(own, res, np.nan)
+    out[:, :k, 1:] = np.where(own[..., None], peaks, np.nan)
+    return out
 
 
 def saddle_row(df: Mapping[str, np.ndarray], j: int, k: int) -> np.ndarray:
@@ -497,6 +545,7 @@ def census(
     cycle_tol: float = CYCLE_TOL,
     threads: int | None = None,
     irregular_block: int = DEFAULTS.irregular.block,
+    recurrence: bool = True,
 ):
     """Attractor census of one model: ``samples`` disturbances, each run to its attractor.
 
@@ -526,7 +575,11 @@ def census(
         Relative tolerance in frequency and first-harmonic amplitude within which cycles are one.
     irregular_block : int
         Sections per block of the stationarity test that stops sustained irregular motion before
-        ``t_max`` (0: off; see the module's early stops).
+        ``t_max``, and of the recurrence test against the pilots' attractors (0: both off; see the
+        module's early stops).
+    recurrence : bool
+        Let the samples after the pilots stop on one block that matches a pilot's irregular
+        attractor (the default); ``False``: every sample decides by its own three blocks.
     threads : int, optional
         Rust worker threads (results do not depend on it).
 
@@ -536,7 +589,8 @@ def census(
         ``basin_fraction`` and ``basin_fraction_se`` on ``attractor`` (sliding, cycle, irregular,
         escape); ``basin_stability``, ``n_attractors``, ``n_cycles`` and the largest cycle's
         frequency and amplitude; per ``sample``: the start ``y0``, the ``attractor`` reached, its
-        ``cycle`` label (-1 if none), ``omega``, ``z1_amplitude``, ``t_end`` and ``n_rhs``.
+        ``cycle`` label (-1 if none), ``omega``, ``z1_amplitude``, ``t_end``, ``n_rhs`` and
+        ``recurrence`` (1 where irregular motion was recognised by matching a pilot's attractor).
 
     Examples
     --------
@@ -572,7 +626,7 @@ def census(
         base, model.contact, model.friction_law, {"normal_load": values[:, 0]}, np.array([0]), samples=int(samples),
         scale=scale, t_max=t_max, integrator=integrator, rtol=rtol, atol=None, periodic_tol=periodic_tol,
         threads=threads, eigenvalues=np.asarray(lin["eigenvalues"]), linear_frequency=lin["linear_frequency"],
-        saddle=sad, cycle_tol=cycle_tol, irregular_block=irregular_block,
+        saddle=sad, cycle_tol=cycle_tol, irregular_block=irregular_block, recurrence=bool(recurrence),
     )  # fmt: skip
     from ._simulate import STATE_VARS
 
@@ -590,6 +644,10 @@ def census(
                            ("t_end", "s", "simulated time when the attractor was recognised"),
                            ("n_rhs", "1", "right-hand-side evaluations")):  # fmt: skip
         data[k] = (("sample",), per[k][0], {"long_name": text, "units": units})
+    data["recurrence"] = (("sample",), per["matched"][0].astype(np.int8),
+                          {"long_name": "1 where the irregular attractor was recognised by recurrence: one block of "
+                           "sections matched an attractor that a pilot sample established", "flag_values":
+                           np.array([0, 1], dtype=np.int8), "flag_meanings": "own_test recurrence"})  # fmt: skip
     data["y0"] = (("sample", "state"), per["y0"][0], {"long_name": "start state [z, zd, x, xd, phi, phid]"})
     coords = {
         "attractor": ("attractor", np.arange(len(ATTRACTOR_NAMES), dtype=np.int8),
@@ -602,7 +660,9 @@ def census(
     attrs = {f"model_{k}": v for k, v in base.items()}
     attrs.update(model_contact=model.contact, model_friction_law=model.friction_law, samples=int(samples),
                  disturbance_scale=scale, t_max=t_max, integrator=integrator, rtol=rtol, periodic_tol=periodic_tol,
-                 cycle_tol=cycle_tol, irregular_block=irregular_block, sliding_stable=int(stable[0]),
+                 cycle_tol=cycle_tol, irregular_block=irregular_block,
+                 pilots=min(PILOTS, int(samples)) if recurrence and irregular_block else int(samples),
+                 sliding_stable=int(stable[0]),
                  saddle_a1=float(sad[0, 0]),
                  saddle_phi1=float(sad[0, 4]),
                  disturbances="y0 = Re(a_t e^(i theta_t) v_t + a_n e^(i theta_n) v_n), v_t, v_n the torsion and normal "

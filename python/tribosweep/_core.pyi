@@ -94,6 +94,7 @@ def ensemble(
     watch_x: bool = True,
     decay_thresholds: npt.NDArray[np.float64] | None = None,
     irregular_block: int = 0,
+    known_irregular: npt.NDArray[np.float64] | None = None,
 ) -> dict[str, Any]: ...
 def linear_stability(
     base: dict[str, float],

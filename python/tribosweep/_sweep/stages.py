@@ -454,7 +454,9 @@ def census(p: Points) -> None:
         if counts[2]:
             # How the irregular samples were decided: stationary (the early stop) or still so at t_max.
             late = int(np.sum((per["outcome"][j] == OUTCOME_NAMES.index("unsettled")) & (per["attractor"][j] == 2)))
-            seen += f" ({counts[2] - late} stationary, {late} at the census t_max)"
+            known = int(np.sum(per["matched"][j]))
+            seen += (f" ({counts[2] - late - known} stationary, {known} by recurrence on a pilot's attractor, "
+                     f"{late} at the census t_max)")
         if res["n_attractors"][j] > 1:
             reason[i] = f"coexisting attractors (census): {seen}"
         elif counts[0] < nv:

@@ -314,6 +314,13 @@ pub(crate) fn summaries_into(d: &Bound<'_, PyDict>, out: &[(Summary, String)]) -
     d.set_item("min_slip_velocity", f(&|s| s.min_slip_velocity))?;
     d.set_item("max_gap", f(&|s| s.extremes.max_gap))?;
     d.set_item("max_abs_z", f(&|s| s.extremes.max_abs_z))?;
+    // Irregular runs: the attractor's fingerprint (NaN otherwise), and whether a known one matched.
+    d.set_item("irregular_residual", f(&|s| s.fingerprint.map_or(f64::NAN, |p| p.residual)))?;
+    let peaks: Vec<State> =
+        out.iter().map(|o| o.0.fingerprint.map_or(State::repeat(f64::NAN), |p| State::from(p.peaks))).collect();
+    let peaks = states(peaks.iter(), out.len());
+    d.set_item("irregular_peaks", peaks.into_pyarray(py))?;
+    d.set_item("irregular_matched", Array1::from_iter(out.iter().map(|o| o.0.matched_known)).into_pyarray(py))?;
     let stats: Vec<Stats> = out.iter().map(|o| o.0.stats).collect();
     stats_into(d, &stats)
 }

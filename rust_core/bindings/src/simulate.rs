@@ -2,15 +2,15 @@
 
 use crate::convert::{method_from, reason_of, runs_into, states, summaries_into, tolerances, y0_rows, Call};
 use crate::errors::CoreError;
-use numpy::ndarray::Array1;
-use numpy::{IntoPyArray, PyArray3, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
+use numpy::ndarray::{Array1, ArrayView1};
+use numpy::{IntoPyArray, PyArray3, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::collections::HashMap;
 use tribosweep_core::ensemble::{run as run_ensemble, run_sampled_into, Settings, Task, TrajectoryResult};
 use tribosweep_core::model::State;
 use tribosweep_core::status::Status;
-use tribosweep_core::steady::{self, DecayTest, RunResult, SteadyOptions, Summary};
+use tribosweep_core::steady::{self, DecayTest, Fingerprint, Known, RunResult, SteadyOptions, Summary, KNOWN_MAX};
 
 /// One trajectory. Returns a dict: `t` (n,), `y` (n, 6), and the run's status, reason (why the
 /// status is not success, with its numbers; empty for success), counters, extremes. With `t_eval`
@@ -118,6 +118,37 @@ fn decays(
     }
 }
 
+/// Per-trajectory fingerprints of known irregular attractors (`known_irregular`, shape
+/// `(n, KNOWN_MAX, 7)`: the mean residual, then the six largest excursions, in characteristic
+/// sizes, as the `irregular_residual` and `irregular_peaks` of an earlier steady run; a row of NaN
+/// is an empty slot).
+fn knowns(known: Option<PyReadonlyArray3<'_, f64>>, n: usize) -> PyResult<Option<Vec<Known>>> {
+    let Some(k) = known else { return Ok(None) };
+    let k = k.as_array();
+    let shape_ok = k.shape() == [n, KNOWN_MAX, 7];
+    let row_ok = |r: ArrayView1<'_, f64>| {
+        r.iter().all(|x| x.is_nan()) || (r.iter().all(|x| x.is_finite() && *x >= 0.0) && r[0] > 0.0)
+    };
+    if !shape_ok || !k.outer_iter().all(|t| t.outer_iter().all(row_ok)) {
+        return Err(CoreError(format!(
+            "known_irregular must be an ({n}, {KNOWN_MAX}, 7) array whose rows are all NaN (no fingerprint) or \
+             finite values >= 0 with a residual > 0; got shape {:?}",
+            k.shape()
+        ))
+        .into());
+    }
+    Ok(Some(
+        k.outer_iter()
+            .map(|t| {
+                std::array::from_fn(|j| {
+                    let r = t.row(j);
+                    (!r[0].is_nan()).then(|| Fingerprint { residual: r[0], peaks: std::array::from_fn(|c| r[c + 1]) })
+                })
+            })
+            .collect(),
+    ))
+}
+
 /// The summaries of runs to steady state with their reasons (the summary's failure): a trajectory
 /// whose computation panicked gets a failed summary (`Status::Panic`) and the message.
 fn summaries(out: Vec<Result<TrajectoryResult, String>>) -> Vec<(Summary, String)> {
@@ -137,12 +168,13 @@ fn summaries(out: Vec<Result<TrajectoryResult, String>>) -> Vec<(Summary, String
 /// (states at `t_eval`) or "steady" (run to steady state and summarise; `t_end` is then `t_max`;
 /// `watch_x=False`: the settling tests ignore `x, xd` where they are slaved, under constant friction;
 /// `irregular_block > 0`: sustained irregular motion stops once stationary over three blocks of
-/// that many sections, outcome "irregular").
+/// that many sections, outcome "irregular", or once a block matches one of the trajectory's
+/// `known_irregular` fingerprints, those of irregular runs of the same model; see `knowns`).
 /// The core picks the path (lane-batched or scalar) and the grouping; results do not depend on it
 /// beyond integration accuracy, nor on the thread count at all. Every non-success status has a
 /// reason; Ctrl-C stops every thread (`KeyboardInterrupt`, the results are dropped).
 #[pyfunction]
-#[pyo3(signature = (base, contact, friction_law, names, values, y0, t_end, method, rtol, *, atol=None, t_eval=None, threads=None, kind="final", periodic_tol=1e-5, decay_amplitude=None, n_fourier=512, max_steps=None, max_events=None, decay_amplitudes=None, watch_x=true, decay_thresholds=None, irregular_block=0))]
+#[pyo3(signature = (base, contact, friction_law, names, values, y0, t_end, method, rtol, *, atol=None, t_eval=None, threads=None, kind="final", periodic_tol=1e-5, decay_amplitude=None, n_fourier=512, max_steps=None, max_events=None, decay_amplitudes=None, watch_x=true, decay_thresholds=None, irregular_block=0, known_irregular=None))]
 #[allow(clippy::too_many_arguments)]
 fn ensemble<'py>(
     py: Python<'py>,
@@ -168,11 +200,13 @@ fn ensemble<'py>(
     watch_x: bool,
     decay_thresholds: Option<PyReadonlyArray2<'py, f64>>,
     irregular_block: usize,
+    known_irregular: Option<PyReadonlyArray3<'py, f64>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let call = Call::rows(py, &base, contact, friction_law, &names, &values, threads)?;
     let n = call.len();
     let y0s = y0_rows(&y0.as_array(), n)?;
     let decays = decays(decay_amplitudes, decay_thresholds, n)?;
+    let knowns = knowns(known_irregular, n)?;
     let settings =
         Settings { t_end, method: method_from(method)?, tol: tolerances(rtol, atol, max_steps, max_events)?, threads };
     let t_eval: Option<Vec<f64>> = t_eval.map(|a| a.as_slice().map(|s| s.to_vec())).transpose()?;
@@ -220,7 +254,7 @@ fn ensemble<'py>(
                 irregular_block,
                 ..SteadyOptions::default()
             };
-            let task = Task::Steady { opts: &opts, decay: decays.as_deref() };
+            let task = Task::Steady { opts: &opts, decay: decays.as_deref(), known: knowns.as_deref() };
             let sums = summaries(call.detach(|| run_ensemble(&sliders, &y0s, &settings, task))?);
             summaries_into(&d, &sums)?;
         }

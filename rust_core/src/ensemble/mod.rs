@@ -35,7 +35,7 @@ use crate::parallel::par_map_or;
 use crate::model::{ContactMode, ContactModel, FrictionLaw, Slider, State};
 use crate::ode::{Control, Method, Observer};
 use crate::status::{Failure, Status};
-use crate::steady::{self, DecayTest, RunResult, SteadyOptions, Summary, Tolerances};
+use crate::steady::{self, DecayTest, Known, RunResult, SteadyOptions, Summary, Tolerances};
 
 /// What each trajectory of an ensemble computes.
 #[derive(Clone, Copy, Debug)]
@@ -47,10 +47,29 @@ pub enum Task<'a> {
     Sampled(&'a [f64]),
     /// A run to a steady state and its summary, as `steady::run_to_steady`: `opts` carries the
     /// method, the tolerances and `t_max` (the settings' `t_end`, `method` and `tol` are not
-    /// used). `decay`: a decay test per trajectory that overrides `opts`' (`DecayTest`).
-    Steady { opts: &'a SteadyOptions, decay: Option<&'a [DecayTest]> },
+    /// used). `decay`: a decay test per trajectory that overrides `opts`' (`DecayTest`);
+    /// `known`: fingerprints of known irregular attractors per trajectory, overriding
+    /// `opts.known_irregular`.
+    Steady { opts: &'a SteadyOptions, decay: Option<&'a [DecayTest]>, known: Option<&'a [Known]> },
     /// The end state and every located event `(index, time)`: for tests and diagnostics.
     Events,
+}
+
+impl Task<'_> {
+    /// Trajectory `i`'s options of a `Steady` task, with its own overrides (`None` for other tasks).
+    pub fn steady_options(&self, i: usize) -> Option<SteadyOptions> {
+        let Task::Steady { opts, decay, known } = *self else { return None };
+        let o = decay.map_or(*opts, |d| d[i].apply(opts));
+        Some(known.map_or(o, |k| SteadyOptions { known_irregular: k[i], ..o }))
+    }
+
+    /// Panics unless the per-trajectory overrides of a `Steady` task have one entry per trajectory.
+    pub(crate) fn check_overrides(&self, n: usize, caller: &str) {
+        if let Task::Steady { decay, known, .. } = self {
+            assert!(decay.is_none_or(|d| d.len() == n), "{caller}: one decay test per slider");
+            assert!(known.is_none_or(|k| k.len() == n), "{caller}: one set of known fingerprints per slider");
+        }
+    }
 }
 
 /// The result of one trajectory.
@@ -175,7 +194,7 @@ pub fn group_size(n: usize, threads: Option<usize>) -> usize {
 /// not started with [`TrajectoryResult::not_started`].
 ///
 /// Preconditions (panics otherwise): `sliders.len() == y0s.len()`; for `Task::Steady` with
-/// `decay`, one decay amplitude per slider.
+/// `decay` or `known`, one entry per slider.
 pub fn run(
     sliders: &[Slider],
     y0s: &[State],
@@ -194,9 +213,7 @@ pub fn run_on(
     task: Task<'_>,
 ) -> Vec<Result<TrajectoryResult, String>> {
     assert_eq!(sliders.len(), y0s.len(), "ensemble: one initial state per slider");
-    if let Task::Steady { decay: Some(d), .. } = task {
-        assert_eq!(d.len(), sliders.len(), "ensemble: one decay amplitude per slider");
-    }
+    task.check_overrides(sliders.len(), "ensemble");
     assert!(supports(route, sliders, settings, &task), "ensemble: the {route:?} route cannot compute this task");
     let (method, tol) = method_tol(settings, &task);
     let threads = settings.threads;
@@ -343,11 +360,8 @@ fn scalar(
             let (run, samples) = steady::run_sampled(s, y0, t_end, method, tol, te);
             TrajectoryResult { samples, ..TrajectoryResult::from_run(run) }
         }
-        Task::Steady { opts, decay } => {
-            let o = match decay {
-                Some(d) => d[i].apply(opts),
-                None => *opts,
-            };
+        Task::Steady { .. } => {
+            let o = task.steady_options(i).expect("a steady task");
             let sum = steady::run_to_steady(s, y0, &o);
             let run = RunResult {
                 status: sum.status,

@@ -65,7 +65,7 @@ fn the_policy_picks_the_fastest_route_that_applies() {
     let mixed = vec![bil[0], uni[0]];
     let te = [0.0, 0.1];
     let opts = SteadyOptions::default();
-    let steady = Task::Steady { opts: &opts, decay: None };
+    let steady = Task::Steady { opts: &opts, decay: None, known: None };
     let dp5 = settings(0.5, Method::Dopri5, 1e-8, None);
     let limited = Settings { tol: Tolerances { max_steps: Some(1000), ..tol(1e-8) }, ..dp5 };
     let cases: [(&str, &[Slider], Settings, Task<'_>, Route); 13] = [
@@ -91,7 +91,7 @@ fn the_policy_picks_the_fastest_route_that_applies() {
             "steady with Rodas4 in its options",
             &bil,
             dp5,
-            Task::Steady { opts: &SteadyOptions { method: Method::Rodas4, ..opts }, decay: None },
+            Task::Steady { opts: &SteadyOptions { method: Method::Rodas4, ..opts }, decay: None, known: None },
             Route::Scalar,
         ),
     ];
@@ -205,7 +205,7 @@ fn samples_and_steady_states_agree_across_routes() {
         let y0: Vec<State> =
             (0..mus.len()).map(|k| State::new(1e-6 * (1 + k) as f64, 0.0, 0.0, 0.0, 0.0, 0.0)).collect();
         let opts = SteadyOptions { t_max: 10.0, tol: tol(1e-8), ..SteadyOptions::default() };
-        let task = Task::Steady { opts: &opts, decay: None };
+        let task = Task::Steady { opts: &opts, decay: None, known: None };
         let lanes = unwrap(run_on(Route::Lanes, &s, &y0, &set, task));
         let scalar = unwrap(run_on(Route::Scalar, &s, &y0, &set, task));
         for i in 0..s.len() {
@@ -235,7 +235,8 @@ fn results_are_bitwise_the_same_for_any_thread_count_and_through_the_entry_point
     let te: Vec<f64> = (0..=20).map(|k| k as f64 * 5e-3).collect();
     let opts = SteadyOptions { t_max: 0.3, tol: tol(1e-7), ..SteadyOptions::default() };
     let decay: Vec<DecayTest> = (0..40).map(|k| DecayTest::Amplitude(1e-8 * (1 + k % 3) as f64)).collect();
-    let tasks = [Task::Final, Task::Sampled(&te), Task::Steady { opts: &opts, decay: Some(&decay) }, Task::Events];
+    let tasks =
+        [Task::Final, Task::Sampled(&te), Task::Steady { opts: &opts, decay: Some(&decay), known: None }, Task::Events];
     for (base, z0) in [(seed_bilateral(), 1e-6), (unilateral(), 30e-6)] {
         let s = sliders(base, &mus);
         let y0 = starts(s.len(), z0);
@@ -347,7 +348,7 @@ fn a_call_cancelled_before_it_starts_computes_nothing() {
     token.cancel();
     for threads in [Some(1), Some(2)] {
         let set = settings(1.0, Method::Dopri5, 1e-8, threads);
-        for task in [Task::Final, Task::Steady { opts: &so, decay: None }] {
+        for task in [Task::Final, Task::Steady { opts: &so, decay: None, known: None }] {
             for r in Route::ALL {
                 if !supports(r, &s, &set, &task) {
                     continue;
@@ -417,7 +418,7 @@ fn a_long_trajectory_is_cancelled_inside_its_run() {
     let so = SteadyOptions { t_max: 1e4, periodic_tol: 1e-15, ..SteadyOptions::default() };
     let set = settings(1e4, Method::Dopri5, 1e-8, Some(1));
     for r in [Route::Lanes, Route::Scalar] {
-        let task = Task::Steady { opts: &so, decay: None };
+        let task = Task::Steady { opts: &so, decay: None, known: None };
         let out = cancelled_after(std::time::Duration::from_millis(100), r, &s, &y0, &set, task);
         let sum = *out[0].summary.as_deref().expect("a summary");
         assert_eq!(sum.status, Status::NotComputed, "{r:?}");

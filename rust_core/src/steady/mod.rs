@@ -353,6 +353,31 @@ pub struct SteadyOptions {
     /// Sections per block of the stationarity test that stops sustained irregular motion early
     /// ([`SteadyOutcome::Irregular`]); 0 turns it off (the run then goes on to `t_max`).
     pub irregular_block: usize,
+    /// Fingerprints of irregular attractors already established at this point (by other runs of
+    /// the same model): a block of sections that matches one of them ends the run as irregular
+    /// without waiting for three stationary blocks ([`Fingerprint`]; only with `irregular_block > 0`).
+    pub known_irregular: Known,
+}
+
+/// Most fingerprints of known irregular attractors a run compares its blocks with.
+pub const KNOWN_MAX: usize = 2;
+
+/// Fingerprints of known irregular attractors (`None`: an empty slot).
+pub type Known = [Option<Fingerprint>; KNOWN_MAX];
+
+/// An irregular attractor's section statistics per block of `irregular_block` sections: the mean
+/// repetition residual and each component's largest excursion, in units of the characteristic
+/// sizes (the stationarity test's statistics). A run that ends stationary reports the mean of its
+/// three blocks; a block of another run of the same model that agrees with it within the
+/// stationarity tolerances ([`STATIONARY_RESIDUAL_TOL`], [`STATIONARY_PEAK_TOL`]) is on the same
+/// attractor, as in the recurrence method of Datseris & Wagemakers (Chaos 32, 2022) that labels a
+/// trajectory by the attractor whose cells it keeps visiting.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Fingerprint {
+    /// Mean repetition residual.
+    pub residual: f64,
+    /// Largest excursion of each component (those the run compares; the others are not compared).
+    pub peaks: [f64; 6],
 }
 
 impl Default for SteadyOptions {
@@ -368,6 +393,7 @@ impl Default for SteadyOptions {
             n_fourier: 512,
             watch_x: true,
             irregular_block: 0,
+            known_irregular: [None; KNOWN_MAX],
         }
     }
 }
@@ -418,6 +444,12 @@ pub struct Summary {
     pub stats: Stats,
     /// Why the status is not `Success`, with its numbers (`None` for `Success`).
     pub failure: Option<Failure>,
+    /// Irregular only: the attractor's fingerprint (the mean of the three stationary blocks, or the
+    /// block that matched a known fingerprint).
+    pub fingerprint: Option<Fingerprint>,
+    /// Irregular only: whether a block matched a known fingerprint (`SteadyOptions::known_irregular`)
+    /// rather than three of its own blocks being stationary.
+    pub matched_known: bool,
 }
 
 impl Summary {
@@ -443,6 +475,8 @@ impl Summary {
             extremes: Extremes::default(),
             stats: Stats::default(),
             failure: None,
+            fingerprint: None,
+            matched_known: false,
         }
     }
 
@@ -581,6 +615,8 @@ pub(crate) fn summarize(s: &Slider, r: &RunResult, w: &SectionWatcher, opts: &St
         sum.outcome = SteadyOutcome::Decayed;
     } else if w.irregular {
         sum.outcome = SteadyOutcome::Irregular;
+        sum.fingerprint = w.fingerprint;
+        sum.matched_known = w.matched_known;
     } else {
         sum.outcome = SteadyOutcome::Unsettled;
         sum.status = Status::NotConverged;
@@ -599,7 +635,7 @@ pub(crate) use section::SectionWatcher;
 #[cfg(test)]
 use section::{ALL, NOT_X};
 pub use section::{
-    REDUCE_TOL, STATIONARY_FLOOR, STATIONARY_MIN_RESIDUAL, STATIONARY_PEAK_TOL, STATIONARY_RESIDUAL_TOL,
+    KNOWN_BLOCKS, REDUCE_TOL, STATIONARY_FLOOR, STATIONARY_MIN_RESIDUAL, STATIONARY_PEAK_TOL, STATIONARY_RESIDUAL_TOL,
 };
 
 #[cfg(test)]

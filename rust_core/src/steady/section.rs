@@ -1,7 +1,7 @@
 //! The Poincare section `zd = 0` (falling) and the tests that decide when a run to steady state
 //! has settled: repetition (periodic), decay, and stationarity (sustained irregular motion).
 
-use super::{characteristic_sizes, decay_amplitude, SteadyOptions, MAX_MULTIPLICITY};
+use super::{characteristic_sizes, decay_amplitude, Fingerprint, Known, SteadyOptions, MAX_MULTIPLICITY};
 use crate::model::{idx, FrictionLaw, Slider, State};
 
 #[derive(Clone, Copy)]
@@ -38,6 +38,10 @@ pub(crate) struct SectionWatcher {
     /// Below this mean repetition residual the motion is nearly periodic: the repetition test decides.
     stationary_floor: f64,
     pub(super) irregular: bool,
+    /// Irregular: the attractor's fingerprint (see [`Fingerprint`]).
+    pub(super) fingerprint: Option<Fingerprint>,
+    /// Irregular by matching a known fingerprint.
+    pub(super) matched_known: bool,
 }
 
 /// Largest relative spread of three consecutive blocks' mean repetition residuals for stationary motion.
@@ -52,6 +56,9 @@ pub const STATIONARY_FLOOR: f64 = 100.0;
 /// then rounding and integration error, steady from block to block, and must not pass for
 /// irregular motion).
 pub const STATIONARY_MIN_RESIDUAL: f64 = 1e-3;
+/// Consecutive blocks that must each match one known fingerprint (`SteadyOptions::known_irregular`)
+/// for a run to end as irregular by recurrence.
+pub const KNOWN_BLOCKS: usize = 1;
 
 /// One block of sections: the mean repetition residual and the largest excursion of each
 /// component, both in units of the characteristic sizes.
@@ -82,6 +89,14 @@ struct Stationarity {
     peaks: [f64; 6],
     done: [Block; 3],
     n_done: usize,
+    /// Fingerprints of known attractors, and how many blocks in a row matched one of them.
+    known: Known,
+    in_row: usize,
+}
+
+/// Whether two positive statistics agree within `tol` (the smaller at least `1 - tol` of the larger).
+fn close(a: f64, b: f64, tol: f64) -> bool {
+    a.min(b) >= (1.0 - tol) * a.max(b)
 }
 
 impl Stationarity {
@@ -108,12 +123,38 @@ impl Stationarity {
         }
         let spread_ok = |v: [f64; 3], tol: f64| {
             let (lo, hi) = (v.iter().copied().fold(f64::INFINITY, f64::min), v.iter().copied().fold(0.0, f64::max));
-            lo >= (1.0 - tol) * hi
+            close(lo, hi, tol)
         };
         let r = self.done.map(|b| b.residual);
         r.iter().all(|&x| x >= floor)
             && spread_ok(r, STATIONARY_RESIDUAL_TOL)
             && comps.iter().all(|&c| spread_ok(self.done.map(|b| b.peaks[c]), STATIONARY_PEAK_TOL))
+    }
+
+    /// The mean of the newest three blocks (the fingerprint of a stationary run).
+    fn mean(&self) -> Fingerprint {
+        let third = |f: &dyn Fn(&Block) -> f64| self.done.iter().map(f).sum::<f64>() / 3.0;
+        Fingerprint { residual: third(&|b| b.residual), peaks: std::array::from_fn(|c| third(&|b| b.peaks[c])) }
+    }
+
+    /// The newest block as a fingerprint.
+    fn newest(&self) -> Fingerprint {
+        let b = self.done[(self.n_done + 2) % 3];
+        Fingerprint { residual: b.residual, peaks: b.peaks }
+    }
+
+    /// Count the newest block towards a match with a known fingerprint: `true` once
+    /// [`KNOWN_BLOCKS`] blocks in a row have each matched one, within the stationarity tolerances
+    /// and above the residual floor (a cycle's approach never matches).
+    fn matched(&mut self, floor: f64, comps: &[usize]) -> bool {
+        let b = self.newest();
+        let hit = b.residual >= floor
+            && self.known.iter().flatten().any(|k| {
+                close(b.residual, k.residual, STATIONARY_RESIDUAL_TOL)
+                    && comps.iter().all(|&c| close(b.peaks[c], k.peaks[c], STATIONARY_PEAK_TOL))
+            });
+        self.in_row = if hit { self.in_row + 1 } else { 0 };
+        self.in_row >= KNOWN_BLOCKS
     }
 }
 
@@ -152,9 +193,13 @@ impl SectionWatcher {
                 peaks: [0.0; 6],
                 done: [Block::default(); 3],
                 n_done: 0,
+                known: opts.known_irregular,
+                in_row: 0,
             }),
             stationary_floor: (STATIONARY_FLOOR * opts.periodic_tol).max(STATIONARY_MIN_RESIDUAL),
             irregular: false,
+            fingerprint: None,
+            matched_known: false,
         }
     }
 
@@ -259,7 +304,14 @@ impl SectionWatcher {
         let peaks = std::array::from_fn(|c| a.peaks[c] / self.sizes[c]);
         let (floor, comps) = (self.stationary_floor, self.comps);
         if let Some(st) = self.stationary.as_mut() {
-            self.irregular = st.add(residual, peaks) && st.stationary(floor, comps);
+            if !st.add(residual, peaks) {
+                return;
+            }
+            if st.stationary(floor, comps) {
+                (self.irregular, self.fingerprint) = (true, Some(st.mean()));
+            } else if st.matched(floor, comps) {
+                (self.irregular, self.matched_known, self.fingerprint) = (true, true, Some(st.newest()));
+            }
         }
     }
 

@@ -65,56 +65,68 @@ fn per_component_decay_thresholds_set_the_decay_test() {
 /// Feed the watcher section states `y(n)` at times `n * dt` until it decides (or `n_max`), and say
 /// what it decided and after how many sections.
 fn watch(opts: &SteadyOptions, n_max: usize, y: impl Fn(usize) -> State) -> (&'static str, usize) {
+    let (w, n) = watcher(opts, n_max, y);
+    let what = if w.found.is_some() {
+        "periodic"
+    } else if w.decayed {
+        "decayed"
+    } else if w.irregular {
+        "irregular"
+    } else {
+        "running"
+    };
+    (what, n)
+}
+
+/// [`watch`]'s watcher once it decided (or after `n_max` sections), and the sections it saw.
+fn watcher(opts: &SteadyOptions, n_max: usize, y: impl Fn(usize) -> State) -> (SectionWatcher, usize) {
     let s = Slider::seed();
     let mut w = SectionWatcher::new(opts, &s);
     for n in 0..n_max {
         let c = y(n);
         w.push(Crossing { t: 0.01 * n as f64, y: c, peaks: c.abs() });
-        if w.found.is_some() {
-            return ("periodic", n + 1);
-        }
-        if w.decayed {
-            return ("decayed", n + 1);
-        }
-        if w.irregular {
-            return ("irregular", n + 1);
+        if w.found.is_some() || w.decayed || w.irregular {
+            return (w, n + 1);
         }
     }
-    ("running", n_max)
+    (w, n_max)
+}
+
+/// A section state of the seed's sizes that never repeats: two incommensurate phases (a
+/// quasi-periodic torus) of amplitude `amp`.
+fn torus(amp: f64) -> impl Fn(usize) -> State {
+    let sizes = characteristic_sizes(&Slider::seed());
+    move |n: usize| {
+        let (a, b) = (n as f64 * 0.618_033_988_749_895, n as f64 * 0.414_213_562_373_095);
+        let (a, b) = (std::f64::consts::TAU * a, std::f64::consts::TAU * b);
+        let mut y = State::zeros();
+        for (c, v) in [(0, 1.0 + 0.2 * a.cos()), (2, 0.3 * b.sin()), (4, 1.0 + 0.2 * b.cos()), (5, 0.5 * a.sin())] {
+            y[c] = amp * v * sizes[c];
+        }
+        y
+    }
+}
+
+/// Section states converging on a period-2 cycle, spread over two points, with a residual
+/// shrinking by `mult` per section.
+fn two(mult: f64) -> impl Fn(usize) -> State {
+    let sizes = characteristic_sizes(&Slider::seed());
+    move |n: usize| {
+        let sign = if n.is_multiple_of(2) { 1.0 } else { -1.0 };
+        State::from_fn(|c, _| sizes[c] * (1.0 + 0.3 * sign)) + mult.powi(n as i32) * torus(0.1)(n)
+    }
 }
 
 #[test]
 fn stationary_irregular_motion_stops_after_three_blocks_and_nothing_else_does() {
-    let s = Slider::seed();
-    let sizes = characteristic_sizes(&s);
     let opts = SteadyOptions { watch_x: false, irregular_block: 32, ..SteadyOptions::default() };
-    // A section state that never repeats: two incommensurate phases (a quasi-periodic torus).
-    let torus = |amp: f64| {
-        move |n: usize| {
-            let (a, b) = (n as f64 * 0.618_033_988_749_895, n as f64 * 0.414_213_562_373_095);
-            let (a, b) = (std::f64::consts::TAU * a, std::f64::consts::TAU * b);
-            let mut y = State::zeros();
-            for (c, v) in [(0, 1.0 + 0.2 * a.cos()), (2, 0.3 * b.sin()), (4, 1.0 + 0.2 * b.cos()), (5, 0.5 * a.sin())] {
-                y[c] = amp * v * sizes[c];
-            }
-            y
-        }
-    };
     // Blocks start once 8 states are there to compare with (the 9th); three full blocks later it stops.
     assert_eq!(watch(&opts, 1000, torus(1.0)), ("irregular", 8 + 3 * 32));
     // Off by default: the same motion runs on.
     assert_eq!(watch(&SteadyOptions { watch_x: false, ..SteadyOptions::default() }, 1000, torus(1.0)).0, "running");
     // Growing by 0.2 % per section (13 % per two blocks): never stationary.
     assert_eq!(watch(&opts, 1000, |n| torus(1.002f64.powi(n as i32))(n)).0, "running");
-    // Converging on a period-2 cycle, its section states spread over two points, with a residual
-    // shrinking by `mult` per section.
-    let two = |mult: f64| {
-        move |n: usize| {
-            let sign = if n.is_multiple_of(2) { 1.0 } else { -1.0 };
-            State::from_fn(|c, _| sizes[c] * (1.0 + 0.3 * sign)) + mult.powi(n as i32) * torus(0.1)(n)
-        }
-    };
-    // At 0.9: recognised as periodic, never taken for irregular on the way.
+    // Converging on a period-2 cycle at 0.9: recognised as periodic, never taken for irregular on the way.
     let (what, n) = watch(&opts, 1000, two(0.9));
     assert_eq!(what, "periodic", "after {n}");
     // At 0.99 (47 % per two blocks) still not irregular: it waits for the repetition test.
@@ -125,6 +137,38 @@ fn stationary_irregular_motion_stops_after_three_blocks_and_nothing_else_does() 
     let tight = SteadyOptions { periodic_tol: 1e-15, ..opts };
     let jitter = |n: usize| two(0.0)(n) + 1e-5 * torus(1.0)(n);
     assert_eq!(watch(&tight, 3000, jitter), ("running", 3000));
+}
+
+#[test]
+fn a_block_on_a_known_irregular_attractor_stops_the_run_and_nothing_else_does() {
+    let opts = SteadyOptions { watch_x: false, irregular_block: 32, ..SteadyOptions::default() };
+    // The torus's fingerprint, from a run that ended stationary: the mean of its three blocks.
+    let (w, _) = watcher(&opts, 1000, torus(1.0));
+    let fp = w.fingerprint.expect("a stationary run has a fingerprint");
+    assert!(!w.matched_known);
+    // Its largest excursion of z: (1 + 0.2) in units of the size, to within the torus's sampling.
+    assert!((fp.peaks[idx::Z] - 1.2).abs() < 1e-3, "{fp:?}");
+    assert!(fp.residual > STATIONARY_MIN_RESIDUAL);
+    let knows = |k: Fingerprint| SteadyOptions { known_irregular: [None, Some(k)], ..opts };
+    // Another run on the same attractor (a later stretch of the torus) stops after one block.
+    let later = |n: usize| torus(1.0)(n + 5000);
+    let (w, n) = watcher(&knows(fp), 1000, later);
+    assert_eq!((w.irregular, w.matched_known, n), (true, true, 8 + 32));
+    // An attractor 10 % larger in every component: three blocks of its own, as without it.
+    assert_eq!(watch(&knows(fp), 1000, |n| torus(1.1)(n + 5000)), ("irregular", 8 + 3 * 32));
+    // Nor does a fingerprint 10 % off in phi alone match.
+    let mut phi_off = fp;
+    phi_off.peaks[idx::PHI] *= 1.1;
+    let (w, n) = watcher(&knows(phi_off), 1000, later);
+    assert_eq!((w.irregular, w.matched_known, n), (true, false, 8 + 3 * 32));
+    // Nor does the jitter of a converged cycle match a fingerprint with its own statistics: it is
+    // below the residual floor.
+    let tight = SteadyOptions { periodic_tol: 1e-15, ..knows(Fingerprint { residual: 2e-5, peaks: [1.3; 6] }) };
+    let jitter = |n: usize| two(0.0)(n) + 1e-5 * torus(1.0)(n);
+    assert_eq!(watch(&tight, 3000, jitter), ("running", 3000));
+    // Without stationarity blocks a fingerprint does nothing.
+    let off = SteadyOptions { irregular_block: 0, ..knows(fp) };
+    assert_eq!(watch(&off, 1000, later).0, "running");
 }
 
 #[test]

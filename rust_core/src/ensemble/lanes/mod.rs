@@ -198,9 +198,7 @@ fn check(sliders: &[Slider], y0s: &[State], method: Method, task: &Task<'_>) {
             );
         }
     }
-    if let Task::Steady { decay: Some(d), .. } = task {
-        assert_eq!(d.len(), sliders.len(), "run_lanes: one decay amplitude per slider");
-    }
+    task.check_overrides(sliders.len(), "run_lanes");
 }
 
 /// The monomorphised, CPU-dispatched lane driver for the sliders' model and `method`.

@@ -18,7 +18,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 pub(super) enum Watch<'a> {
     Nothing,
     Sample(Sampler<'a, 6, Store<'a>>),
-    Steady(Box<SteadyObserver>, SteadyOptions),
+    Steady(Box<SteadyObserver>, Box<SteadyOptions>),
     Log(Vec<(usize, f64)>),
 }
 
@@ -257,12 +257,9 @@ pub(super) fn refill<'a>(ln: &mut Lanes<'a>, l: usize, inp: &Input<'a, '_>, out:
                 };
                 Watch::Sample(Sampler { t_eval: te, out })
             }
-            Task::Steady { opts, decay } => {
-                let o = match decay {
-                    Some(d) => d[i].apply(opts),
-                    None => *opts,
-                };
-                Watch::Steady(Box::new(SteadyObserver::new(s, &o)), o)
+            Task::Steady { .. } => {
+                let o = inp.task.steady_options(i).expect("a steady task");
+                Watch::Steady(Box::new(SteadyObserver::new(s, &o)), Box::new(o))
             }
             Task::Events => Watch::Log(Vec::new()),
         };

@@ -242,8 +242,15 @@ fn seed_bouncing_cycle_on_the_lane_path() {
     }
     let sliders = [s; 3];
     let opts8 = SteadyOptions { method: Method::Dop853, ..opts };
-    let r5 = lanes5(&sliders, &starts, 0.0, &tol(1e-9), Task::Steady { opts: &opts, decay: None });
-    let r8 = run_lanes(&sliders, &starts, 0.0, Method::Dop853, &tol(1e-9), Task::Steady { opts: &opts8, decay: None });
+    let r5 = lanes5(&sliders, &starts, 0.0, &tol(1e-9), Task::Steady { opts: &opts, decay: None, known: None });
+    let r8 = run_lanes(
+        &sliders,
+        &starts,
+        0.0,
+        Method::Dop853,
+        &tol(1e-9),
+        Task::Steady { opts: &opts8, decay: None, known: None },
+    );
     for (k, x) in r5.iter().chain(&r8).enumerate() {
         let k = k % 3;
         let m = *x.summary.as_deref().expect("steady");
@@ -281,8 +288,9 @@ fn steady_outcomes_agree_with_the_scalar_path() {
         let idx: Vec<usize> = (k..s.len()).step_by(2).collect();
         let sk: Vec<Slider> = idx.iter().map(|&i| s[i]).collect();
         let yk: Vec<State> = idx.iter().map(|&i| y0[i]).collect();
-        for (j, x) in
-            lanes5(&sk, &yk, 0.0, &tol(1e-8), Task::Steady { opts: &opts, decay: None }).into_iter().enumerate()
+        for (j, x) in lanes5(&sk, &yk, 0.0, &tol(1e-8), Task::Steady { opts: &opts, decay: None, known: None })
+            .into_iter()
+            .enumerate()
         {
             r[idx[j]] = Some(x);
         }
@@ -329,7 +337,8 @@ fn results_do_not_depend_on_the_batch() {
         if name == "stick_slip" {
             continue;
         }
-        let tasks = [Task::Final, Task::Sampled(&te), Task::Steady { opts: &opts, decay: None }, Task::Events];
+        let tasks =
+            [Task::Final, Task::Sampled(&te), Task::Steady { opts: &opts, decay: None, known: None }, Task::Events];
         for (method, task) in [Method::Dopri5, Method::Dop853].into_iter().flat_map(|m| tasks.map(|t| (m, t))) {
             let t = tol(1e-7);
             let all = run_lanes(&s, &y0, 0.1, method, &t, task);
@@ -449,7 +458,13 @@ fn steady_throughput() {
     for _ in 0..3 {
         if path != "scalar" {
             best[0] = best[0].min(time(&|| {
-                std::hint::black_box(lanes5(&sliders, &y0, 0.0, &tol(1e-6), Task::Steady { opts: &opts, decay: None }));
+                std::hint::black_box(lanes5(
+                    &sliders,
+                    &y0,
+                    0.0,
+                    &tol(1e-6),
+                    Task::Steady { opts: &opts, decay: None, known: None },
+                ));
             }));
         }
         if path != "lanes" {
@@ -460,7 +475,7 @@ fn steady_throughput() {
             }));
         }
     }
-    let r = lanes5(&sliders, &y0, 0.0, &tol(1e-6), Task::Steady { opts: &opts, decay: None });
+    let r = lanes5(&sliders, &y0, 0.0, &tol(1e-6), Task::Steady { opts: &opts, decay: None, known: None });
     let steps: u64 = r.iter().map(|x| x.run.stats.n_accept + x.run.stats.n_reject).sum();
     let events: u64 = r.iter().map(|x| x.run.stats.n_events).sum();
     let simulated: f64 = r.iter().map(|x| x.run.t).sum();
@@ -593,7 +608,7 @@ fn driver_cost() {
         watch_x: false,
         ..SteadyOptions::default()
     };
-    let watched = Task::Steady { opts: &steady, decay: None };
+    let watched = Task::Steady { opts: &steady, decay: None, known: None };
     for (name, m, sl, task) in [
         ("dopri5", Method::Dopri5, &sliders, Task::Final),
         ("dop853", Method::Dop853, &sliders, Task::Final),
