@@ -80,7 +80,12 @@ Early stops
     sweep from 7.8 s to 5.8 s on 2 cores; 3 of 5,776 labels change (2 cycles and 1 return to
     sliding that came after a long chaotic transient are reported ``irregular``), no point's
     fraction moves by 2 standard errors; against runs to ``t_max`` = 30 s, 67 labels differ (64
-    without recurrence) and the same 5 points move by more than 2 (none by 3).
+    without recurrence) and the same 5 points move by more than 2 (none by 3). A third phase
+    (``PHASE_STARTS = (0, 2, 6)``: samples 2-5 establishing attractors for the rest) saved 9 % more
+    right-hand sides but relabelled 19 samples instead of 3 (13 cycles, 5 returns to sliding),
+    9 points moving by 2 standard errors against runs to ``t_max``: where the pilots are not
+    irregular, irregular motion is rarer and more often a long transient, whose fingerprint then
+    stops samples that would have settled. Not kept.
 """
 
 from __future__ import annotations
@@ -106,10 +111,16 @@ CYCLE_TOL: float = 1e-2
 #: half of |z_st|), and shrinking.
 RETURN_FRACTION: float = 0.4
 
-#: The first samples of each point (Halton indices 1, 2) are its pilots: run first, with the
-#: three-block stationarity test alone; their irregular attractors' fingerprints let the other
-#: samples stop on one matching block. As many as the core compares (``KNOWN_MAX``).
-PILOTS: int = 2
+#: The census runs each point's samples in phases starting at these indices (then ``K``). The
+#: first phase (the pilots, Halton indices 1, 2) decides by the three-block stationarity test
+#: alone; each later phase also stops on one block that matches an irregular attractor an earlier
+#: phase established (recurrence). The phases are fixed samples of the point, so nothing depends on
+#: threads, chunking or order.
+PHASE_STARTS: tuple[int, ...] = (0, 2)
+#: Pilots: the samples of the first phase.
+PILOTS: int = PHASE_STARTS[1]
+#: Most known irregular attractors a sample compares its blocks with (the core's ``KNOWN_MAX``).
+KNOWN: int = 2
 
 _HALTON_BASES = (2, 3, 5, 7)
 
@@ -408,13 +419,11 @@ def run(
 
     # Two phases: the pilots establish each point's irregular attractors; the other samples stop
     # as soon as a block of their sections matches one (recurrence), instead of three blocks.
-    pilots = min(PILOTS, samples) if irregular_block > 0 and recurrence else samples
-    first = batch(slice(0, pilots), None)
-    if pilots < samples:
-        rest = batch(slice(pilots, samples), fingerprints(first))
-        res = {key: np.concatenate([first[key], rest[key]], axis=1) for key in first}
-    else:
-        res = first
+    cuts = phases(samples) if irregular_block > 0 and recurrence else [0, samples]
+    res: dict[str, np.ndarray] = {}
+    for a, b in zip(cuts[:-1], cuts[1:]):
+        part = batch(slice(a, b), fingerprints(res) if res else None)
+        res = {key: np.concatenate([res[key], part[key]], axis=1) for key in part} if res else part
     outcome, status = res["outcome"], res["status"]
     attractor = np.vectorize(lambda o: _ATTRACTOR_OF[OUTCOME_NAMES[o]], otypes=[np.int64])(outcome)
     # A run that stopped at t_max is bounded motion (irregular) only if it was not a numerical failure.
@@ -464,15 +473,23 @@ def run(
     return out, per_sample
 
 
-def fingerprints(pilots: Mapping[str, np.ndarray]) -> np.ndarray:
-    """The fingerprints ``(m, PILOTS, 7)`` of the pilots that ended stationary-irregular (residual, then
-    the six largest excursions; NaN rows for the others), as the core's ``known_irregular``."""
-    res, peaks = pilots["irregular_residual"], pilots["irregular_peaks"]
-    m, k = res.shape
-    out = np.full((m, PILOTS, 7), np.nan)
-    own = np.isfinite(res) & ~pilots["irregular_matched"]
-    out[:, :k, 0] = np.where(own, res, np.nan)
-    out[:, :k, 1:] = np.where(own[..., None], peaks, np.nan)
+def phases(samples: int) -> list[int]:
+    """Sample indices at which the census's phases start, and ``samples``: ``PHASE_STARTS`` below ``samples``."""
+    return [c for c in PHASE_STARTS if c < samples] + [samples]
+
+
+def fingerprints(done: Mapping[str, np.ndarray]) -> np.ndarray:
+    """The irregular attractors the samples ``done`` established, as the core's ``known_irregular``
+    ``(m, KNOWN, 7)``: per point, the fingerprints (residual, then the six largest excursions) of
+    its first ``KNOWN`` samples that ended stationary-irregular, in sample order; NaN rows for
+    empty slots."""
+    res, peaks = done["irregular_residual"], done["irregular_peaks"]
+    own = np.isfinite(res) & ~done["irregular_matched"]
+    out = np.full((res.shape[0], KNOWN, 7), np.nan)
+    for i, j in zip(*np.nonzero(own)):
+        slot = int(np.sum(own[i, :j]))
+        if slot < KNOWN:
+            out[i, slot, 0], out[i, slot, 1:] = res[i, j], peaks[i, j]
     return out
 
 
