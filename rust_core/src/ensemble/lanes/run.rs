@@ -2,7 +2,7 @@
 //! the controller, the common accepted step on the lanes, and the cold path for lanes that need
 //! their scalar side (the scalar driver's event code, observers, the end of a run).
 
-use super::slider::{events_lanes, hidden_crossings, Coef, SliderRhs, EV_COMPS, EV_COMPS_CONST, NE};
+use super::slider::{events_at, events_lanes, hidden_crossings, Coef, SliderRhs, EV_COMPS, EV_COMPS_CONST, NE};
 use super::state::{finish, refill, sync_from_side, sync_to_side, Feed, Input, Lanes, Side, Watch};
 use crate::cancel;
 use crate::ensemble::{Task, TrajectoryResult};
@@ -54,6 +54,7 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
         contact: [true; W],
         g0: [splat(1.0); NE],
         pend: [[false; W]; NE],
+        pend_t: [splat(f64::NAN); NE],
         min_n: zero,
         max_gap: zero,
         min_vr: zero,
@@ -279,6 +280,32 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
                 busy[l] |= ln.pend[e][l] | cross(ln.g0[e][l], g1[e][l]);
             }
         }
+        // A lane busy only with pending events goes to the cold path for `step_events` to read
+        // each pending function just after its event and clear it; where the hidden-crossing check
+        // built (and counted) the lane's interpolant this step, that reading is done here, on the
+        // same coefficients with the same operations (the scalar's bits). Whatever the cold path would decide
+        // otherwise (a crossing after the check, a zero or NaN reading, a zero at the step end)
+        // still goes there.
+        if UNI {
+            // Lanes the check counted its interpolant for (the cold path reuses it uncounted),
+            // busy with no sign change and no zero at the step end.
+            let mut cand = [false; W];
+            for l in 0..W {
+                let mut quiet = true;
+                for e in 0..NE {
+                    quiet &= !cross(ln.g0[e][l], g1[e][l]) & (g1[e][l] != 0.0);
+                }
+                cand[l] = busy[l] & acc_ok[l] & need[l] & ok[l] & quiet;
+            }
+            if cand.iter().any(|&x| x) {
+                let span = (&t_start, &t_new, &hh);
+                if COUL {
+                    pending_on_lanes::<COUL, 5>(&mut ln, &ev5, &cand, &g1, span, &mut busy);
+                } else {
+                    pending_on_lanes::<COUL, 3>(&mut ln, &ev3, &cand, &g1, span, &mut busy);
+                }
+            }
+        }
         for l in 0..W {
             let mut a = busy[l] | last[l];
             if steady {
@@ -483,6 +510,7 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
                     for e in 0..NE {
                         ln.g0[e][l] = g[e];
                         ln.pend[e][l] = pend[e].is_some();
+                        ln.pend_t[e][l] = pend[e].unwrap_or(f64::NAN);
                     }
                     ln.t[l] = t;
                     ln.contact[l] = contact;
@@ -500,6 +528,7 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
                             sd.pend[e] = Some(t_new[l]);
                         }
                         ln.pend[e][l] = sd.pend[e].is_some();
+                        ln.pend_t[e][l] = sd.pend[e].unwrap_or(f64::NAN);
                     }
                     if last[l] {
                         finish(&mut ln, l, t_new[l], y1, hh[l], Outcome::Finished, &mut out);
@@ -510,6 +539,59 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
         }
     }
     out
+}
+
+/// The cold path's reading of the pending event functions (`step_events`) for the lanes `cand`,
+/// on their interpolant `dense` (built this step by the hidden-crossing check: the scalar's
+/// coefficients and operations, so the same bits): each pending function read at its check time
+/// that is inside the step, nonzero and of the step end's sign is cleared, and the lane is no
+/// longer busy. A lane with a reading the cold path would act on (zero, NaN, or a sign change
+/// after the check: a crossing to locate) is left as it was, busy.
+#[inline(never)]
+fn pending_on_lanes<const COUL: bool, const C: usize>(
+    ln: &mut Lanes<'_>,
+    dense: &LaneDense<C>,
+    cand: &[bool; W],
+    g1: &[L; NE],
+    (t_start, t_new, hh): (&L, &L, &L),
+    busy: &mut [bool; W],
+) {
+    for l in 0..W {
+        if !cand[l] {
+            continue;
+        }
+        let (t0, t1) = (t_start[l], t_new[l]);
+        let sd = ln.side[l].as_mut().expect("busy only on live lanes");
+        let guard = sd.opts.event_guard;
+        let mut clear = [false; NE];
+        let mut here = true;
+        for e in 0..NE {
+            if !ln.pend[e][l] {
+                continue;
+            }
+            let tc = (ln.pend_t[e][l] + guard).max(t0 + 1e-6 * (t1 - t0));
+            if tc >= t1 {
+                continue;
+            }
+            let gc = events_at::<COUL>(&ln.c, &dense.eval_lane(l, (tc - t0) / hh[l]), l)[e];
+            if gc == 0.0 || gc.is_nan() || cross(gc, g1[e][l]) {
+                here = false;
+                break;
+            }
+            clear[e] = true;
+        }
+        if !here {
+            continue;
+        }
+        for e in 0..NE {
+            if clear[e] {
+                ln.pend[e][l] = false;
+                ln.pend_t[e][l] = f64::NAN;
+                sd.pend[e] = None;
+            }
+        }
+        busy[l] = false;
+    }
 }
 
 /// Safety factor of [`near_events`].

@@ -187,6 +187,23 @@ pub(super) fn events_lanes<const COUL: bool>(c: &Coef, y: &V6, fzl: &L, g: &mut 
     }
 }
 
+/// The event functions of lane `l` from its interpolant's components there: EV_COMPS (5 values,
+/// speed-dependent friction) or EV_COMPS_CONST (3: z, zd, phi), as `Slider::events` computes them.
+#[inline(always)]
+pub(super) fn events_at<const COUL: bool>(c: &Coef, v: &[f64], l: usize) -> [f64; NE] {
+    let n = v.len();
+    let (ip, ixd, iphd) = if n == 5 { (3, 2, 4) } else { (2, usize::MAX, usize::MAX) };
+    let at = |k: usize| if k < n { v[k] } else { 0.0 };
+    let (z, zd, ph) = (v[0], v[1], at(ip));
+    let fz = -c.ks[l] * z + c.ka[l] * z * z - c.c[l] * zd + c.kphi[l] * ph;
+    let mut g = [0.0; NE];
+    g[event::GAP] = c.zst[l] + z;
+    g[event::NORMAL] = c.fst[l] + fz;
+    g[event::SLIP] = if COUL { c.v[l] - (at(ixd) + c.sl[l] * at(iphd)) } else { 1.0 };
+    g[event::ESCAPE] = c.esc[l] - z.abs();
+    g
+}
+
 /// The scalar driver's hidden-crossing check on all lanes at once: at the three interior points
 /// `x = 1/4, 1/2, 3/4` of each accepted step's interpolant and at each lane's own turning point
 /// `turn[l]` (0: none; see `run::near_events`), an event function that is not pending and differs
@@ -204,20 +221,7 @@ pub(super) fn hidden_crossings<const COUL: bool, const C: usize>(
     turn: &L,
     hidden: &mut L,
 ) {
-    // The event functions of lane `l` from the interpolant's components there: EV_COMPS (C = 5)
-    // or EV_COMPS_CONST (C = 3).
-    let g_at = |v: [f64; C], l: usize| {
-        let (ip, ixd, iphd) = if C == 5 { (3, 2, 4) } else { (2, usize::MAX, usize::MAX) };
-        let at = |k: usize| if k < C { v[k] } else { 0.0 };
-        let (z, zd, ph) = (v[0], v[1], at(ip));
-        let fz = -c.ks[l] * z + c.ka[l] * z * z - c.c[l] * zd + c.kphi[l] * ph;
-        let mut g = [0.0; NE];
-        g[event::GAP] = c.zst[l] + z;
-        g[event::NORMAL] = c.fst[l] + fz;
-        g[event::SLIP] = if COUL { c.v[l] - (at(ixd) + c.sl[l] * at(iphd)) } else { 1.0 };
-        g[event::ESCAPE] = c.esc[l] - z.abs();
-        g
-    };
+    let g_at = |v: [f64; C], l: usize| events_at::<COUL>(c, &v, l);
     let hit_of = |g: &[f64; NE], l: usize| {
         let mut hit = false;
         for e in 0..NE {

@@ -113,6 +113,8 @@ pub(super) struct Lanes<'a> {
     pub(super) contact: [bool; W],
     pub(super) g0: [L; NE],
     pub(super) pend: [[bool; W]; NE],
+    /// Where `pend` is set, the pending event's time (the side's `pend`), else NaN.
+    pub(super) pend_t: [L; NE],
     pub(super) min_n: L,
     pub(super) max_gap: L,
     pub(super) min_vr: L,
@@ -228,6 +230,7 @@ fn idle(ln: &mut Lanes<'_>, l: usize) {
     for e in 0..NE {
         ln.g0[e][l] = 1.0;
         ln.pend[e][l] = false;
+        ln.pend_t[e][l] = f64::NAN;
     }
     ln.rest[l] = f64::NEG_INFINITY;
     ln.next_sample[l] = f64::INFINITY;
@@ -309,6 +312,7 @@ pub(super) fn refill<'a>(ln: &mut Lanes<'a>, l: usize, inp: &Input<'a, '_>, out:
             }
             ln.g0[e][l] = g[e];
             ln.pend[e][l] = g[e] == 0.0;
+            ln.pend_t[e][l] = if g[e] == 0.0 { 0.0 } else { f64::NAN };
         }
         let atol: [f64; 6] = std::array::from_fn(|k| opts.atol[k]);
         ln.c.set(l, s, &atol);
