@@ -7,6 +7,7 @@ run in the same process (the machines are shared: absolute seconds drift with th
     python benches/bench_census.py --sweep-points 120 --samples 16 --threads 2
     python benches/bench_census.py --scipy 128 --sweep-points 0   # labels against scipy, 128 starts
     python benches/bench_census.py --compare --sweep-points 0     # the stationarity stop against t_max
+    python benches/bench_census.py --recurrence --sweep-points 0  # recurrence on the pilots' attractors, on/off
     python benches/bench_census.py --rtol 1e-6,1e-8,1e-10 --sweep-points 0   # the census's accuracy and cost
 """
 
@@ -118,6 +119,34 @@ def compare_irregular_stop(n_loads: int, n_arms: int, k: int, threads: int | Non
           f"at {load:.1f} N, {100 * arm:.1f} cm)")  # fmt: skip
 
 
+def compare_recurrence(k: int, threads: int | None) -> None:
+    """The census with recurrence on the pilots' attractors against each sample deciding by its own
+    blocks, sample by sample, on the points the default sweep censuses."""
+    import dataclasses
+
+    pts = grid_points(40, 10, threads)
+    models = [dataclasses.replace(ts.apparatus_model(a, b, 0.3), contact="unilateral") for a, b in pts]
+    out = {}
+    for rec in (False, True):
+        t0 = time.perf_counter()
+        runs = [ts.census(m, samples=k, recurrence=rec, threads=threads) for m in models]
+        out[rec] = (time.perf_counter() - t0, np.array([r.attractor_reached.values for r in runs]),
+                    np.array([r.t_end.values for r in runs]), np.array([r.n_rhs.values for r in runs]),
+                    int(sum(int(r.recurrence.sum()) for r in runs)))  # fmt: skip
+    (w0, a0, t0_, r0, _), (w1, a1, t1_, r1, n_rec) = out[False], out[True]
+    names = ts.ATTRACTOR_NAMES
+    moved = a0 != a1
+    pairs: dict[str, int] = {}
+    for x, y in zip(a0[moved], a1[moved]):
+        key = f"{names[x] if x >= 0 else 'failed'} -> {names[y] if y >= 0 else 'failed'}"
+        pairs[key] = pairs.get(key, 0) + 1
+    z = fraction_shift(a0, a1, k)
+    print(f"census of {len(pts)} grid points x K = {k}, own blocks -> recurrence: {w0:.1f} -> {w1:.1f} s, simulated "
+          f"{t0_.sum():.0f} -> {t1_.sum():.0f} s, right-hand sides {r1.sum() / r0.sum():.3f}x; {n_rec} samples "
+          f"stopped by recurrence; labels that differ: {int(moved.sum())} of {a0.size}: {pairs}; points where a "
+          f"fraction moves by more than 2 / 3 standard errors: {int((z > 2).sum())} / {int((z > 3).sum())}")  # fmt: skip
+
+
 def fractions(labels: np.ndarray) -> np.ndarray:
     """Per point (rows of ``labels``, K samples each), the fraction of its valid samples on each attractor."""
     n = len(ts.ATTRACTOR_NAMES)
@@ -176,7 +205,9 @@ def main() -> None:
     ap.add_argument("--rtol", type=str, default="",
                     help="comma-separated rtols: the census of the grid's points at each (K = --samples)")
     ap.add_argument("--compare", action="store_true",
-                    help="the stationarity stop against runs to t_max (K = --samples)")  # fmt: skip
+                    help="the stationarity stop against runs to t_max (K = --samples)")
+    ap.add_argument("--recurrence", action="store_true",
+                    help="recurrence on the pilots' attractors against each sample's own blocks (K = --samples)")  # fmt: skip
     a = ap.parse_args()
     print(f"cores {os.cpu_count()}, load average {os.getloadavg()[0]:.2f}")
     one_point(a.samples_one, a.threads)
@@ -186,6 +217,8 @@ def main() -> None:
         rtol_agreement([float(x) for x in a.rtol.split(",")], a.samples, a.threads)
     if a.compare:
         compare_irregular_stop(40, 10, a.samples, a.threads)
+    if a.recurrence:
+        compare_recurrence(a.samples, a.threads)
     if a.sweep_points == 2000:
         sweep(40, 10, 5, a.samples, a.threads)
     elif a.sweep_points == 120:

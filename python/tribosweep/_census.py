@@ -75,12 +75,13 @@ Early stops
     fingerprint within the same tolerances (25 % and 5 %, residual above the floor): one block
     instead of three. The pilots are fixed samples of the point, so this depends on nothing but
     the point. ``recurrence=False`` (or ``irregular_block=0``) turns it off. Measured on the default
-    sweep's 361 censused points at K = 16 (2026-11-26, 169 points with an irregular pilot): the
-    simulated time falls from 26,086 s to 20,903 s (right-hand sides 0.78x) and the 2,000-point
-    sweep from 7.8 s to 5.8 s on 2 cores; 3 of 5,776 labels change (2 cycles and 1 return to
-    sliding that came after a long chaotic transient are reported ``irregular``), no point's
-    fraction moves by 2 standard errors; against runs to ``t_max`` = 30 s, 67 labels differ (64
-    without recurrence) and the same 5 points move by more than 2 (none by 3). A third phase
+    sweep's 361 censused points at K = 16 (``python benches/bench_census.py --recurrence
+    --sweep-points 0``, 2026-11-26): the simulated time falls from 25,640 s to 20,617 s
+    (right-hand sides 0.79x; 1,061 samples stop by recurrence) and the 2,000-point sweep from
+    7.8 s to 5.8-6.0 s on 2 cores; 6 of 5,776 labels change (5 cycles and 1 return to sliding that
+    came after a long chaotic transient are reported ``irregular``), no point's fraction moves by
+    2 standard errors. Against runs to ``t_max`` = 30 s (an earlier build, same test): 67 labels
+    differ (64 without recurrence) and the same 5 points move by more than 2 (none by 3). A third phase
     (``PHASE_STARTS = (0, 2, 6)``: samples 2-5 establishing attractors for the rest) saved 9 % more
     right-hand sides but relabelled 19 samples instead of 3 (13 cycles, 5 returns to sliding),
     9 points moving by 2 standard errors against runs to ``t_max``: where the pilots are not
