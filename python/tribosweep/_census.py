@@ -83,7 +83,8 @@ Early stops
     2 standard errors. Against runs to ``t_max`` = 30 s (an earlier build, same test): 67 labels
     differ (64 without recurrence) and the same 5 points move by more than 2 (none by 3). A third phase
     (``PHASE_STARTS = (0, 2, 6)``: samples 2-5 establishing attractors for the rest) saved 9 % more
-    right-hand sides but relabelled 19 samples instead of 3 (13 cycles, 5 returns to sliding),
+    right-hand sides but relabelled 19 samples instead of 3 (13 cycles, 5 returns to sliding; same
+    earlier build),
     9 points moving by 2 standard errors against runs to ``t_max``: where the pilots are not
     irregular, irregular motion is rarer and more often a long transient, whose fingerprint then
     stops samples that would have settled. Not kept.
@@ -375,7 +376,8 @@ def run(
     irregular_block: int = DEFAULTS.irregular.block,
     recurrence: bool = True,
 ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
-    """Census of the points ``sel`` of a chunk: one batched call for every sample of every point.
+    """Census of the points ``sel`` of a chunk: one batched call per phase (``PHASE_STARTS``) for those
+    samples of every point.
 
     Parameters
     ----------
@@ -418,8 +420,8 @@ def run(
         )  # fmt: skip
         return {key: np.asarray(v).reshape((m, k) + np.shape(v)[1:]) for key, v in r.items()}
 
-    # Two phases: the pilots establish each point's irregular attractors; the other samples stop
-    # as soon as a block of their sections matches one (recurrence), instead of three blocks.
+    # Phases: the pilots establish each point's irregular attractors; the later samples stop as
+    # soon as a block of their sections matches one (recurrence), instead of three blocks.
     cuts = phases(samples) if irregular_block > 0 and recurrence else [0, samples]
     res: dict[str, np.ndarray] = {}
     for a, b in zip(cuts[:-1], cuts[1:]):
