@@ -84,8 +84,7 @@ Early stops
     differ (64 without recurrence) and the same 5 points move by more than 2 (none by 3). A third phase
     (``PHASE_STARTS = (0, 2, 6)``: samples 2-5 establishing attractors for the rest) saved 9 % more
     right-hand sides but relabelled 19 samples instead of 3 (13 cycles, 5 returns to sliding; same
-    earlier build),
-    9 points moving by 2 standard errors against runs to ``t_max``: where the pilots are not
+    earlier build), 9 points moving by 2 standard errors against runs to ``t_max``: where the pilots are not
     irregular, irregular motion is rarer and more often a long transient, whose fingerprint then
     stops samples that would have settled. Not kept.
 """
