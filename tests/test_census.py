@@ -237,6 +237,18 @@ def test_a_sweep_point_says_how_its_irregular_samples_were_decided():
     assert text + f"attractor, {late} at the census t_max)" in str(ds.reason.item()), ds.reason.item()
 
 
+def test_a_sweep_without_recurrence_is_the_standalone_census_without_it():
+    # census_recurrence=False reaches the census: the sweep point's fractions are those of
+    # ts.census(..., recurrence=False), and its reason counts no sample stopped by recurrence.
+    m = ts.apparatus_model(20.7692, 0.1099, 0.3, base=SEED_U)
+    ds = ts.sweep(normal_load=[20.7692], arm_length=[0.1099], sliding_speed=[0.3], samples=16, progress=False,
+                  census_recurrence=False)  # fmt: skip
+    alone = ts.census(m, samples=16, recurrence=False)
+    np.testing.assert_array_equal(ds.basin_fraction.values.ravel(), alone.basin_fraction.values)
+    assert "0 by recurrence on a pilot's attractor" in str(ds.reason.item()), ds.reason.item()
+    assert ds.attrs["solver_census_recurrence"] == 0
+
+
 def test_the_return_to_sliding_is_measured_in_the_saddle_cycles_own_shape(seed64):
     # The thresholds are RETURN_FRACTION of the describing function's saddle root in every
     # component (docs/model.md §5: A1 = 21.52 um, phi1 = 2.066e-3 rad, omega = 647.56 rad/s at the

@@ -139,6 +139,20 @@ def test_census_flags_and_config(tmp_path, capsys):
     assert code == 0, err
     with xr.open_dataset(tmp_path / "n.nc") as ds:
         assert int(ds.census_samples.item()) == 0 and int(ds.bistable.item()) == -1
+    # Recurrence: on by default, off by the flag or the [census] key (recorded in the file).
+    with xr.open_dataset(nc) as ds:
+        assert ds.attrs["solver_census_recurrence"] == 1
+    for extra, text in (([], "[census]\nrecurrence = false\n"), (["--no-recurrence"], "")):
+        cfg.write_text(text)
+        out_nc = tmp_path / f"r{len(extra)}.nc"
+        code, _, err = run(["sweep", "--normal-load", "84.46", "--config", cfg, "--samples", "4", "-o", out_nc,
+                            "--no-progress", *extra], capsys)  # fmt: skip
+        assert code == 0, err
+        with xr.open_dataset(out_nc) as ds:
+            assert ds.attrs["solver_census_recurrence"] == 0
+    cfg.write_text("[census]\nrecurrence = 1\n")
+    code, _, err = run(["sweep", "--normal-load", "84.46", "--config", cfg, "-o", tmp_path / "y.nc"], capsys)
+    assert code == 2 and "census_recurrence = 1 is not valid: must be true or false" in err, err
     cfg.write_text("[census]\nsamplez = 6\n")
     code, _, err = run(["sweep", "--config", cfg, "-o", tmp_path / "x.nc"], capsys)
     assert code == 2 and "unknown [census] keys ['samplez']" in err
@@ -294,6 +308,7 @@ def test_every_sweep_argument_is_a_cli_flag_and_a_config_key():
         "executor": "an object: no command-line form (dask runs through the API)",
         "progress": "--no-progress",
         "census": "--no-census and [census] enabled",
+        "census_recurrence": "--no-recurrence and [census] recurrence",
         "wear_reference": "the [wear_reference] table",
         "wear_calibration": "an object of the API only",
         "command": "the command line itself",

@@ -151,6 +151,11 @@ class Census:
         the rest are boundary samples, whose fate is a coin toss at any tolerance), no point's
         fraction moves by 2 standard errors, and the census costs 0.78-0.86x that at 1e-8
         (``benches/bench_census.py --rtol``).
+    recurrence : bool
+        Let the samples after each point's two pilots stop as irregular on one block of sections
+        that matches an irregular attractor a pilot established (True; see ``tribosweep._census``):
+        on the default grid 0.79x the right-hand sides, 6 of 5,776 labels changed
+        (``benches/bench_census.py --recurrence``). False: each sample decides by its own blocks.
 
     Notes
     -----
@@ -163,9 +168,13 @@ class Census:
     t_max: float = 30.0
     disturbance_scale: float = 3.0
     rtol: float = 1e-6
+    recurrence: bool = True
 
     def __post_init__(self):
         _set(self, "enabled", bool(self.enabled))
+        if not isinstance(self.recurrence, (bool, np.bool_)):
+            raise ValueError(f"census_recurrence = {self.recurrence!r} is not valid: must be true or false")
+        _set(self, "recurrence", bool(self.recurrence))
         if isinstance(self.samples, bool) or not isinstance(self.samples, (int, np.integer)) or not (
             1 <= self.samples <= 100_000
         ):
@@ -268,6 +277,7 @@ _FLAT: tuple[tuple[str, str, str], ...] = (
     ("census_t_max", "census", "t_max"),
     ("disturbance_scale", "census", "disturbance_scale"),
     ("census_rtol", "census", "rtol"),
+    ("census_recurrence", "census", "recurrence"),
     ("unstable_disturbance", "", "unstable_disturbance"),
     ("irregular_block", "irregular", "block"),
     ("irregular_window", "irregular", "window"),

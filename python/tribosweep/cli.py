@@ -139,7 +139,7 @@ _DASK_KEYS = {"scheduler"}
 _SOLVER_KEYS = set(_SETTINGS) | {"census"}
 #: [census] keys -> sweep() arguments.
 _CENSUS_KEYS = {"enabled": "census", "samples": "samples", "t_max": "census_t_max",
-                "disturbance_scale": "disturbance_scale", "rtol": "census_rtol"}  # fmt: skip
+                "disturbance_scale": "disturbance_scale", "rtol": "census_rtol", "recurrence": "census_recurrence"}  # fmt: skip
 
 
 def _default(name: str):
@@ -229,7 +229,8 @@ def _add_sweep_arguments(p: argparse.ArgumentParser) -> None:
             "(about 0: quasi-periodic; > 0: chaotic) with its standard error.",
         ),
         "census": p.add_argument_group(
-            "attractor census (also the [census] table: enabled, samples, t_max, disturbance_scale, rtol)",
+            "attractor census (also the [census] table: enabled, samples, t_max, disturbance_scale, rtol, "
+            "recurrence)",
             "auto: at stable points with a saddle cycle, K disturbances on the torsion and normal modes are each run "
             "to their attractor; the sweep reports the fraction reaching sliding / a cycle / irregular motion / "
             "escape, with standard errors. It is most of an auto sweep's cost (about K runs of up to --census-t-max "
@@ -237,6 +238,9 @@ def _add_sweep_arguments(p: argparse.ArgumentParser) -> None:
         ),
     }
     groups["census"].add_argument("--no-census", action="store_true", help="skip the census (fractions left empty)")
+    groups["census"].add_argument("--no-recurrence", action="store_true",
+                                  help="every census disturbance decides by its own blocks, none by recurrence on an "
+                                  "irregular attractor a pilot sample of its point established")  # fmt: skip
     for name, (group, kind, metavar, text) in _SETTINGS.items():
         default = _default(name)
         shown = "" if default is None or "(default" in text else f" (default {default:g})" if isinstance(
@@ -287,6 +291,8 @@ def _run_sweep(args: argparse.Namespace) -> int:
             solver[key] = getattr(args, key)
     if args.no_census:
         solver["census"] = False
+    if args.no_recurrence:
+        solver["census_recurrence"] = False
     try:
         wear_reference = WearReference(**cfg["wear_reference"]) if "wear_reference" in cfg else None
     except TypeError as e:

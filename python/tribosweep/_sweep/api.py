@@ -74,6 +74,7 @@ def sweep(
     census_t_max: float = _D.census.t_max,
     disturbance_scale: float = _D.census.disturbance_scale,
     census_rtol: float = _D.census.rtol,
+    census_recurrence: bool = _D.census.recurrence,
     unstable_disturbance: float = _D.unstable_disturbance,
     shooting_rtol: float = _D.shooting.rtol,
     shooting_tol: float = _D.shooting.tol,
@@ -195,6 +196,10 @@ def sweep(
         Relative tolerance of the census disturbances' runs (1e-6; the integrator is
         ``integrator``'s). Labels agree with those at rtol 1e-10 as well as at 1e-8, at 0.78-0.86x the
         cost (see ``tribosweep._settings.Census``).
+    census_recurrence : bool
+        Let census samples stop as irregular on one block of sections that matches an irregular
+        attractor one of the point's two pilot samples established (default True; False: each
+        sample decides by its own three blocks). See ``tribosweep._census``.
     unstable_disturbance : float
         ``auto``: transients of linearly unstable points start on the unstable mode with
         ``|z| = unstable_disturbance |z_st|``.
@@ -323,7 +328,8 @@ def sweep(
     settings = SweepSettings.from_flat(
         t_max=t_max, integrator=integrator, rtol=rtol, atol=atol, periodic_tol=periodic_tol,
         decay_amplitude=decay_amplitude, census=census, samples=samples, census_t_max=census_t_max,
-        disturbance_scale=disturbance_scale, census_rtol=census_rtol, unstable_disturbance=unstable_disturbance, shooting_rtol=shooting_rtol,
+        disturbance_scale=disturbance_scale, census_rtol=census_rtol, census_recurrence=census_recurrence,
+        unstable_disturbance=unstable_disturbance, shooting_rtol=shooting_rtol,
         shooting_tol=shooting_tol, irregular_block=irregular_block, irregular_window=irregular_window,
         irregular_sample_dt=irregular_sample_dt,
         ftle_tau=ftle_tau, ftle_segments=ftle_segments, ftle_warmup=ftle_warmup, ftle_d0=ftle_d0, ftle_rtol=ftle_rtol,

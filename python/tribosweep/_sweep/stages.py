@@ -437,7 +437,7 @@ def census(p: Points) -> None:
         integrator=it.integrator, rtol=cs.rtol, atol=None if it.atol is None else list(it.atol),
         periodic_tol=p.settings.steady.periodic_tol, threads=p.threads,
         eigenvalues=p.eigenvalues[cand], linear_frequency=out["linear_frequency"][cand],
-        saddle=p.saddle[cand], irregular_block=p.settings.irregular.block,
+        saddle=p.saddle[cand], irregular_block=p.settings.irregular.block, recurrence=cs.recurrence,
     )  # fmt: skip
     p.charge(cand, t1)
     out["n_rhs"][cand] += per["n_rhs"].sum(axis=1)
