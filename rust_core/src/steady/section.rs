@@ -56,9 +56,6 @@ pub const STATIONARY_FLOOR: f64 = 100.0;
 /// then rounding and integration error, steady from block to block, and must not pass for
 /// irregular motion).
 pub const STATIONARY_MIN_RESIDUAL: f64 = 1e-3;
-/// Consecutive blocks that must each match one known fingerprint (`SteadyOptions::known_irregular`)
-/// for a run to end as irregular by recurrence.
-pub const KNOWN_BLOCKS: usize = 1;
 
 /// One block of sections: the mean repetition residual and the largest excursion of each
 /// component, both in units of the characteristic sizes.
@@ -89,9 +86,8 @@ struct Stationarity {
     peaks: [f64; 6],
     done: [Block; 3],
     n_done: usize,
-    /// Fingerprints of known attractors, and how many blocks in a row matched one of them.
+    /// Fingerprints of known attractors (`SteadyOptions::known_irregular`).
     known: Known,
-    in_row: usize,
 }
 
 /// Whether two positive statistics agree within `tol` (the smaller at least `1 - tol` of the larger).
@@ -143,18 +139,16 @@ impl Stationarity {
         Fingerprint { residual: b.residual, peaks: b.peaks }
     }
 
-    /// Count the newest block towards a match with a known fingerprint: `true` once
-    /// [`KNOWN_BLOCKS`] blocks in a row have each matched one, within the stationarity tolerances
-    /// and above the residual floor (a cycle's approach never matches).
-    fn matched(&mut self, floor: f64, comps: &[usize]) -> bool {
+    /// Whether the newest block matches a known fingerprint: within the stationarity tolerances,
+    /// and above the residual floor (a cycle's approach never matches). One block suffices: the
+    /// known attractor has already passed the three-block test on another run.
+    fn matched(&self, floor: f64, comps: &[usize]) -> bool {
         let b = self.newest();
-        let hit = b.residual >= floor
+        b.residual >= floor
             && self.known.iter().flatten().any(|k| {
                 close(b.residual, k.residual, STATIONARY_RESIDUAL_TOL)
                     && comps.iter().all(|&c| close(b.peaks[c], k.peaks[c], STATIONARY_PEAK_TOL))
-            });
-        self.in_row = if hit { self.in_row + 1 } else { 0 };
-        self.in_row >= KNOWN_BLOCKS
+            })
     }
 }
 
@@ -194,7 +188,6 @@ impl SectionWatcher {
                 done: [Block::default(); 3],
                 n_done: 0,
                 known: opts.known_irregular,
-                in_row: 0,
             }),
             stationary_floor: (STATIONARY_FLOOR * opts.periodic_tol).max(STATIONARY_MIN_RESIDUAL),
             irregular: false,
