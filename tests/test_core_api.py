@@ -58,6 +58,22 @@ def test_the_exception_hierarchy():
                                    1e-6, kind="steady", known_irregular=np.full((1, 2, 7), np.nan)),
             r"known_irregular must be an \(2, 2, 7\) array .* got shape \[1, 2, 7\]",
         ),
+        (
+            # Cells whose extent is backwards (lower corner above the upper one).
+            lambda: _core.ensemble({}, "unilateral", "constant", [], np.zeros((1, 0)), np.zeros((1, 6)), 0.1, "dop853",
+                                   1e-6, kind="steady", irregular_block=256, known_irregular=np.full((1, 2, 7), np.nan),
+                                   known_cells=np.ones((1, 2, 216), dtype=np.uint64),
+                                   known_cell_extent=np.tile([1.0, 1.0, 1.0, 0.0, 0.0, 0.0], (1, 2, 1))),
+            r"known_cells must be an \(1, 2, 216\) uint64 array and known_cell_extent an \(1, 2, 6\) array whose "
+            r"rows are all NaN \(with zero cells: none\) or finite lower corners below the upper ones; got shapes "
+            r"\[1, 2, 216\] and \[1, 2, 6\]",
+        ),
+        (
+            lambda: _core.ensemble({}, "unilateral", "constant", [], np.zeros((1, 0)), np.zeros((1, 6)), 0.1, "dop853",
+                                   1e-6, kind="steady", irregular_block=256, known_irregular=np.full((1, 2, 7), np.nan),
+                                   known_cells=np.zeros((1, 2, 216), dtype=np.uint64)),
+            r"known_cells and known_cell_extent go together, and with known_irregular",
+        ),
     ],
 )
 def test_bad_input_raises_invalid_argument_naming_it(call, message):

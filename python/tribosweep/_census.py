@@ -70,23 +70,31 @@ Early stops
     Recurrence on a known attractor (the idea of Attractors.jl's recurrence method: a trajectory
     that keeps visiting an attractor already found is on it). The first ``PILOTS`` (2) samples of
     each point run first, with the stationarity test alone. Each one that ends irregular leaves its
-    fingerprint: the mean residual and each component's largest excursion over its three blocks.
-    The other samples then also stop as ``irregular`` on one block of their own that matches a
-    fingerprint within the same tolerances (25 % and 5 %, residual above the floor): one block
-    instead of three. The pilots are fixed samples of the point, so this depends on nothing but
-    the point. ``recurrence=False`` (or ``irregular_block=0``) turns it off. Measured on the default
-    sweep's 361 censused points at K = 16 (``python benches/bench_census.py --recurrence
-    --sweep-points 0``, 2026-11-26): the simulated time falls from 25,640 s to 20,617 s
-    (right-hand sides 0.79x; 1,061 samples stop by recurrence) and the 2,000-point sweep from
-    7.8 s to 5.8-6.0 s on 2 cores; 6 of 5,776 labels change (5 cycles and 1 return to sliding that
-    came after a long chaotic transient are reported ``irregular``), no point's fraction moves by
-    2 standard errors. Against runs to ``t_max`` = 30 s (an earlier build, same test): 67 labels
-    differ (64 without recurrence) and the same 5 points move by more than 2 (none by 3). A third phase
-    (``PHASE_STARTS = (0, 2, 6)``: samples 2-5 establishing attractors for the rest) saved 9 % more
-    right-hand sides but relabelled 19 samples instead of 3 (13 cycles, 5 returns to sliding; same
-    earlier build), 9 points moving by 2 standard errors against runs to ``t_max``: where the pilots are not
-    irregular, irregular motion is rarer and more often a long transient, whose fingerprint then
-    stops samples that would have settled. Not kept.
+    fingerprint: the mean residual and each component's largest excursion over its three blocks,
+    and the cells of state space its sections visited over them (a 24^3 grid over the bounding box
+    of ``(z, phi, phid)`` on the section, each visited cell and its neighbours marked). The other
+    samples then also stop as ``irregular`` once 32 sections in a row fall in a pilot's cells with
+    a mean residual of at least half the pilot's (and above the floor: a cycle approached through
+    the cells does not match), or on one block of their own that matches a fingerprint's statistics
+    within the same tolerances (25 % and 5 %). The pilots are fixed samples of the point, so this
+    depends on nothing but the point. ``recurrence=False`` (or ``irregular_block=0``) turns it off.
+    Measured on the default sweep's 361 censused points at K = 16 (``python benches/bench_census.py
+    --recurrence --sweep-points 0``, 2026-11-26): the simulated time falls from 25,640 s to
+    18,637 s (right-hand sides 0.70x; 1,098 samples stop by recurrence, median 1.1 s); 12 of 5,776
+    labels change (7 cycles and 5 returns to sliding that came after a chaotic transient are
+    reported ``irregular``), no point's fraction moves by 2 standard errors. The block match alone
+    gave 20,617 s and 6 labels; the cells cut the grid's census right-hand sides by a further
+    11 % and the 2,000-point sweep from 6.5-6.7 s to 5.6-5.8 s on this (busier) machine. Against
+    runs to ``t_max`` = 30 s (``--compare``): 79 labels differ (73 with the block match alone), 5
+    points move by more than 2 standard errors and 4 by more than 3 (4 and 2): the cells stop more
+    samples that shadow a pilot's chaotic motion for a while before settling, a chaotic transient
+    longer than the recurrence window. 128 sections in a row: 77 labels, 5 and 3 points, 3 % more
+    simulated time; 64: the same labels as 32, 1.5 % more. A third phase
+    (``PHASE_STARTS = (0, 2, 6)``: samples 2-5 establishing attractors for the rest, block match
+    only) saved 9 % more right-hand sides but relabelled 19 samples instead of 3 (13 cycles, 5
+    returns to sliding), 9 points moving by 2 standard errors against runs to ``t_max``: where the
+    pilots are not irregular, irregular motion is rarer and more often a long transient, whose
+    fingerprint then stops samples that would have settled. Not kept.
 """
 
 from __future__ import annotations
@@ -404,7 +412,7 @@ def run(
     values = np.column_stack([np.asarray(point_params[k], dtype=np.float64)[sel] for k in names])
     decay = return_thresholds(sub, saddle)
 
-    def batch(cols: slice, known: np.ndarray | None) -> dict[str, np.ndarray]:
+    def batch(cols: slice, known: tuple[np.ndarray, np.ndarray, np.ndarray] | None) -> dict[str, np.ndarray]:
         """The samples ``cols`` of every point, in one call; arrays shaped ``(m, k, ...)``."""
         k = len(range(samples)[cols])
         r = _core.ensemble(
@@ -415,7 +423,8 @@ def run(
             decay_thresholds=np.ascontiguousarray(np.repeat(decay, k, axis=0)),
             watch_x=False,  # x is left out only where it is slaved (constant friction); the core decides
             irregular_block=int(irregular_block),
-            known_irregular=None if known is None else np.ascontiguousarray(np.repeat(known, k, axis=0)),
+            **({} if known is None else dict(zip(("known_irregular", "known_cells", "known_cell_extent"),
+                                                 (np.ascontiguousarray(np.repeat(a, k, axis=0)) for a in known)))),
         )  # fmt: skip
         return {key: np.asarray(v).reshape((m, k) + np.shape(v)[1:]) for key, v in r.items()}
 
@@ -480,19 +489,25 @@ def phases(samples: int) -> list[int]:
     return [c for c in PHASE_STARTS if c < samples] + [samples]
 
 
-def fingerprints(done: Mapping[str, np.ndarray]) -> np.ndarray:
+def fingerprints(done: Mapping[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The irregular attractors the samples ``done`` established, as the core's ``known_irregular``
-    ``(m, KNOWN, 7)``: per point, the fingerprints (residual, then the six largest excursions) of
-    its first ``KNOWN`` samples that ended stationary-irregular, in sample order; NaN rows for
-    empty slots."""
+    ``(m, KNOWN, 7)``, ``known_cells`` ``(m, KNOWN, words)`` and ``known_cell_extent`` ``(m, KNOWN, 6)``:
+    per point, the fingerprints (residual, then the six largest excursions) and the section cells
+    of its first ``KNOWN`` samples that ended stationary-irregular, in sample order; NaN rows (and
+    zero cells) for empty slots."""
     res, peaks = done["irregular_residual"], done["irregular_peaks"]
+    cells, extent = done["irregular_cells"], done["irregular_cell_extent"]
     own = np.isfinite(res) & ~done["irregular_matched"]
-    out = np.full((res.shape[0], KNOWN, 7), np.nan)
+    m = res.shape[0]
+    out = np.full((m, KNOWN, 7), np.nan)
+    out_cells = np.zeros((m, KNOWN, cells.shape[-1]), dtype=np.uint64)
+    out_extent = np.full((m, KNOWN, 6), np.nan)
     for i, j in zip(*np.nonzero(own)):
         slot = int(np.sum(own[i, :j]))
         if slot < KNOWN:
             out[i, slot, 0], out[i, slot, 1:] = res[i, j], peaks[i, j]
-    return out
+            out_cells[i, slot], out_extent[i, slot] = cells[i, j], extent[i, j]
+    return out, out_cells, out_extent
 
 
 def saddle_row(df: Mapping[str, np.ndarray], j: int, k: int) -> np.ndarray:

@@ -95,6 +95,8 @@ def ensemble(
     decay_thresholds: npt.NDArray[np.float64] | None = None,
     irregular_block: int = 0,
     known_irregular: npt.NDArray[np.float64] | None = None,
+    known_cells: npt.NDArray[np.uint64] | None = None,
+    known_cell_extent: npt.NDArray[np.float64] | None = None,
 ) -> dict[str, Any]: ...
 def linear_stability(
     base: dict[str, float],

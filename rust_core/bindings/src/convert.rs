@@ -321,6 +321,17 @@ pub(crate) fn summaries_into(d: &Bound<'_, PyDict>, out: &[(Summary, String)]) -
     let peaks = states(peaks.iter(), out.len());
     d.set_item("irregular_peaks", peaks.into_pyarray(py))?;
     d.set_item("irregular_matched", Array1::from_iter(out.iter().map(|o| o.0.matched_known)).into_pyarray(py))?;
+    // Their cells (zeros and NaN extents where there are none): input for `known_cells`.
+    let mut cells = Array2::<u64>::zeros((out.len(), tribosweep_core::steady::CELL_WORDS));
+    let mut extent = Array2::<f64>::from_elem((out.len(), 6), f64::NAN);
+    for (i, o) in out.iter().enumerate() {
+        if let Some(c) = o.0.fingerprint.map(|p| p.cells).filter(|c| !c.is_empty()) {
+            cells.row_mut(i).iter_mut().zip(c.bits).for_each(|(a, b)| *a = b);
+            extent.row_mut(i).iter_mut().zip(c.lo.into_iter().chain(c.hi)).for_each(|(a, b)| *a = b);
+        }
+    }
+    d.set_item("irregular_cells", cells.into_pyarray(py))?;
+    d.set_item("irregular_cell_extent", extent.into_pyarray(py))?;
     let stats: Vec<Stats> = out.iter().map(|o| o.0.stats).collect();
     stats_into(d, &stats)
 }

@@ -10,7 +10,9 @@ use std::collections::HashMap;
 use tribosweep_core::ensemble::{run as run_ensemble, run_sampled_into, Settings, Task, TrajectoryResult};
 use tribosweep_core::model::State;
 use tribosweep_core::status::Status;
-use tribosweep_core::steady::{self, DecayTest, Fingerprint, Known, RunResult, SteadyOptions, Summary, KNOWN_MAX};
+use tribosweep_core::steady::{
+    self, Cells, DecayTest, Fingerprint, Known, RunResult, SteadyOptions, Summary, CELL_WORDS, KNOWN_MAX,
+};
 
 /// One trajectory. Returns a dict: `t` (n,), `y` (n, 6), and the run's status, reason (why the
 /// status is not success, with its numbers; empty for success), counters, extremes. With `t_eval`
@@ -122,7 +124,50 @@ fn decays(
 /// `(n, KNOWN_MAX, 7)`: the mean residual, then the six largest excursions, in characteristic
 /// sizes, as the `irregular_residual` and `irregular_peaks` of an earlier steady run; a row of NaN
 /// is an empty slot).
-fn knowns(known: Option<PyReadonlyArray3<'_, f64>>, n: usize) -> PyResult<Option<Vec<Known>>> {
+///
+/// `known_cells` `(n, KNOWN_MAX, CELL_WORDS)` and `known_cell_extent` `(n, KNOWN_MAX, 6)`, both or
+/// neither, give each fingerprint its cells (`irregular_cells` and `irregular_cell_extent` of the
+/// same earlier run: the grid's lower corner, then its upper corner): zeros and NaN for none.
+fn knowns(
+    known: Option<PyReadonlyArray3<'_, f64>>,
+    cells: Option<PyReadonlyArray3<'_, u64>>,
+    extent: Option<PyReadonlyArray3<'_, f64>>,
+    n: usize,
+) -> PyResult<Option<Vec<Known>>> {
+    let cells = match (cells, extent, &known) {
+        (None, None, _) => None,
+        (Some(c), Some(e), Some(_)) => {
+            let (c, e) = (c.as_array().to_owned(), e.as_array().to_owned());
+            let ok = c.shape() == [n, KNOWN_MAX, CELL_WORDS]
+                && e.shape() == [n, KNOWN_MAX, 6]
+                && e.outer_iter().zip(c.outer_iter()).all(|(et, ct)| {
+                    et.outer_iter().zip(ct.outer_iter()).all(|(r, b)| {
+                        let none = r.iter().all(|x| x.is_nan()) && b.iter().all(|&w| w == 0);
+                        let some = r.iter().all(|x| x.is_finite()) && (0..3).all(|i| r[i] < r[i + 3]);
+                        none || some
+                    })
+                });
+            if !ok {
+                return Err(CoreError(format!(
+                    "known_cells must be an ({n}, {KNOWN_MAX}, {CELL_WORDS}) uint64 array and known_cell_extent an \
+                     ({n}, {KNOWN_MAX}, 6) array whose rows are all NaN (with zero cells: none) or finite lower \
+                     corners below the upper ones; got shapes {:?} and {:?}",
+                    c.shape(),
+                    e.shape()
+                ))
+                .into());
+            }
+            Some((c, e))
+        }
+        _ => {
+            return Err(CoreError(
+                "known_cells and known_cell_extent go together, and with known_irregular: give all three or \
+                 neither of the first two"
+                    .to_string(),
+            )
+            .into())
+        }
+    };
     let Some(k) = known else { return Ok(None) };
     let k = k.as_array();
     let shape_ok = k.shape() == [n, KNOWN_MAX, 7];
@@ -139,10 +184,23 @@ fn knowns(known: Option<PyReadonlyArray3<'_, f64>>, n: usize) -> PyResult<Option
     }
     Ok(Some(
         k.outer_iter()
-            .map(|t| {
+            .enumerate()
+            .map(|(i, t)| {
                 std::array::from_fn(|j| {
                     let r = t.row(j);
-                    (!r[0].is_nan()).then(|| Fingerprint { residual: r[0], peaks: std::array::from_fn(|c| r[c + 1]) })
+                    let cells = cells.as_ref().map_or(Cells::EMPTY, |(c, e)| {
+                        let e = e.slice(numpy::ndarray::s![i, j, ..]);
+                        Cells {
+                            lo: std::array::from_fn(|m| e[m]),
+                            hi: std::array::from_fn(|m| e[m + 3]),
+                            bits: std::array::from_fn(|w| c[[i, j, w]]),
+                        }
+                    });
+                    (!r[0].is_nan()).then(|| Fingerprint {
+                        residual: r[0],
+                        peaks: std::array::from_fn(|c| r[c + 1]),
+                        cells,
+                    })
                 })
             })
             .collect(),
@@ -169,12 +227,13 @@ fn summaries(out: Vec<Result<TrajectoryResult, String>>) -> Vec<(Summary, String
 /// `watch_x=False`: the settling tests ignore `x, xd` where they are slaved, under constant friction;
 /// `irregular_block > 0`: sustained irregular motion stops once stationary over three blocks of
 /// that many sections, outcome "irregular", or once a block matches one of the trajectory's
-/// `known_irregular` fingerprints, those of irregular runs of the same model; see `knowns`).
+/// `known_irregular` fingerprints, those of irregular runs of the same model, or its sections keep
+/// to their `known_cells`; see `knowns`).
 /// The core picks the path (lane-batched or scalar) and the grouping; results do not depend on it
 /// beyond integration accuracy, nor on the thread count at all. Every non-success status has a
 /// reason; Ctrl-C stops every thread (`KeyboardInterrupt`, the results are dropped).
 #[pyfunction]
-#[pyo3(signature = (base, contact, friction_law, names, values, y0, t_end, method, rtol, *, atol=None, t_eval=None, threads=None, kind="final", periodic_tol=1e-5, decay_amplitude=None, n_fourier=512, max_steps=None, max_events=None, decay_amplitudes=None, watch_x=true, decay_thresholds=None, irregular_block=0, known_irregular=None))]
+#[pyo3(signature = (base, contact, friction_law, names, values, y0, t_end, method, rtol, *, atol=None, t_eval=None, threads=None, kind="final", periodic_tol=1e-5, decay_amplitude=None, n_fourier=512, max_steps=None, max_events=None, decay_amplitudes=None, watch_x=true, decay_thresholds=None, irregular_block=0, known_irregular=None, known_cells=None, known_cell_extent=None))]
 #[allow(clippy::too_many_arguments)]
 fn ensemble<'py>(
     py: Python<'py>,
@@ -201,12 +260,14 @@ fn ensemble<'py>(
     decay_thresholds: Option<PyReadonlyArray2<'py, f64>>,
     irregular_block: usize,
     known_irregular: Option<PyReadonlyArray3<'py, f64>>,
+    known_cells: Option<PyReadonlyArray3<'py, u64>>,
+    known_cell_extent: Option<PyReadonlyArray3<'py, f64>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let call = Call::rows(py, &base, contact, friction_law, &names, &values, threads)?;
     let n = call.len();
     let y0s = y0_rows(&y0.as_array(), n)?;
     let decays = decays(decay_amplitudes, decay_thresholds, n)?;
-    let knowns = knowns(known_irregular, n)?;
+    let knowns = knowns(known_irregular, known_cells, known_cell_extent, n)?;
     let settings =
         Settings { t_end, method: method_from(method)?, tol: tolerances(rtol, atol, max_steps, max_events)?, threads };
     let t_eval: Option<Vec<f64>> = t_eval.map(|a| a.as_slice().map(|s| s.to_vec())).transpose()?;

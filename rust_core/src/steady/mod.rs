@@ -372,12 +372,20 @@ pub type Known = [Option<Fingerprint>; KNOWN_MAX];
 /// stationarity tolerances ([`STATIONARY_RESIDUAL_TOL`], [`STATIONARY_PEAK_TOL`]) is on the same
 /// attractor, as in the recurrence method of Datseris & Wagemakers (Chaos 32, 2022) that labels a
 /// trajectory by the attractor whose cells it keeps visiting.
+///
+/// A run that ends stationary also reports the [`Cells`] its section states visited over its
+/// three blocks: a run of the same model whose section states fall in them [`RECUR_SECTIONS`]
+/// times in a row, with a mean repetition residual of the same order (at least half the
+/// fingerprint's, and above the stationarity floor), is on the same attractor, without waiting
+/// for a whole block.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Fingerprint {
     /// Mean repetition residual.
     pub residual: f64,
     /// Largest excursion of each component (those the run compares; the others are not compared).
     pub peaks: [f64; 6],
+    /// The cells of the section states over the stationary blocks ([`Cells::EMPTY`]: none known).
+    pub cells: Cells,
 }
 
 impl Default for SteadyOptions {
@@ -444,11 +452,13 @@ pub struct Summary {
     pub stats: Stats,
     /// Why the status is not `Success`, with its numbers (`None` for `Success`).
     pub failure: Option<Failure>,
-    /// Irregular only: the attractor's fingerprint (the mean of the three stationary blocks, or the
-    /// block that matched a known fingerprint).
+    /// Irregular only: the attractor's fingerprint (the mean of the three stationary blocks with
+    /// their cells, the block that matched a known fingerprint, or the known fingerprint whose
+    /// cells the run kept visiting; the last two without cells of their own).
     pub fingerprint: Option<Fingerprint>,
-    /// Irregular only: whether a block matched a known fingerprint (`SteadyOptions::known_irregular`)
-    /// rather than three of its own blocks being stationary.
+    /// Irregular only: whether the run matched a known fingerprint (`SteadyOptions::known_irregular`:
+    /// a block of its statistics, or [`RECUR_SECTIONS`] sections in a row in its cells) rather than
+    /// three of its own blocks being stationary.
     pub matched_known: bool,
 }
 
@@ -625,8 +635,10 @@ pub(crate) fn summarize(s: &Slider, r: &RunResult, w: &SectionWatcher, opts: &St
     sum
 }
 
+mod cells;
 mod fourier;
 mod section;
+pub use cells::{Cells, CELLS, CELL_COMPS, CELL_WORDS, RECUR_SECTIONS};
 use fourier::fourier_period;
 #[cfg(test)]
 use fourier::{amp_phase, wrap};

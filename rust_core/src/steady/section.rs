@@ -1,7 +1,10 @@
 //! The Poincare section `zd = 0` (falling) and the tests that decide when a run to steady state
 //! has settled: repetition (periodic), decay, and stationarity (sustained irregular motion).
 
-use super::{characteristic_sizes, decay_amplitude, Fingerprint, Known, SteadyOptions, MAX_MULTIPLICITY};
+use super::RECUR_SECTIONS;
+use super::{
+    characteristic_sizes, decay_amplitude, Cells, Fingerprint, Known, SteadyOptions, KNOWN_MAX, MAX_MULTIPLICITY,
+};
 use crate::model::{idx, FrictionLaw, Slider, State};
 
 #[derive(Clone, Copy)]
@@ -88,6 +91,14 @@ struct Stationarity {
     n_done: usize,
     /// Fingerprints of known attractors (`SteadyOptions::known_irregular`).
     known: Known,
+    /// The newest `3 block` section states' cell coordinates (a ring; `n_cloud` pushed so far):
+    /// the cells of a stationary run.
+    cloud: Vec<[f64; 3]>,
+    n_cloud: usize,
+    /// Per known attractor: sections in a row in its cells.
+    hits: [usize; KNOWN_MAX],
+    /// The newest [`RECUR_SECTIONS`] repetition residuals (a ring, at `n_cloud`).
+    recent: [f64; RECUR_SECTIONS],
 }
 
 /// Whether two positive statistics agree within `tol` (the smaller at least `1 - tol` of the larger).
@@ -130,13 +141,54 @@ impl Stationarity {
     /// The mean of the newest three blocks (the fingerprint of a stationary run).
     fn mean(&self) -> Fingerprint {
         let third = |f: &dyn Fn(&Block) -> f64| self.done.iter().map(f).sum::<f64>() / 3.0;
-        Fingerprint { residual: third(&|b| b.residual), peaks: std::array::from_fn(|c| third(&|b| b.peaks[c])) }
+        Fingerprint {
+            residual: third(&|b| b.residual),
+            peaks: std::array::from_fn(|c| third(&|b| b.peaks[c])),
+            cells: Cells::from_points(&self.cloud),
+        }
     }
 
     /// The newest block as a fingerprint.
     fn newest(&self) -> Fingerprint {
         let b = self.done[(self.n_done + 2) % 3];
-        Fingerprint { residual: b.residual, peaks: b.peaks }
+        Fingerprint { residual: b.residual, peaks: b.peaks, cells: Cells::EMPTY }
+    }
+
+    /// Record a section state's cell coordinates in the ring of the newest three blocks.
+    fn record(&mut self, p: [f64; 3]) {
+        let cap = 3 * self.block;
+        if self.cloud.len() < cap {
+            self.cloud.push(p);
+        } else {
+            self.cloud[self.n_cloud % cap] = p;
+        }
+        self.n_cloud += 1;
+    }
+
+    /// The known attractor (slot) the run is on by recurrence: the section state `y`, with its
+    /// repetition `residual`, ends [`RECUR_SECTIONS`] sections in a row in that attractor's cells
+    /// whose mean residual is above `floor` and at least half the attractor's (a cycle's approach
+    /// through the attractor's cells does not match).
+    fn recurs(&mut self, y: &State, residual: f64, floor: f64) -> Option<usize> {
+        self.recent[self.n_cloud % RECUR_SECTIONS] = residual;
+        let mut mean = f64::NAN;
+        for (j, k) in self.known.iter().enumerate() {
+            let Some(k) = k else { continue };
+            if !k.cells.contains(y) {
+                self.hits[j] = 0;
+                continue;
+            }
+            self.hits[j] += 1;
+            if self.hits[j] >= RECUR_SECTIONS {
+                if mean.is_nan() {
+                    mean = self.recent.iter().sum::<f64>() / RECUR_SECTIONS as f64;
+                }
+                if mean >= floor && mean >= (1.0 - 2.0 * STATIONARY_RESIDUAL_TOL) * k.residual {
+                    return Some(j);
+                }
+            }
+        }
+        None
     }
 
     /// Whether the newest block matches a known fingerprint: within the stationarity tolerances,
@@ -188,6 +240,10 @@ impl SectionWatcher {
                 done: [Block::default(); 3],
                 n_done: 0,
                 known: opts.known_irregular,
+                cloud: Vec::with_capacity(3 * opts.irregular_block),
+                n_cloud: 0,
+                hits: [0; KNOWN_MAX],
+                recent: [0.0; RECUR_SECTIONS],
             }),
             stationary_floor: (STATIONARY_FLOOR * opts.periodic_tol).max(STATIONARY_MIN_RESIDUAL),
             irregular: false,
@@ -295,8 +351,16 @@ impl SectionWatcher {
             })
             .fold(f64::INFINITY, f64::min);
         let peaks = std::array::from_fn(|c| a.peaks[c] / self.sizes[c]);
+        let y = a.y;
         let (floor, comps) = (self.stationary_floor, self.comps);
         if let Some(st) = self.stationary.as_mut() {
+            let rec = st.recurs(&y, residual, floor);
+            st.record(Cells::point(&y));
+            if let Some(j) = rec {
+                let fp = st.known[j].map(|k| Fingerprint { cells: Cells::EMPTY, ..k });
+                (self.irregular, self.matched_known, self.fingerprint) = (true, true, fp);
+                return;
+            }
             if !st.add(residual, peaks) {
                 return;
             }

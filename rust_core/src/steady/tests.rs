@@ -156,19 +156,90 @@ fn a_block_on_a_known_irregular_attractor_stops_the_run_and_nothing_else_does() 
     assert_eq!((w.irregular, w.matched_known, n), (true, true, 8 + 32));
     // An attractor 10 % larger in every component: three blocks of its own, as without it.
     assert_eq!(watch(&knows(fp), 1000, |n| torus(1.1)(n + 5000)), ("irregular", 8 + 3 * 32));
-    // Nor does a fingerprint 10 % off in phi alone match.
-    let mut phi_off = fp;
+    // Nor does a fingerprint 10 % off in phi alone match (its statistics alone: without cells).
+    let mut phi_off = Fingerprint { cells: Cells::EMPTY, ..fp };
     phi_off.peaks[idx::PHI] *= 1.1;
     let (w, n) = watcher(&knows(phi_off), 1000, later);
     assert_eq!((w.irregular, w.matched_known, n), (true, false, 8 + 3 * 32));
     // Nor does the jitter of a converged cycle match a fingerprint with its own statistics: it is
     // below the residual floor.
-    let tight = SteadyOptions { periodic_tol: 1e-15, ..knows(Fingerprint { residual: 2e-5, peaks: [1.3; 6] }) };
+    let tight = SteadyOptions {
+        periodic_tol: 1e-15,
+        ..knows(Fingerprint { residual: 2e-5, peaks: [1.3; 6], cells: Cells::EMPTY })
+    };
     let jitter = |n: usize| two(0.0)(n) + 1e-5 * torus(1.0)(n);
     assert_eq!(watch(&tight, 3000, jitter), ("running", 3000));
     // Without stationarity blocks a fingerprint does nothing.
     let off = SteadyOptions { irregular_block: 0, ..knows(fp) };
     assert_eq!(watch(&off, 1000, later).0, "running");
+}
+
+#[test]
+fn cells_mark_the_visited_states_and_their_neighbours_only() {
+    // Points on a circle in (z, phi) at phid = 1: the grid spans the box widened by one cell.
+    let pts: Vec<[f64; 3]> = (0..500)
+        .map(|n| {
+            let a = std::f64::consts::TAU * n as f64 / 500.0;
+            [a.cos(), a.sin(), 1.0 + 0.1 * (3.0 * a).sin()]
+        })
+        .collect();
+    let g = Cells::from_points(&pts);
+    assert!(!g.is_empty());
+    let w = 2.0 / (CELLS - 2) as f64;
+    assert!((g.lo[0] - (-1.0 - w)).abs() < 1e-12 && (g.hi[0] - (1.0 + w)).abs() < 1e-12, "{:?} {:?}", g.lo, g.hi);
+    let at = |z: f64, phi: f64, phid: f64| g.contains(&State::new(z, 0.0, 0.0, 0.0, phi, phid));
+    // Every point it was built from, and a point within half a cell of one.
+    for p in &pts {
+        assert!(at(p[0], p[1], p[2]));
+    }
+    assert!(at(0.5f64.sqrt() + 0.4 * w, 0.5f64.sqrt(), 1.0 + 0.1 * (3.0 * std::f64::consts::FRAC_PI_4).sin()));
+    // Not the circle's centre (the attractor's hole), nor a circle 20 % larger, nor outside the grid.
+    assert!(!at(0.0, 0.0, 1.0));
+    assert!(!at(1.2 * 0.5f64.sqrt(), 1.2 * 0.5f64.sqrt(), 1.0 + 0.1 * (3.0 * std::f64::consts::FRAC_PI_4).sin()));
+    assert!(!at(3.0, 0.0, 1.0) && !at(f64::NAN, 0.0, 1.0));
+    // No grid from nothing, from NaN, or from a component that does not move.
+    assert!(Cells::from_points(&[]).is_empty());
+    assert!(Cells::from_points(&[[0.0, 1.0, f64::NAN], [1.0, 0.0, 2.0]]).is_empty());
+    assert!(Cells::from_points(&[[0.0, 1.0, 2.0], [1.0, 0.0, 2.0]]).is_empty());
+    assert!(!Cells::EMPTY.contains(&State::zeros()));
+}
+
+#[test]
+fn sections_in_a_known_attractors_cells_stop_the_run_after_a_short_run_of_them() {
+    let opts = SteadyOptions { watch_x: false, irregular_block: 128, ..SteadyOptions::default() };
+    let (w, n) = watcher(&opts, 2000, torus(1.0));
+    assert_eq!((w.irregular, n), (true, 8 + 3 * 128));
+    let fp = w.fingerprint.expect("a stationary run has a fingerprint");
+    assert!(!fp.cells.is_empty());
+    // Block statistics that cannot match (excursions 50 % off): only the cells can.
+    let cells_only = |cells: Cells| Fingerprint { peaks: fp.peaks.map(|p| 1.5 * p), cells, ..fp };
+    let knows = |k: Fingerprint| SteadyOptions { known_irregular: [None, Some(k)], ..opts };
+    // A later stretch of the torus stops once RECUR_SECTIONS sections in a row (counted from the
+    // 9th, the first with a residual) fell in the cells, before a block of 128 is complete. (The
+    // torus is a surface in the section: its 384 states leave gaps in its cells that a later
+    // section may fall into, which starts the count again.)
+    let later = |n: usize| torus(1.0)(n + 5000);
+    let (w, n) = watcher(&knows(cells_only(fp.cells)), 2000, later);
+    assert_eq!((w.irregular, w.matched_known), (true, true));
+    assert!((8 + RECUR_SECTIONS..8 + 128).contains(&n), "{n}");
+    // It reports the attractor it matched, without cells of its own.
+    let got = w.fingerprint.expect("matched");
+    assert_eq!((got.residual, got.cells.is_empty()), (fp.residual, true));
+    // An attractor 10 % larger in every component: its own three blocks.
+    let (w, n) = watcher(&knows(cells_only(fp.cells)), 2000, |n| torus(1.1)(n + 5000));
+    assert_eq!((w.irregular, w.matched_known, n), (true, false, 8 + 3 * 128));
+    // A cycle approached through the attractor's cells (its section states are in them, its
+    // repetition residual shrinks far below the attractor's): recognised as periodic, not matched.
+    let path: Vec<[f64; 3]> = (0..400).map(|n| Cells::point(&two(0.9)(n))).collect();
+    assert_eq!(watch(&knows(cells_only(Cells::from_points(&path))), 2000, two(0.9)).0, "periodic");
+    // A converged cycle's jitter in cells of its own, with its own residual: below the floor.
+    let tight = SteadyOptions { periodic_tol: 1e-15, ..opts };
+    let jitter = |n: usize| two(0.0)(n) + 1e-5 * torus(1.0)(n);
+    let own: Vec<[f64; 3]> = (0..400).map(|n| Cells::point(&jitter(n))).collect();
+    let k = Fingerprint { residual: 2e-5, peaks: [1.3; 6], cells: Cells::from_points(&own) };
+    assert!(!k.cells.is_empty());
+    let tight_knows = SteadyOptions { known_irregular: [Some(k), None], ..tight };
+    assert_eq!(watch(&tight_knows, 3000, jitter), ("running", 3000));
 }
 
 #[test]
