@@ -122,8 +122,8 @@ RETURN_FRACTION: float = 0.4
 
 #: The census runs each point's samples in phases starting at these indices (then ``K``). The
 #: first phase (the pilots, Halton indices 1, 2) decides by the three-block stationarity test
-#: alone; each later phase also stops on one block that matches an irregular attractor an earlier
-#: phase established (recurrence). The phases are fixed samples of the point, so nothing depends on
+#: alone; each later phase also stops once it keeps to an irregular attractor an earlier phase
+#: established (recurrence: in its cells, or a block matching its statistics). The phases are fixed samples of the point, so nothing depends on
 #: threads, chunking or order.
 PHASE_STARTS: tuple[int, ...] = (0, 2)
 #: Pilots: the samples of the first phase.
@@ -612,8 +612,9 @@ def census(
         ``t_max``, and of the recurrence test against the pilots' attractors (0: both off; see the
         module's early stops).
     recurrence : bool
-        Let the samples after the pilots stop on one block that matches a pilot's irregular
-        attractor (the default); ``False``: every sample decides by its own three blocks.
+        Let the samples after the pilots stop once they keep to a pilot's irregular attractor: 32
+        sections in a row in the cells its sections visited, or one block that matches its
+        statistics (the default); ``False``: every sample decides by its own three blocks.
     threads : int, optional
         Rust worker threads (results do not depend on it).
 

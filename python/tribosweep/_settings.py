@@ -152,10 +152,11 @@ class Census:
         fraction moves by 2 standard errors, and the census costs 0.78-0.86x that at 1e-8
         (``benches/bench_census.py --rtol``).
     recurrence : bool
-        Let the samples after each point's two pilots stop as irregular on one block of sections
-        that matches an irregular attractor a pilot established (True; see ``tribosweep._census``):
-        on the default grid 0.79x the right-hand sides, 6 of 5,776 labels changed
-        (``benches/bench_census.py --recurrence``). False: each sample decides by its own blocks.
+        Let the samples after each point's two pilots stop as irregular once they keep to an
+        irregular attractor a pilot established: 32 sections in a row in its cells, or one block
+        of sections that matches its statistics (True; see ``tribosweep._census``): on the default
+        grid 0.70x the right-hand sides, 12 of 5,776 labels changed (``benches/bench_census.py
+        --recurrence``). False: each sample decides by its own blocks.
 
     Notes
     -----

@@ -197,9 +197,9 @@ def sweep(
         ``integrator``'s). Labels agree with those at rtol 1e-10 as well as at 1e-8, at 0.78-0.86x the
         cost (see ``tribosweep._settings.Census``).
     census_recurrence : bool
-        Let census samples stop as irregular on one block of sections that matches an irregular
-        attractor one of the point's two pilot samples established (default True; False: each
-        sample decides by its own three blocks). See ``tribosweep._census``.
+        Let census samples stop as irregular once they keep to an irregular attractor one of the
+        point's two pilot samples established, in its cells or on a block matching its statistics
+        (default True; False: each sample decides by its own three blocks). See ``tribosweep._census``.
     unstable_disturbance : float
         ``auto``: transients of linearly unstable points start on the unstable mode with
         ``|z| = unstable_disturbance |z_st|``.
