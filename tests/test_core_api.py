@@ -126,3 +126,16 @@ def test_ensemble_results_do_not_depend_on_the_thread_count():
         for key, value in runs[0].items():
             if isinstance(value, np.ndarray):
                 assert np.array_equal(value, runs[1][key], equal_nan=True), (case, key)
+
+
+def test_steady_runs_return_cells_only_where_a_run_left_any():
+    # Cells come from runs that end stationary-irregular. Without stationarity blocks there are
+    # none, and the cell array has no columns (not 216 words of zeros per trajectory); its extents
+    # are NaN. (That cells reach the census's later samples is test_census.py's recurrence test:
+    # stops before a block of 256 sections could match.)
+    base = {"normal_load": 20.7692}
+    n = 3
+    y0 = np.tile([1e-6, 0, 0, 0, 0, 0.0], (n, 1))
+    off = _core.ensemble(base, "unilateral", "constant", [], np.zeros((n, 0)), y0, 0.5, "dop853", 1e-6, kind="steady")
+    assert off["irregular_cells"].shape == (n, 0) and off["irregular_cells"].dtype == np.uint64
+    assert off["irregular_cell_extent"].shape == (n, 6) and np.isnan(off["irregular_cell_extent"]).all()

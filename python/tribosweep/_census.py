@@ -423,8 +423,9 @@ def run(
             decay_thresholds=np.ascontiguousarray(np.repeat(decay, k, axis=0)),
             watch_x=False,  # x is left out only where it is slaved (constant friction); the core decides
             irregular_block=int(irregular_block),
-            **({} if known is None else dict(zip(("known_irregular", "known_cells", "known_cell_extent"),
-                                                 (np.ascontiguousarray(np.repeat(a, k, axis=0)) for a in known)))),
+            **({} if known is None else {name: np.ascontiguousarray(np.repeat(a, k, axis=0)) for name, a in
+                                         zip(("known_irregular", "known_cells", "known_cell_extent"), known)
+                                         if a is not None}),
         )  # fmt: skip
         return {key: np.asarray(v).reshape((m, k) + np.shape(v)[1:]) for key, v in r.items()}
 
@@ -434,7 +435,7 @@ def run(
     res: dict[str, np.ndarray] = {}
     for a, b in zip(cuts[:-1], cuts[1:]):
         part = batch(slice(a, b), fingerprints(res) if res else None)
-        res = {key: np.concatenate([res[key], part[key]], axis=1) for key in part} if res else part
+        res = {key: _join(res[key], part[key]) for key in part} if res else part
     outcome, status = res["outcome"], res["status"]
     attractor = np.vectorize(lambda o: _ATTRACTOR_OF[OUTCOME_NAMES[o]], otypes=[np.int64])(outcome)
     # A run that stopped at t_max is bounded motion (irregular) only if it was not a numerical failure.
@@ -484,17 +485,27 @@ def run(
     return out, per_sample
 
 
+def _join(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Two phases' per-sample arrays ``(m, k, ...)`` side by side; the cell arrays of a phase that left
+    no cells have no columns, and are padded with zeros (no cell) to the other's width."""
+    if a.ndim == 3 and a.shape[2] != b.shape[2]:
+        w = max(a.shape[2], b.shape[2])
+        a, b = (np.pad(x, ((0, 0), (0, 0), (0, w - x.shape[2]))) for x in (a, b))
+    return np.concatenate([a, b], axis=1)
+
+
 def phases(samples: int) -> list[int]:
     """Sample indices at which the census's phases start, and ``samples``: ``PHASE_STARTS`` below ``samples``."""
     return [c for c in PHASE_STARTS if c < samples] + [samples]
 
 
-def fingerprints(done: Mapping[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def fingerprints(done: Mapping[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
     """The irregular attractors the samples ``done`` established, as the core's ``known_irregular``
     ``(m, KNOWN, 7)``, ``known_cells`` ``(m, KNOWN, words)`` and ``known_cell_extent`` ``(m, KNOWN, 6)``:
     per point, the fingerprints (residual, then the six largest excursions) and the section cells
     of its first ``KNOWN`` samples that ended stationary-irregular, in sample order; NaN rows (and
-    zero cells) for empty slots."""
+    zero cells) for empty slots. No cells (``None``, ``None``) where no sample left any (the core's
+    cell array then has no columns)."""
     res, peaks = done["irregular_residual"], done["irregular_peaks"]
     cells, extent = done["irregular_cells"], done["irregular_cell_extent"]
     own = np.isfinite(res) & ~done["irregular_matched"]
@@ -507,6 +518,8 @@ def fingerprints(done: Mapping[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray
         if slot < KNOWN:
             out[i, slot, 0], out[i, slot, 1:] = res[i, j], peaks[i, j]
             out_cells[i, slot], out_extent[i, slot] = cells[i, j], extent[i, j]
+    if cells.shape[-1] == 0:
+        return out, None, None
     return out, out_cells, out_extent
 
 

@@ -321,8 +321,12 @@ pub(crate) fn summaries_into(d: &Bound<'_, PyDict>, out: &[(Summary, String)]) -
     let peaks = states(peaks.iter(), out.len());
     d.set_item("irregular_peaks", peaks.into_pyarray(py))?;
     d.set_item("irregular_matched", Array1::from_iter(out.iter().map(|o| o.0.matched_known)).into_pyarray(py))?;
-    // Their cells (zeros and NaN extents where there are none): input for `known_cells`.
-    let mut cells = Array2::<u64>::zeros((out.len(), tribosweep_core::steady::CELL_WORDS));
+    // Their cells (zeros and NaN extents where there are none): input for `known_cells`. Without
+    // any (no stationarity blocks, no irregular run) the cell array has no columns: 1.7 KB per
+    // trajectory of zeros would outweigh every other column together.
+    let any = out.iter().any(|o| o.0.fingerprint.is_some_and(|p| !p.cells.is_empty()));
+    let words = if any { tribosweep_core::steady::CELL_WORDS } else { 0 };
+    let mut cells = Array2::<u64>::zeros((out.len(), words));
     let mut extent = Array2::<f64>::from_elem((out.len(), 6), f64::NAN);
     for (i, o) in out.iter().enumerate() {
         if let Some(c) = o.0.fingerprint.map(|p| p.cells).filter(|c| !c.is_empty()) {
