@@ -123,8 +123,8 @@ RETURN_FRACTION: float = 0.4
 #: The census runs each point's samples in phases starting at these indices (then ``K``). The
 #: first phase (the pilots, Halton indices 1, 2) decides by the three-block stationarity test
 #: alone; each later phase also stops once it keeps to an irregular attractor an earlier phase
-#: established (recurrence: in its cells, or a block matching its statistics). The phases are fixed samples of the point, so nothing depends on
-#: threads, chunking or order.
+#: established (recurrence: in its cells, or a block matching its statistics). The phases are
+#: fixed samples of the point, so nothing depends on threads, chunking or order.
 PHASE_STARTS: tuple[int, ...] = (0, 2)
 #: Pilots: the samples of the first phase.
 PILOTS: int = PHASE_STARTS[1]
@@ -509,7 +509,7 @@ def fingerprints(done: Mapping[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray
     res, peaks = done["irregular_residual"], done["irregular_peaks"]
     cells, extent = done["irregular_cells"], done["irregular_cell_extent"]
     own = np.isfinite(res) & ~done["irregular_matched"]
-    m = res.shape[0]
+    m, has_cells = res.shape[0], cells.shape[-1] > 0
     out = np.full((m, KNOWN, 7), np.nan)
     out_cells = np.zeros((m, KNOWN, cells.shape[-1]), dtype=np.uint64)
     out_extent = np.full((m, KNOWN, 6), np.nan)
@@ -518,9 +518,7 @@ def fingerprints(done: Mapping[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray
         if slot < KNOWN:
             out[i, slot, 0], out[i, slot, 1:] = res[i, j], peaks[i, j]
             out_cells[i, slot], out_extent[i, slot] = cells[i, j], extent[i, j]
-    if cells.shape[-1] == 0:
-        return out, None, None
-    return out, out_cells, out_extent
+    return (out, out_cells, out_extent) if has_cells else (out, None, None)
 
 
 def saddle_row(df: Mapping[str, np.ndarray], j: int, k: int) -> np.ndarray:

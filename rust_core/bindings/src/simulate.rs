@@ -134,10 +134,11 @@ fn knowns(
     extent: Option<PyReadonlyArray3<'_, f64>>,
     n: usize,
 ) -> PyResult<Option<Vec<Known>>> {
-    let cells = match (cells, extent, &known) {
+    // Views of the caller's arrays (they outlive this function's use of them): no copy.
+    let cells = match (&cells, &extent, &known) {
         (None, None, _) => None,
         (Some(c), Some(e), Some(_)) => {
-            let (c, e) = (c.as_array().to_owned(), e.as_array().to_owned());
+            let (c, e) = (c.as_array(), e.as_array());
             let ok = c.shape() == [n, KNOWN_MAX, CELL_WORDS]
                 && e.shape() == [n, KNOWN_MAX, 6]
                 && e.outer_iter().zip(c.outer_iter()).all(|(et, ct)| {

@@ -1,9 +1,9 @@
 //! The Poincare section `zd = 0` (falling) and the tests that decide when a run to steady state
 //! has settled: repetition (periodic), decay, and stationarity (sustained irregular motion).
 
-use super::RECUR_SECTIONS;
 use super::{
     characteristic_sizes, decay_amplitude, Cells, Fingerprint, Known, SteadyOptions, KNOWN_MAX, MAX_MULTIPLICITY,
+    RECUR_SECTIONS,
 };
 use crate::model::{idx, FrictionLaw, Slider, State};
 
