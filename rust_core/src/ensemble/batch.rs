@@ -1,10 +1,11 @@
 //! Lane-batched Dormand–Prince 5(4) and DOP853 for the bilateral, constant-`mu` slider: the fast
 //! path of ensembles that only need the end state.
 //!
-//! [`run_bilateral_batch`] integrates many trajectories at once, `W` = 8 at a time in
-//! structure-of-arrays form (`[f64; 8]` per state component and per parameter), so that the
-//! stage arithmetic of eight trajectories runs in SIMD registers (plain loops over the lanes that
+//! [`run_bilateral_batch`] integrates many trajectories at once, `N` lanes at a time in
+//! structure-of-arrays form (`[f64; N]` per state component and per parameter), so that the
+//! stage arithmetic of `N` trajectories runs in SIMD registers (plain loops over the lanes that
 //! LLVM vectorises; on x86-64 a copy compiled for AVX2/AVX-512 is picked at run time, std only).
+//! `N` is 8, or 16 in the AVX-512 copy ([`W_AVX512`]).
 //! Each lane has its own time, step size, error estimate, controller history and accept/reject
 //! decision; when a lane's trajectory ends the lane is refilled at once with the next trajectory of
 //! the input, so no lane idles while others run long.
@@ -55,39 +56,39 @@ use crate::ode::dopri5::Dopri5Dense;
 use crate::ode::events::locate;
 use crate::ode::lanes::{
     dop853_dense_into, dop853_step, dopri5_dense_into, dopri5_step, each6, exp_lanes, lane_state, ln_lanes,
-    sample_lane, splat, LaneDense, LaneRhs, Row, ALL_COMPS, ALPHA, ALPHA8, BETA, L, LN_ERR_FLOOR, LN_SAFETY, V6, W,
+    sample_lane, splat, LaneDense, LaneRhs, Lw, Row, Vw, ALL_COMPS, ALPHA, ALPHA8, BETA, LN_ERR_FLOOR, LN_SAFETY, W,
 };
 use crate::ode::stepper::StepDense;
 use crate::ode::{Dense, Method, Options, Stats};
 use crate::status::{Failure, Status};
 use crate::steady::{characteristic_sizes, options_for, run_failure, Extremes, RunResult, Tolerances};
 
-/// The state of the eight lanes.
-struct Lanes {
-    c: Coef,
-    y: V6,
+/// The state of the `N` lanes.
+struct Lanes<const N: usize> {
+    c: Coef<N>,
+    y: Vw<N>,
     /// f(t, y): the FSAL stage.
-    f: V6,
-    t: L,
-    h: L,
-    ln_err_old: L,
-    rejected: [bool; W],
-    n_acc: [u64; W],
-    n_rej: [u64; W],
+    f: Vw<N>,
+    t: Lw<N>,
+    h: Lw<N>,
+    ln_err_old: Lw<N>,
+    rejected: [bool; N],
+    n_acc: [u64; N],
+    n_rej: [u64; N],
     /// Right-hand sides of DOP853 interpolants built to locate an escape.
-    n_extra: [u64; W],
-    min_n: L,
-    max_gap: L,
-    min_vr: L,
-    max_z: L,
+    n_extra: [u64; N],
+    min_n: Lw<N>,
+    max_gap: Lw<N>,
+    min_vr: Lw<N>,
+    max_z: Lw<N>,
     /// Input index of each lane's trajectory (`usize::MAX`: idle).
-    who: [usize; W],
+    who: [usize; N],
 }
 
-/// Right-hand side of the eight lanes, and the dynamic law force `F_z` of each.
+/// Right-hand side of the `N` lanes, and the dynamic law force `F_z` of each.
 #[inline(always)]
-fn rhs(c: &Coef, y: &V6, out: &mut V6, fz: &mut L) {
-    for l in 0..W {
+fn rhs<const N: usize>(c: &Coef<N>, y: &Vw<N>, out: &mut Vw<N>, fz: &mut Lw<N>) {
+    for l in 0..N {
         let (z, zd, x, xd, ph, phd) = (y[0][l], y[1][l], y[2][l], y[3][l], y[4][l], y[5][l]);
         let f = -c.ks[l] * z + c.ka[l] * z * z - c.c[l] * zd + c.kphi[l] * ph;
         let fx = c.mu[l] * f;
@@ -102,20 +103,20 @@ fn rhs(c: &Coef, y: &V6, out: &mut V6, fz: &mut L) {
 }
 
 /// [`rhs`] as the lane kit's [`LaneRhs`]: the law force of the last evaluation is left in `fz`.
-struct BatchRhs<'a> {
-    c: &'a Coef,
-    fz: &'a mut L,
+struct BatchRhs<'a, const N: usize> {
+    c: &'a Coef<N>,
+    fz: &'a mut Lw<N>,
 }
 
-impl LaneRhs for BatchRhs<'_> {
+impl<const N: usize> LaneRhs<N> for BatchRhs<'_, N> {
     #[inline(always)]
-    fn eval(&mut self, y: &V6, out: &mut V6) {
+    fn eval(&mut self, y: &Vw<N>, out: &mut Vw<N>) {
         rhs(self.c, y, out, self.fz);
     }
 }
 
 /// Integrate each `sliders[i]` from `y0s[i]` at `t = 0` to `t_end` with `method` (Dormand–Prince
-/// 5(4) or DOP853), eight trajectories at a time; the result for each trajectory, in input order.
+/// 5(4) or DOP853), `N` trajectories at a time; the result for each trajectory, in input order.
 ///
 /// Precondition (the caller checks): every slider has `ContactModel::Bilateral` and
 /// `FrictionLaw::Constant`; [`supports_method`] accepts `method`; `sliders.len() == y0s.len()`.
@@ -210,32 +211,49 @@ fn dispatch<const M8: bool>(job: Job<'_>) -> Vec<RunResult> {
     {
         if std::is_x86_feature_detected!("avx512f") {
             // SAFETY: the CPU supports the features the function is compiled for.
-            return unsafe { run_avx512::<M8>(job) };
+            return unsafe {
+                if M8 && !job.t_eval.is_empty() {
+                    run_avx512::<M8, W>(job)
+                } else {
+                    run_avx512::<M8, W_AVX512>(job)
+                }
+            };
         }
         if std::is_x86_feature_detected!("avx2") {
             // SAFETY: as above.
             return unsafe { run_avx2::<M8>(job) };
         }
     }
-    run_impl::<M8>(job)
+    run_impl::<M8, W>(job)
 }
+
+/// Lanes of the AVX-512 copy, except for DOP853 with samples: two registers per operation, so
+/// that two independent chains of a stage's arithmetic overlap (a stage waits on the one before:
+/// at 8 lanes the step is partly latency-bound). Measured against 8 lanes on the issue-2
+/// ensemble (Zen 4, one thread, 4,000 trajectories, builds alternating): the DOP853 end state
+/// 28-31k -> 42.5k trajectories/s at rtol 1e-6 and 13.4-13.7k -> 18-18.7k at 1e-9, DP5 19-20k
+/// -> 22-23.5k; with 501 samples DP5 16.3k -> 20.4k, but DOP853 18.5k -> 15.8k, so DOP853 with
+/// samples keeps 8. The slider's lane driver (`ensemble::lanes`) keeps 8 too: its any-lane work
+/// (events, the hidden-crossing check's extra stages) runs for all lanes as soon as one needs
+/// it, and 16 lanes made the census 10 % slower.
+pub(crate) const W_AVX512: usize = 16;
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
-unsafe fn run_avx512<const M8: bool>(job: Job<'_>) -> Vec<RunResult> {
-    run_impl::<M8>(job)
+unsafe fn run_avx512<const M8: bool, const N: usize>(job: Job<'_>) -> Vec<RunResult> {
+    run_impl::<M8, N>(job)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn run_avx2<const M8: bool>(job: Job<'_>) -> Vec<RunResult> {
-    run_impl::<M8>(job)
+    run_impl::<M8, W>(job)
 }
 
 /// The portable path (also used by the tests to check that the SIMD copies agree bitwise).
 /// `M8`: DOP853, else Dormand–Prince 5(4).
 #[inline(always)]
-fn run_impl<const M8: bool>(job: Job<'_>) -> Vec<RunResult> {
+fn run_impl<const M8: bool, const N: usize>(job: Job<'_>) -> Vec<RunResult> {
     let Job { sliders, y0s, t_end, tol, t_eval, samples, counts } = job;
     let stride = 6 * t_eval.len();
     let n = sliders.len();
@@ -243,14 +261,14 @@ fn run_impl<const M8: bool>(job: Job<'_>) -> Vec<RunResult> {
     let first_sample = t_eval.first().copied().unwrap_or(f64::INFINITY);
     // Per lane: the time of its trajectory's next sample (its index is the length of the
     // trajectory's samples so far).
-    let mut next_t = [first_sample; W];
+    let mut next_t = [first_sample; N];
     let opts = Options::<6>::new(tol.rtol, 1.0);
     let rtol = tol.rtol;
     let max_steps = opts.max_steps;
     let event_tol = opts.event_tol;
     let h_min_rel = opts.h_min_rel;
     let mut out: Vec<Option<RunResult>> = vec![None; n];
-    let zero = [0.0; W];
+    let zero = [0.0; N];
     let mut ln = Lanes {
         c: Coef::zero(),
         y: [zero; 6],
@@ -258,18 +276,18 @@ fn run_impl<const M8: bool>(job: Job<'_>) -> Vec<RunResult> {
         t: zero,
         h: zero,
         ln_err_old: splat(LN_ERR_FLOOR),
-        rejected: [false; W],
-        n_acc: [0; W],
-        n_rej: [0; W],
-        n_extra: [0; W],
+        rejected: [false; N],
+        n_acc: [0; N],
+        n_rej: [0; N],
+        n_extra: [0; N],
         min_n: zero,
         max_gap: zero,
         min_vr: zero,
         max_z: zero,
-        who: [usize::MAX; W],
+        who: [usize::MAX; N],
     };
     let mut next = 0usize;
-    for l in 0..W {
+    for l in 0..N {
         refill(&mut ln, l, &mut next, sliders, y0s, t_end, tol, M8, &mut out);
     }
     let end = End { sliders, t_end, opts: &opts, m8: M8 };
@@ -282,7 +300,7 @@ fn run_impl<const M8: bool>(job: Job<'_>) -> Vec<RunResult> {
     let mut fz = zero;
     let mut fz_scratch = zero;
     let mut extra = [[zero; 6]; 3];
-    let mut dense = LaneDense::<6>::new();
+    let mut dense = LaneDense::<6, N>::new();
 
     while ln.who.iter().any(|&w| w != usize::MAX) {
         rounds += 1;
@@ -292,10 +310,10 @@ fn run_impl<const M8: bool>(job: Job<'_>) -> Vec<RunResult> {
         }
         // ---- before the attempt: landing on t_end, the step floor, the step budget ----
         let mut hh = zero;
-        let mut last = [false; W];
+        let mut last = [false; N];
         let mut floor = zero;
         let mut bad = false;
-        for l in 0..W {
+        for l in 0..N {
             let h = ln.h[l];
             let rem = t_end - ln.t[l];
             let la = h >= rem || 1.01 * h >= rem;
@@ -306,7 +324,7 @@ fn run_impl<const M8: bool>(job: Job<'_>) -> Vec<RunResult> {
             bad |= ln.who[l] != usize::MAX && (too_small || ln.n_acc[l] + ln.n_rej[l] >= max_steps);
         }
         if bad {
-            for l in 0..W {
+            for l in 0..N {
                 if ln.who[l] == usize::MAX {
                     continue;
                 }
@@ -341,12 +359,12 @@ fn run_impl<const M8: bool>(job: Job<'_>) -> Vec<RunResult> {
         } else {
             dopri5_step(&mut BatchRhs { c, fz: &mut fz }, y, k1, &hh, rtol, &c.atol, &mut k, &mut yn)
         };
-        let fnew: &V6 = if M8 { &kk[12] } else { &k[5] };
+        let fnew: &Vw<N> = if M8 { &kk[12] } else { &k[5] };
 
         // ---- accept or reject, the controller, extremes, the end tests (branch-free) ----
-        let mut ok = [false; W];
+        let mut ok = [false; N];
         let mut lnx = zero;
-        for l in 0..W {
+        for l in 0..N {
             ok[l] = err[l] <= 1.0 && fin[l];
             // ln of the error, floored far below anything that matters (a zero or subnormal error
             // gives the largest growth either way); non-finite errors are not used below.
@@ -360,7 +378,7 @@ fn run_impl<const M8: bool>(job: Job<'_>) -> Vec<RunResult> {
         }
         let alpha = if M8 { ALPHA8 } else { ALPHA };
         let mut arg = zero;
-        for l in 0..W {
+        for l in 0..N {
             // One exp per lane: the accept factor err^-alpha err_old^beta / safety, or the reject
             // factor err^-alpha (times safety), as in `Controller::accept` / `Controller::reject`.
             arg[l] =
@@ -369,8 +387,8 @@ fn run_impl<const M8: bool>(job: Job<'_>) -> Vec<RunResult> {
         let r = exp_lanes(&arg);
         // Kept as several simple loops over the lanes: each vectorises on its own.
         let t_start = ln.t;
-        let mut ended = [false; W];
-        for l in 0..W {
+        let mut ended = [false; N];
+        for l in 0..N {
             let ok = ok[l];
             let e = err[l];
             // Accepted: the PI ratio, no growth right after a rejection.
@@ -393,14 +411,14 @@ fn run_impl<const M8: bool>(job: Job<'_>) -> Vec<RunResult> {
         }
         // ---- samples: the interpolant of the step, built when some accepted lane passes its next
         // sample time (before an escape cuts the step: the crossing is located on it) ----
-        let due: [bool; W] =
+        let due: [bool; N] =
             std::array::from_fn(|l| sampled & ok[l] & (ln.who[l] != usize::MAX) & (ln.t[l] >= next_t[l]));
         // Built into one buffer kept across steps (an interpolant built and moved per step cost
         // a tenth of a sampled run in copies and zeroing).
         let have_dense = due.iter().any(|&d| d);
         if have_dense {
             if M8 {
-                for l in 0..W {
+                for l in 0..N {
                     ln.n_extra[l] += 3 * due[l] as u64;
                 }
                 let f = &mut BatchRhs { c, fz: &mut fz_scratch };
@@ -412,9 +430,9 @@ fn run_impl<const M8: bool>(job: Job<'_>) -> Vec<RunResult> {
 
         // Off the common path: only when some lane ends this step.
         let attention = ended.iter().fold(false, |a, &b| a | b);
-        if attention && (0..W).any(|l| ok[l] && ended[l] && yn[idx::Z][l].abs() >= c.esc[l]) {
+        if attention && (0..N).any(|l| ok[l] && ended[l] && yn[idx::Z][l].abs() >= c.esc[l]) {
             let step = Step { t0: &t_start, h: &hh, ok: &ok };
-            let stages: [&V6; 13] = if M8 {
+            let stages: [&Vw<N>; 13] = if M8 {
                 std::array::from_fn(|j| if j == 0 { &ln.f } else { &kk[j] })
             } else {
                 std::array::from_fn(|j| if j == 0 { &ln.f } else { &k[(j - 1).min(5)] })
@@ -424,7 +442,7 @@ fn run_impl<const M8: bool>(job: Job<'_>) -> Vec<RunResult> {
         }
         if have_dense {
             let d = &dense;
-            for l in 0..W {
+            for l in 0..N {
                 if !due[l] {
                     continue;
                 }
@@ -436,17 +454,17 @@ fn run_impl<const M8: bool>(job: Job<'_>) -> Vec<RunResult> {
                 counts[w] = row.n;
             }
         }
-        for l in 0..W {
+        for l in 0..N {
             ln.n_acc[l] += ok[l] as u64;
             ln.n_rej[l] += (!ok[l]) as u64;
         }
         each6!(i, {
-            for l in 0..W {
+            for l in 0..N {
                 ln.y[i][l] = if ok[l] { yn[i][l] } else { ln.y[i][l] };
                 ln.f[i][l] = if ok[l] { fnew[i][l] } else { ln.f[i][l] };
             }
         });
-        for l in 0..W {
+        for l in 0..N {
             let ok = ok[l];
             let z = yn[idx::Z][l];
             let normal = c.fst[l] + fz[l];
@@ -458,7 +476,7 @@ fn run_impl<const M8: bool>(job: Job<'_>) -> Vec<RunResult> {
             ln.max_z[l] = if ok { ln.max_z[l].max(z.abs()) } else { ln.max_z[l] };
         }
         if attention {
-            for l in 0..W {
+            for l in 0..N {
                 if !ended[l] || ln.who[l] == usize::MAX {
                     continue;
                 }
@@ -491,8 +509,8 @@ fn run_impl<const M8: bool>(job: Job<'_>) -> Vec<RunResult> {
 /// The caller cancelled: every running lane ends where it is (`NotComputed`).
 #[cold]
 #[inline(never)]
-fn stop_all(ln: &mut Lanes, end: &End<'_>, out: &mut [Option<RunResult>]) {
-    for l in 0..W {
+fn stop_all<const N: usize>(ln: &mut Lanes<N>, end: &End<'_>, out: &mut [Option<RunResult>]) {
+    for l in 0..N {
         if ln.who[l] != usize::MAX {
             let h = ln.h[l];
             finish(ln, l, Status::NotComputed, h, end, out);
@@ -516,20 +534,20 @@ struct End<'a> {
 /// the located ones. Called before the lane state is overwritten (`ln.y`, `ln.f` still hold the
 /// step's start and first stage). Cold: diverging runs are rare.
 /// The attempted step of every lane: start times, step sizes, accepted or not.
-struct Step<'a> {
-    t0: &'a L,
-    h: &'a L,
-    ok: &'a [bool; W],
+struct Step<'a, const N: usize> {
+    t0: &'a Lw<N>,
+    h: &'a Lw<N>,
+    ok: &'a [bool; N],
 }
 
 /// One batch step's lanes, for [`locate_escapes`]: the stages (DP5: `k1..k7` in the first seven,
 /// DOP853: `k1..k13`), the step, the method.
-struct Escapes<'a> {
-    c: &'a Coef,
-    who: &'a [usize; W],
-    y: &'a V6,
-    stages: &'a [&'a V6; 13],
-    step: &'a Step<'a>,
+struct Escapes<'a, const N: usize> {
+    c: &'a Coef<N>,
+    who: &'a [usize; N],
+    y: &'a Vw<N>,
+    stages: &'a [&'a Vw<N>; 13],
+    step: &'a Step<'a, N>,
     sliders: &'a [Slider],
     event_tol: f64,
     m8: bool,
@@ -537,9 +555,15 @@ struct Escapes<'a> {
 
 #[cold]
 #[inline(never)]
-fn locate_escapes(e: &Escapes<'_>, yn: &mut V6, fz: &mut L, t: &mut L, n_extra: &mut [u64; W]) {
+fn locate_escapes<const N: usize>(
+    e: &Escapes<'_, N>,
+    yn: &mut Vw<N>,
+    fz: &mut Lw<N>,
+    t: &mut Lw<N>,
+    n_extra: &mut [u64; N],
+) {
     let c = e.c;
-    for l in 0..W {
+    for l in 0..N {
         if e.who[l] == usize::MAX || !e.step.ok[l] || yn[idx::Z][l].abs() < c.esc[l] {
             continue;
         }
@@ -574,7 +598,14 @@ fn locate_escapes(e: &Escapes<'_>, yn: &mut V6, fz: &mut L, t: &mut L, n_extra: 
 
 /// Write lane `l`'s result (ended with `status`, step size `h`) and mark it idle.
 #[cold]
-fn finish(ln: &mut Lanes, l: usize, status: Status, h: f64, end: &End<'_>, out: &mut [Option<RunResult>]) {
+fn finish<const N: usize>(
+    ln: &mut Lanes<N>,
+    l: usize,
+    status: Status,
+    h: f64,
+    end: &End<'_>,
+    out: &mut [Option<RunResult>],
+) {
     let i = ln.who[l];
     let steps = ln.n_acc[l] + ln.n_rej[l];
     let (t, y) = (ln.t[l], lane_state(&ln.y, l));
@@ -602,8 +633,8 @@ fn finish(ln: &mut Lanes, l: usize, status: Status, h: f64, end: &End<'_>, out: 
 /// first step get their result here); leave the lane idle (harmless values) when none is left.
 #[cold]
 #[allow(clippy::too_many_arguments)]
-fn refill(
-    ln: &mut Lanes,
+fn refill<const N: usize>(
+    ln: &mut Lanes<N>,
     l: usize,
     next: &mut usize,
     sliders: &[Slider],

@@ -1,6 +1,8 @@
-//! The lane-batched integration kit: [`W`] = 8 trajectories at once in structure-of-arrays form
-//! (`[f64; 8]` per state component), so that the stage arithmetic of eight trajectories runs in
-//! SIMD registers (plain loops over the lanes that LLVM vectorises).
+//! The lane-batched integration kit: `N` trajectories at once in structure-of-arrays form
+//! (`[f64; N]` per state component, [`Lw`] and [`Vw`]), so that the stage arithmetic of `N`
+//! trajectories runs in SIMD registers (plain loops over the lanes that LLVM vectorises). Every
+//! function is generic in `N`: the slider's lane driver runs [`W`] = 8 lanes, the bilateral
+//! batch 16 in its AVX-512 copy (two registers per operation).
 //!
 //! Generic over the right-hand side (a closure on the lanes), it holds what any lane-batched
 //! explicit integrator needs: the lane types, branch-free `exp` and `ln` for the PI controller in
@@ -25,10 +27,14 @@ use super::dopri5::{
 use super::SampleStore;
 use nalgebra::SVector;
 
-/// Trajectories per batch (SIMD lanes).
+/// Trajectories per batch of the slider's lane driver (SIMD lanes; [`L`], [`V6`]).
 pub const W: usize = 8;
+/// One `f64` per lane, on `N` lanes.
+pub(crate) type Lw<const N: usize> = [f64; N];
+/// A six-component state on `N` lanes, `v[component][lane]`.
+pub(crate) type Vw<const N: usize> = [Lw<N>; 6];
 /// One `f64` per lane.
-pub(crate) type L = [f64; W];
+pub(crate) type L = Lw<W>;
 /// A six-component state on the lanes, `v[component][lane]` (the slider's dimension: the only
 /// one lane-batched so far).
 pub(crate) type V6 = [L; 6];
@@ -48,15 +54,15 @@ pub(crate) const LN_ERR_FLOOR: f64 = -9.210_340_371_976_184;
 /// A right-hand side on the lanes: `out = f(y)` for each lane. A trait rather than a closure so
 /// that the implementation can be `#[inline(always)]`: the steps below call it up to 16 times, and
 /// the cheap ones (the bilateral slider) lose a fifth of their speed when it is a call.
-pub(crate) trait LaneRhs {
+pub(crate) trait LaneRhs<const N: usize> {
     /// `out = f(y)` on every lane.
-    fn eval(&mut self, y: &V6, out: &mut V6);
+    fn eval(&mut self, y: &Vw<N>, out: &mut Vw<N>);
 }
 
 /// `x` in every lane.
 #[inline(always)]
-pub(crate) fn splat(x: f64) -> L {
-    [x; W]
+pub(crate) fn splat<const N: usize>(x: f64) -> Lw<N> {
+    [x; N]
 }
 
 /// `$body` for `$i` = 0..6, unrolled: the loops inside run over the lanes, and unrolling the
@@ -95,13 +101,13 @@ pub(crate) use each6;
 /// `|r| <= ln 2 / 2`, Taylor to degree 12 (relative error below 1e-15). Arguments are clamped to
 /// `[-700, 700]` (the controller clips its factors far inside that).
 #[inline(always)]
-pub(crate) fn exp_lanes(x: &L) -> L {
+pub(crate) fn exp_lanes<const N: usize>(x: &Lw<N>) -> Lw<N> {
     const MAGIC: f64 = 6755399441055744.0; // 1.5 * 2^52: adding it rounds to an integer
                                            // ln 2 split so that n * LN2_HI is exact (fdlibm's constants).
     const LN2_HI: f64 = f64::from_bits(0x3fe6_2e42_fee0_0000);
     const LN2_LO: f64 = f64::from_bits(0x3dea_39ef_3579_3c76);
-    let mut out = [0.0; W];
-    for l in 0..W {
+    let mut out = [0.0; N];
+    for l in 0..N {
         let x = x[l].clamp(-700.0, 700.0);
         let t = x * std::f64::consts::LOG2_E + MAGIC;
         let n = t - MAGIC;
@@ -130,10 +136,10 @@ pub(crate) fn exp_lanes(x: &L) -> L {
 /// `x = 2^e m`, `m` in `[sqrt(1/2), sqrt 2)`, `ln m = 2 atanh s`, `s = (m - 1)/(m + 1)`, series to
 /// `s^21` (relative error below 1e-15).
 #[inline(always)]
-pub(crate) fn ln_lanes(x: &L) -> L {
+pub(crate) fn ln_lanes<const N: usize>(x: &Lw<N>) -> Lw<N> {
     const TWO52: f64 = 4503599627370496.0;
-    let mut out = [0.0; W];
-    for l in 0..W {
+    let mut out = [0.0; N];
+    for l in 0..N {
         let b = x[l].to_bits();
         let mut m = f64::from_bits((b & 0x000f_ffff_ffff_ffff) | 0x3ff0_0000_0000_0000);
         // Biased exponent as a double, exactly (no vector int->float conversion needed).
@@ -161,7 +167,7 @@ pub(crate) fn ln_lanes(x: &L) -> L {
 
 /// The state of lane `l`.
 #[inline]
-pub(crate) fn lane_state(v: &V6, l: usize) -> SVector<f64, 6> {
+pub(crate) fn lane_state<const N: usize>(v: &Vw<N>, l: usize) -> SVector<f64, 6> {
     SVector::<f64, 6>::from_fn(|i, _| v[i][l])
 }
 
@@ -240,14 +246,14 @@ impl SampleStore<6> for Row<'_> {
 /// other the step's interpolant `dense`. Returns the time of the next sample (infinity: none).
 #[inline]
 #[allow(clippy::too_many_arguments)]
-pub(crate) fn sample_lane(
+pub(crate) fn sample_lane<const N: usize>(
     t_eval: &[f64],
     out: &mut impl SampleStore<6>,
-    dense: &LaneDense<6>,
+    dense: &LaneDense<6, N>,
     l: usize,
     (t0, t1, h): (f64, f64, f64),
-    y0: &V6,
-    y1: &V6,
+    y0: &Vw<N>,
+    y1: &Vw<N>,
 ) -> f64 {
     while let Some(&t) = t_eval.get(out.len()) {
         if t > t1 {
@@ -273,19 +279,25 @@ pub(crate) fn cross(a: f64, b: f64) -> bool {
 
 /// `out = y + h (a_1 k_1 + ... + a_K k_K)` on the lanes.
 #[inline(always)]
-pub(crate) fn comb<const K: usize>(y: &V6, hh: &L, a: [f64; K], ks: [&V6; K], out: &mut V6) {
+pub(crate) fn comb<const K: usize, const N: usize>(
+    y: &Vw<N>,
+    hh: &Lw<N>,
+    a: [f64; K],
+    ks: [&Vw<N>; K],
+    out: &mut Vw<N>,
+) {
     // Stage by stage over whole lane rows (the sum of each lane in the same order, `0 + a_1 k_1 +
     // ... + a_K k_K`): with the stage loop innermost, LLVM vectorised the sum across stages with
     // gathers, and DOP853's attempt cost 15x DP5's instead of about 2x.
     each6!(i, {
-        let mut s = [0.0; W];
+        let mut s = [0.0; N];
         for j in 0..K {
             let (aj, kj) = (a[j], &ks[j][i]);
-            for l in 0..W {
+            for l in 0..N {
                 s[l] += aj * kj[l];
             }
         }
-        for l in 0..W {
+        for l in 0..N {
             out[i][l] = y[i][l] + hh[l] * s[l];
         }
     });
@@ -298,51 +310,51 @@ pub(crate) fn comb<const K: usize>(y: &V6, hh: &L, a: [f64; K], ks: [&V6; K], ou
 /// right-hand side on the lanes.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-pub(crate) fn dopri5_step<F: LaneRhs>(
+pub(crate) fn dopri5_step<F: LaneRhs<N>, const N: usize>(
     rhs: &mut F,
-    y: &V6,
-    k1: &V6,
-    hh: &L,
+    y: &Vw<N>,
+    k1: &Vw<N>,
+    hh: &Lw<N>,
     rtol: f64,
-    atol: &V6,
-    k: &mut [V6; 6],
-    yn: &mut V6,
-) -> (L, [bool; W]) {
-    let zero = [0.0; W];
+    atol: &Vw<N>,
+    k: &mut [Vw<N>; 6],
+    yn: &mut Vw<N>,
+) -> (Lw<N>, [bool; N]) {
+    let zero = [0.0; N];
     let mut ys = [zero; 6];
     each6!(i, {
-        for l in 0..W {
+        for l in 0..N {
             ys[i][l] = y[i][l] + hh[l] * (A21 * k1[i][l]);
         }
     });
     rhs.eval(&ys, &mut k[0]);
     each6!(i, {
-        for l in 0..W {
+        for l in 0..N {
             ys[i][l] = y[i][l] + hh[l] * (A31 * k1[i][l] + A32 * k[0][i][l]);
         }
     });
     rhs.eval(&ys, &mut k[1]);
     each6!(i, {
-        for l in 0..W {
+        for l in 0..N {
             ys[i][l] = y[i][l] + hh[l] * (A41 * k1[i][l] + A42 * k[0][i][l] + A43 * k[1][i][l]);
         }
     });
     rhs.eval(&ys, &mut k[2]);
     each6!(i, {
-        for l in 0..W {
+        for l in 0..N {
             ys[i][l] = y[i][l] + hh[l] * (A51 * k1[i][l] + A52 * k[0][i][l] + A53 * k[1][i][l] + A54 * k[2][i][l]);
         }
     });
     rhs.eval(&ys, &mut k[3]);
     each6!(i, {
-        for l in 0..W {
+        for l in 0..N {
             ys[i][l] = y[i][l]
                 + hh[l] * (A61 * k1[i][l] + A62 * k[0][i][l] + A63 * k[1][i][l] + A64 * k[2][i][l] + A65 * k[3][i][l]);
         }
     });
     rhs.eval(&ys, &mut k[4]);
     each6!(i, {
-        for l in 0..W {
+        for l in 0..N {
             yn[i][l] = y[i][l]
                 + hh[l] * (B1 * k1[i][l] + B3 * k[1][i][l] + B4 * k[2][i][l] + B5 * k[3][i][l] + B6 * k[4][i][l]);
         }
@@ -351,9 +363,9 @@ pub(crate) fn dopri5_step<F: LaneRhs>(
 
     // ---- error norm and finiteness ----
     let mut acc = zero;
-    let mut fin = [true; W];
+    let mut fin = [true; N];
     each6!(i, {
-        for l in 0..W {
+        for l in 0..N {
             let h = hh[l];
             let e = (E1 * h) * k1[i][l]
                 + (E3 * h) * k[1][i][l]
@@ -368,7 +380,7 @@ pub(crate) fn dopri5_step<F: LaneRhs>(
         }
     });
     let mut e2 = zero;
-    for l in 0..W {
+    for l in 0..N {
         e2[l] = acc[l] / 6.0;
     }
     (e2, fin)
@@ -379,18 +391,18 @@ pub(crate) fn dopri5_step<F: LaneRhs>(
 /// derivative are finite. `rhs` is the right-hand side on the lanes.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-pub(crate) fn dop853_step<F: LaneRhs>(
+pub(crate) fn dop853_step<F: LaneRhs<N>, const N: usize>(
     rhs: &mut F,
-    y: &V6,
-    k1: &V6,
-    hh: &L,
+    y: &Vw<N>,
+    k1: &Vw<N>,
+    hh: &Lw<N>,
     rtol: f64,
-    atol: &V6,
-    kk: &mut [V6; 16],
-    yn: &mut V6,
-) -> (L, [bool; W]) {
-    let mut ys = [[0.0; W]; 6];
-    let mut t = [[0.0; W]; 6];
+    atol: &Vw<N>,
+    kk: &mut [Vw<N>; 16],
+    yn: &mut Vw<N>,
+) -> (Lw<N>, [bool; N]) {
+    let mut ys = [[0.0; N]; 6];
+    let mut t = [[0.0; N]; 6];
     macro_rules! stage {
         ($j:expr, $a:expr, $ks:expr) => {{
             comb(y, hh, $a, $ks, &mut ys);
@@ -419,23 +431,23 @@ pub(crate) fn dop853_step<F: LaneRhs>(
     );
     let used = [k1, &kk[5], &kk[6], &kk[7], &kk[8], &kk[9], &kk[10], &kk[11]];
     comb(y, hh, [A13_1, A13_6, A13_7, A13_8, A13_9, A13_10, A13_11, A13_12], used, yn);
-    let mut s5 = [0.0; W];
-    let mut s3 = [0.0; W];
+    let mut s5 = [0.0; N];
+    let mut s3 = [0.0; N];
     let er = [ER_1, ER_6, ER_7, ER_8, ER_9, ER_10, ER_11, ER_12];
     let e3c = [E3_1, A13_6, A13_7, A13_8, E3_9, A13_10, A13_11, E3_12];
     each6!(i, {
         // Row by row, as in `comb`.
-        let mut e5 = [0.0; W];
-        let mut e3 = [0.0; W];
+        let mut e5 = [0.0; N];
+        let mut e3 = [0.0; N];
         for j in 0..8 {
             let (a5, a3, kj) = (er[j], e3c[j], &used[j][i]);
-            for l in 0..W {
+            for l in 0..N {
                 e5[l] += a5 * kj[l];
                 e3[l] += a3 * kj[l];
             }
         }
         // One division per component, not two (a vector division costs about a dozen FMAs).
-        for l in 0..W {
+        for l in 0..N {
             let sk = atol[i][l] + rtol * y[i][l].abs().max(yn[i][l].abs());
             let w = 1.0 / (sk * sk);
             s5[l] += e5[l] * e5[l] * w;
@@ -444,9 +456,9 @@ pub(crate) fn dop853_step<F: LaneRhs>(
     });
     rhs.eval(yn, &mut t);
     kk[12] = t;
-    let mut err = [0.0; W];
-    let mut fin = [true; W];
-    for l in 0..W {
+    let mut err = [0.0; N];
+    let mut fin = [true; N];
+    for l in 0..N {
         let den = s5[l] + 0.01 * s3[l];
         let e = hh[l].abs() * s5[l] / (den * 6.0).sqrt();
         err[l] = if den > 0.0 {
@@ -458,7 +470,7 @@ pub(crate) fn dop853_step<F: LaneRhs>(
         };
     }
     for i in 0..6 {
-        for l in 0..W {
+        for l in 0..N {
             fin[l] &= yn[i][l].is_finite() & kk[12][i][l].is_finite();
         }
     }
@@ -466,18 +478,18 @@ pub(crate) fn dop853_step<F: LaneRhs>(
 }
 
 /// A step's interpolant on the lanes, for `C` selected components of the state.
-pub(crate) struct LaneDense<const C: usize> {
-    y0: [L; C],
+pub(crate) struct LaneDense<const C: usize, const N: usize = W> {
+    y0: [Lw<N>; C],
     /// DP5: `dy, bspl, r4, r5` (`y0 + (dy + (bspl + (r4 + r5 (1-x)) x) (1-x)) x`);
     /// DOP853: `c0..c6` (Hairer's `contd8` polynomial).
-    c: [[L; C]; 7],
+    c: [[Lw<N>; C]; 7],
     eight: bool,
 }
 
-impl<const C: usize> LaneDense<C> {
+impl<const C: usize, const N: usize> LaneDense<C, N> {
     /// An interpolant to be filled by the `*_into` builders (zeros until then).
     pub(crate) fn new() -> Self {
-        LaneDense { y0: [[0.0; W]; C], c: [[[0.0; W]; C]; 7], eight: false }
+        LaneDense { y0: [[0.0; N]; C], c: [[[0.0; N]; C]; 7], eight: false }
     }
 
     /// Component `j` of lane `l` at `x` (`x1 = 1 - x`): the scalar interpolants' formula,
@@ -515,11 +527,11 @@ impl<const C: usize> LaneDense<C> {
 
     #[inline(always)]
     /// The selected components at `x = (t - t0) / h` in `[0, 1]` of each lane's step.
-    pub(crate) fn eval(&self, x: f64) -> [L; C] {
+    pub(crate) fn eval(&self, x: f64) -> [Lw<N>; C] {
         let x1 = 1.0 - x;
-        let mut v = [[0.0; W]; C];
+        let mut v = [[0.0; N]; C];
         for j in 0..C {
-            for l in 0..W {
+            for l in 0..N {
                 v[j][l] = self.at(j, l, x, x1);
             }
         }
@@ -531,18 +543,18 @@ impl<const C: usize> LaneDense<C> {
 /// stages `k = [k1, k3, k4, k5, k6, k7]`, into `d` (a buffer the driver keeps across steps:
 /// an interpolant built and moved per step cost copies and zeroing).
 #[inline(always)]
-pub(crate) fn dopri5_dense_into<const C: usize>(
-    d: &mut LaneDense<C>,
+pub(crate) fn dopri5_dense_into<const C: usize, const N: usize>(
+    d: &mut LaneDense<C, N>,
     comps: &[usize; C],
-    y0: &V6,
-    y1: &V6,
-    k: [&V6; 6],
-    hh: &L,
+    y0: &Vw<N>,
+    y1: &Vw<N>,
+    k: [&Vw<N>; 6],
+    hh: &Lw<N>,
 ) {
     let [k1, k3, k4, k5, k6, k7] = k;
     d.eight = false;
     for (j, &i) in comps.iter().enumerate() {
-        for l in 0..W {
+        for l in 0..N {
             let h = hh[l];
             let dy = y1[i][l] - y0[i][l];
             let b = k1[i][l] * h - dy;
@@ -566,18 +578,18 @@ pub(crate) fn dopri5_dense_into<const C: usize>(
 /// each component ([`dop853_poly_into`]). `k1` and `kk` are the stages of [`dop853_step`].
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-pub(crate) fn dop853_dense_into<F: LaneRhs, const C: usize>(
-    d: &mut LaneDense<C>,
+pub(crate) fn dop853_dense_into<F: LaneRhs<N>, const C: usize, const N: usize>(
+    d: &mut LaneDense<C, N>,
     rhs: &mut F,
     comps: &[usize; C],
-    y: &V6,
-    y1: &V6,
-    k1: &V6,
-    hh: &L,
-    kk: &[V6; 16],
-    extra: &mut [V6; 3],
+    y: &Vw<N>,
+    y1: &Vw<N>,
+    k1: &Vw<N>,
+    hh: &Lw<N>,
+    kk: &[Vw<N>; 16],
+    extra: &mut [Vw<N>; 3],
 ) {
-    let mut ys = [[0.0; W]; 6];
+    let mut ys = [[0.0; N]; 6];
     let [k14, k15, k16] = extra;
     let k = |j: usize| &kk[j - 1];
     comb(
@@ -612,15 +624,15 @@ pub(crate) fn dop853_dense_into<F: LaneRhs, const C: usize>(
 /// for operation those of the scalar `dop853::poly`.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-pub(crate) fn dop853_poly_into<const C: usize>(
-    d: &mut LaneDense<C>,
+pub(crate) fn dop853_poly_into<const C: usize, const N: usize>(
+    d: &mut LaneDense<C, N>,
     comps: &[usize; C],
-    y: &V6,
-    y1: &V6,
-    k1: &V6,
-    hh: &L,
-    kk: &[V6; 16],
-    extra: &[V6; 3],
+    y: &Vw<N>,
+    y1: &Vw<N>,
+    k1: &Vw<N>,
+    hh: &Lw<N>,
+    kk: &[Vw<N>; 16],
+    extra: &[Vw<N>; 3],
 ) {
     let k = |j: usize| &kk[j - 1];
     let [k14, k15, k16] = extra;
@@ -633,7 +645,7 @@ pub(crate) fn dop853_poly_into<const C: usize>(
     ];
     d.eight = true;
     for (j, &i) in comps.iter().enumerate() {
-        for l in 0..W {
+        for l in 0..N {
             let h = hh[l];
             let dy = y1[i][l] - y[i][l];
             d.y0[j][l] = y[i][l];
@@ -646,12 +658,12 @@ pub(crate) fn dop853_poly_into<const C: usize>(
     // order, `0 + (a_1 h) k_1 + ... + (a_12 h) k_12`) held in registers, so that their adds
     // overlap instead of each waiting on the one before.
     for (r, row) in rows.iter().enumerate() {
-        let mut s = [[0.0; W]; C];
+        let mut s = [[0.0; N]; C];
         for m in 0..12 {
             let a = row[m];
             for (j, &i) in comps.iter().enumerate() {
                 let km = &st[m][i];
-                for l in 0..W {
+                for l in 0..N {
                     s[j][l] += (a * hh[l]) * km[l];
                 }
             }

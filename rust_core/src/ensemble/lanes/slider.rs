@@ -4,7 +4,7 @@
 //! at once.
 
 use crate::model::{event, idx, Slider};
-use crate::ode::lanes::{cross, exp_lanes, splat, LaneDense, LaneRhs, L, V6, W};
+use crate::ode::lanes::{cross, exp_lanes, splat, LaneDense, LaneRhs, Lw, Vw, L, V6, W};
 
 /// Event functions of the slider (gap, law normal force, sliding velocity, escape).
 pub(super) const NE: usize = 4;
@@ -18,39 +18,39 @@ pub(super) const EV_COMPS_CONST: [usize; 3] = [idx::Z, idx::ZD, idx::PHI];
 
 /// Per-lane coefficients of the right-hand side and the tolerances (shared with `batch`).
 #[derive(Clone, Copy)]
-pub(crate) struct Coef {
-    pub(crate) ks: L,
-    pub(crate) ka: L,
-    pub(crate) c: L,
-    pub(crate) kphi: L,
-    pub(crate) mu: L,
-    pub(crate) inv_m: L,
-    pub(crate) wz2: L,
-    pub(crate) dz: L,
-    pub(crate) wx2: L,
-    pub(crate) dx: L,
-    pub(crate) wt2: L,
-    pub(crate) dt: L,
+pub(crate) struct Coef<const N: usize = W> {
+    pub(crate) ks: Lw<N>,
+    pub(crate) ka: Lw<N>,
+    pub(crate) c: Lw<N>,
+    pub(crate) kphi: Lw<N>,
+    pub(crate) mu: Lw<N>,
+    pub(crate) inv_m: Lw<N>,
+    pub(crate) wz2: Lw<N>,
+    pub(crate) dz: Lw<N>,
+    pub(crate) wx2: Lw<N>,
+    pub(crate) dx: Lw<N>,
+    pub(crate) wt2: Lw<N>,
+    pub(crate) dt: Lw<N>,
     /// s L / I
-    pub(crate) tg: L,
-    pub(crate) atol: V6,
+    pub(crate) tg: Lw<N>,
+    pub(crate) atol: Vw<N>,
     /// F_st, z_st, V, s L, escape limit.
-    pub(crate) fst: L,
-    pub(crate) zst: L,
-    pub(crate) v: L,
-    pub(crate) sl: L,
-    pub(crate) esc: L,
+    pub(crate) fst: Lw<N>,
+    pub(crate) zst: Lw<N>,
+    pub(crate) v: Lw<N>,
+    pub(crate) sl: Lw<N>,
+    pub(crate) esc: Lw<N>,
     /// Stribeck law: mu_k, mu_s - mu_k, 1/v_s, 1/eps, mu(V) F_st tanh(V/eps).
-    pub(crate) mu_k: L,
-    pub(crate) dmu: L,
-    pub(crate) inv_vs: L,
-    pub(crate) inv_eps: L,
-    pub(crate) stat: L,
+    pub(crate) mu_k: Lw<N>,
+    pub(crate) dmu: Lw<N>,
+    pub(crate) inv_vs: Lw<N>,
+    pub(crate) inv_eps: Lw<N>,
+    pub(crate) stat: Lw<N>,
 }
 
-impl Coef {
+impl<const N: usize> Coef<N> {
     pub(crate) fn zero() -> Self {
-        let z = [0.0; W];
+        let z = [0.0; N];
         Coef {
             ks: z,
             ka: z,
@@ -167,7 +167,7 @@ pub(super) struct SliderRhs<'a, const UNI: bool, const COUL: bool> {
     pub(super) fzl: &'a mut L,
 }
 
-impl<const UNI: bool, const COUL: bool> LaneRhs for SliderRhs<'_, UNI, COUL> {
+impl<const UNI: bool, const COUL: bool> LaneRhs<W> for SliderRhs<'_, UNI, COUL> {
     #[inline(always)]
     fn eval(&mut self, y: &V6, out: &mut V6) {
         rhs::<UNI, COUL>(self.c, self.contact, y, out, self.fzl);
