@@ -27,17 +27,13 @@ use super::dopri5::{
 use super::SampleStore;
 use nalgebra::SVector;
 
-/// Trajectories per batch of the slider's lane driver (SIMD lanes; [`L`], [`V6`]).
+/// Lanes of the slider's lane driver (SIMD lanes), except its AVX-512 copy for end states.
 pub const W: usize = 8;
 /// One `f64` per lane, on `N` lanes.
 pub(crate) type Lw<const N: usize> = [f64; N];
-/// A six-component state on `N` lanes, `v[component][lane]`.
-pub(crate) type Vw<const N: usize> = [Lw<N>; 6];
-/// One `f64` per lane.
-pub(crate) type L = Lw<W>;
-/// A six-component state on the lanes, `v[component][lane]` (the slider's dimension: the only
+/// A six-component state on `N` lanes, `v[component][lane]` (the slider's dimension: the only
 /// one lane-batched so far).
-pub(crate) type V6 = [L; 6];
+pub(crate) type Vw<const N: usize> = [Lw<N>; 6];
 
 // The PI controller of `controller.rs` in log form (one `exp` per lane and step).
 /// Weight of the previous error (`beta = 0.04`, the explicit methods').

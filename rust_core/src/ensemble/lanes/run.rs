@@ -1,4 +1,4 @@
-//! The loop over steps of the eight lanes: the attempt, the events at the step end and inside it,
+//! The loop over steps of the `N` lanes: the attempt, the events at the step end and inside it,
 //! the controller, the common accepted step on the lanes, and the cold path for lanes that need
 //! their scalar side (the scalar driver's event code, observers, the end of a run).
 
@@ -14,7 +14,7 @@ use crate::ode::events::{step_events, turn_point, StepEnd};
 use crate::ode::lanes::LaneDense;
 use crate::ode::lanes::{
     cross, dop853_dense_into, dop853_poly_into, dop853_step, dopri5_dense_into, dopri5_step, each6, exp_lanes,
-    lane_state, ln_lanes, sample_lane, splat, ALL_COMPS, ALPHA, ALPHA8, BETA, L, LN_ERR_FLOOR, LN_SAFETY, V6, W,
+    lane_state, ln_lanes, sample_lane, splat, Lw, Vw, ALL_COMPS, ALPHA, ALPHA8, BETA, LN_ERR_FLOOR, LN_SAFETY,
 };
 use crate::ode::stepper::StepDense;
 use crate::ode::{Control, Observer, OdeSystem, Options, Outcome, StepView, MAX_EVENTS};
@@ -22,7 +22,7 @@ use crate::steady::Tolerances;
 
 /// The portable path (the tests check that the SIMD copies agree bitwise).
 #[inline(always)]
-pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
+pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool, const N: usize>(
     sliders: &[Slider],
     y0s: &[State],
     t_end: f64,
@@ -38,7 +38,7 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
     let n = sliders.len();
     let rtol = tol.rtol;
     let mut out: Vec<(usize, TrajectoryResult)> = Vec::with_capacity(n);
-    let zero = [0.0; W];
+    let zero = [0.0; N];
     let mut ln = Lanes {
         c: Coef::zero(),
         y: [zero; 6],
@@ -46,14 +46,14 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
         t: zero,
         h: zero,
         ln_err_old: splat(LN_ERR_FLOOR),
-        rejected: [false; W],
-        n_acc: [0; W],
-        n_rej: [0; W],
-        n_extra: [0; W],
+        rejected: [false; N],
+        n_acc: [0; N],
+        n_rej: [0; N],
+        n_extra: [0; N],
         m8: M8,
-        contact: [true; W],
+        contact: [true; N],
         g0: [splat(1.0); NE],
-        pend: [[false; W]; NE],
+        pend: [[false; N]; NE],
         pend_t: [splat(f64::NAN); NE],
         min_n: zero,
         max_gap: zero,
@@ -68,7 +68,7 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
     let steady = matches!(task, Task::Steady { .. });
     let sampled = matches!(task, Task::Sampled(_));
     let h_min_rel = Options::<6>::new(rtol, 1.0).h_min_rel;
-    for l in 0..W {
+    for l in 0..N {
         refill(&mut ln, l, &inp, &mut out);
     }
 
@@ -81,10 +81,10 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
     // they cost copies and zeroing): for the hidden-crossing check (the components its event
     // functions read), for samples, and DOP853's of all components shared by samples and the cold
     // path (`full`, valid where `full_built`).
-    let mut ev5 = LaneDense::<5>::new();
-    let mut ev3 = LaneDense::<3>::new();
-    let mut samp = LaneDense::<6>::new();
-    let mut full = LaneDense::<6>::new();
+    let mut ev5 = LaneDense::<5, N>::new();
+    let mut ev3 = LaneDense::<3, N>::new();
+    let mut samp = LaneDense::<6, N>::new();
+    let mut full = LaneDense::<6, N>::new();
     let mut yn = [zero; 6];
     let mut fzl = zero;
     let mut fzl_scratch = zero;
@@ -95,7 +95,7 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
         if cancel::requested_every(rounds) {
             // The running trajectories end where they are; no new one starts (the caller marks
             // those as not started).
-            for l in 0..W {
+            for l in 0..N {
                 if ln.side[l].is_some() {
                     let (t, y, h) = (ln.t[l], lane_state(&ln.y, l), ln.h[l]);
                     finish(&mut ln, l, t, y, h, Outcome::Cancelled, &mut out);
@@ -103,13 +103,13 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
             }
             break;
         }
-        let live: [bool; W] = std::array::from_fn(|l| ln.side[l].is_some());
+        let live: [bool; N] = std::array::from_fn(|l| ln.side[l].is_some());
         // ---- before the attempt: landing on t_end, the step floor, the step budget ----
         let mut hh = zero;
-        let mut last = [false; W];
+        let mut last = [false; N];
         let mut floor = zero;
         let mut bad = false;
-        for l in 0..W {
+        for l in 0..N {
             let h = ln.h[l];
             let rem = t_end - ln.t[l];
             let la = h >= rem || 1.01 * h >= rem;
@@ -117,14 +117,14 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
             hh[l] = if la { rem } else { h };
             floor[l] = h_min_rel * ln.t[l].abs().max(1.0);
         }
-        for l in 0..W {
+        for l in 0..N {
             if let Some(sd) = &ln.side[l] {
                 let too_small = (hh[l].is_nan() || hh[l] < floor[l]) && !last[l];
                 bad |= too_small || ln.n_acc[l] + ln.n_rej[l] >= sd.opts.max_steps;
             }
         }
         if bad {
-            for l in 0..W {
+            for l in 0..N {
                 let Some(sd) = &ln.side[l] else { continue };
                 let too_small = (hh[l].is_nan() || hh[l] < floor[l]) && !last[l];
                 let outcome = if too_small {
@@ -154,7 +154,7 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
         // state is left in `fzl` by the last right-hand side.
         let (err, fin) = if M8 {
             dop853_step(
-                &mut SliderRhs::<UNI, COUL> { c, contact: cm, fzl: &mut fzl },
+                &mut SliderRhs::<UNI, COUL, N> { c, contact: cm, fzl: &mut fzl },
                 y,
                 k1,
                 &hh,
@@ -165,7 +165,7 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
             )
         } else {
             dopri5_step(
-                &mut SliderRhs::<UNI, COUL> { c, contact: cm, fzl: &mut fzl },
+                &mut SliderRhs::<UNI, COUL, N> { c, contact: cm, fzl: &mut fzl },
                 y,
                 k1,
                 &hh,
@@ -175,15 +175,15 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
                 &mut yn,
             )
         };
-        let fnew: &V6 = if M8 { &kk[12] } else { &k[5] };
-        let mut ok = [false; W];
-        for l in 0..W {
+        let fnew: &Vw<N> = if M8 { &kk[12] } else { &k[5] };
+        let mut ok = [false; N];
+        for l in 0..N {
             ok[l] = err[l] <= 1.0 && fin[l] && live[l];
         }
 
         // ---- events at the step end; hidden crossings inside the step (unilateral) ----
         let mut g1 = [zero; NE];
-        events_lanes::<COUL>(c, &yn, &fzl, &mut g1);
+        events_lanes::<COUL, N>(c, &yn, &fzl, &mut g1);
         // Theta of the interior point to end a redone step at (0: none).
         let mut hidden = zero;
         // The lanes whose step needs the hidden-crossing check (`near_events`): the check runs
@@ -193,17 +193,17 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
         // inside the step (0: none), checked on the interpolant beside the three fixed points.
         let mut turn = zero;
         let need = if UNI {
-            near_events::<COUL>(c, y, k1, &yn, fnew, &ln.g0, &g1, &ln.pend, &ok, &hh, &mut turn)
+            near_events::<COUL, N>(c, y, k1, &yn, fnew, &ln.g0, &g1, &ln.pend, &ok, &hh, &mut turn)
         } else {
-            [false; W]
+            [false; N]
         };
         if need.iter().any(|&x| x) {
-            let ok: [bool; W] = std::array::from_fn(|l| ok[l] & need[l]);
+            let ok: [bool; N] = std::array::from_fn(|l| ok[l] & need[l]);
             // The interpolant at three interior points: DP5's from its stages, DOP853's needs
             // three more right-hand sides (its 7th-order dense output), counted as work. Only the
             // components the event functions read: under constant friction z, zd and phi.
             if M8 {
-                for l in 0..W {
+                for l in 0..N {
                     ln.n_extra[l] += 3 * ok[l] as u64;
                 }
             }
@@ -212,12 +212,12 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
                 ($comps:expr, $dense:expr) => {{
                     let dense = $dense;
                     if M8 {
-                        let mut f = SliderRhs::<UNI, COUL> { c, contact: cm, fzl: &mut fzl_scratch };
+                        let mut f = SliderRhs::<UNI, COUL, N> { c, contact: cm, fzl: &mut fzl_scratch };
                         dop853_dense_into(dense, &mut f, $comps, y, &yn, k1, &hh, &kk, &mut extra);
                     } else {
                         dopri5_dense_into(dense, $comps, y, &yn, [k1, &k[1], &k[2], &k[3], &k[4], &k[5]], &hh);
                     }
-                    hidden_crossings::<COUL, _>(c, dense, &ln.g0, &g1, &ln.pend, &ok, &turn, &mut hidden);
+                    hidden_crossings::<COUL, _, N>(c, dense, &ln.g0, &g1, &ln.pend, &ok, &turn, &mut hidden);
                 }};
             }
             if COUL {
@@ -229,7 +229,7 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
 
         // ---- accept or reject, the controller (branch-free) ----
         let mut lnx = zero;
-        for l in 0..W {
+        for l in 0..N {
             lnx[l] = err[l].max(1e-300);
         }
         let mut ln_err = ln_lanes(&lnx);
@@ -240,15 +240,15 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
         }
         let alpha = if M8 { ALPHA8 } else { ALPHA };
         let mut arg = zero;
-        for l in 0..W {
+        for l in 0..N {
             arg[l] =
                 if ok[l] { -(alpha * ln_err[l] - BETA * ln.ln_err_old[l] - LN_SAFETY) } else { -alpha * ln_err[l] };
         }
         let r = exp_lanes(&arg);
         let t_start = ln.t;
-        let mut acc_ok = [false; W];
+        let mut acc_ok = [false; N];
         let mut t_new = zero;
-        for l in 0..W {
+        for l in 0..N {
             let okl = ok[l];
             let hid = hidden[l] > 0.0;
             let e = err[l];
@@ -267,16 +267,16 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
             ln.rejected[l] = if hid { ln.rejected[l] } else { !okl };
             t_new[l] = if last[l] { t_end } else { ln.t[l] + hh[l] };
         }
-        for l in 0..W {
+        for l in 0..N {
             ln.n_acc[l] += acc_ok[l] as u64;
             ln.n_rej[l] += (live[l] && !acc_ok[l]) as u64;
         }
 
         // ---- which accepted lanes need the cold path ----
-        let mut busy = [false; W];
-        let mut attn = [false; W];
+        let mut busy = [false; N];
+        let mut attn = [false; N];
         for e in 0..NE {
-            for l in 0..W {
+            for l in 0..N {
                 busy[l] |= ln.pend[e][l] | cross(ln.g0[e][l], g1[e][l]);
             }
         }
@@ -289,8 +289,8 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
         if UNI {
             // Lanes the check counted its interpolant for (the cold path reuses it uncounted),
             // busy with no sign change and no zero at the step end.
-            let mut cand = [false; W];
-            for l in 0..W {
+            let mut cand = [false; N];
+            for l in 0..N {
                 let mut quiet = true;
                 for e in 0..NE {
                     quiet &= !cross(ln.g0[e][l], g1[e][l]) & (g1[e][l] != 0.0);
@@ -300,13 +300,13 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
             if cand.iter().any(|&x| x) {
                 let span = (&t_start, &t_new, &hh);
                 if COUL {
-                    pending_on_lanes::<COUL, 5>(&mut ln, &ev5, &cand, &g1, span, &mut busy);
+                    pending_on_lanes::<COUL, 5, N>(&mut ln, &ev5, &cand, &g1, span, &mut busy);
                 } else {
-                    pending_on_lanes::<COUL, 3>(&mut ln, &ev3, &cand, &g1, span, &mut busy);
+                    pending_on_lanes::<COUL, 3, N>(&mut ln, &ev3, &cand, &g1, span, &mut busy);
                 }
             }
         }
-        for l in 0..W {
+        for l in 0..N {
             let mut a = busy[l] | last[l];
             if steady {
                 let section = (ln.y[idx::ZD][l] > 0.0) & (yn[idx::ZD][l] <= 0.0);
@@ -324,7 +324,7 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
         }
         // A step end where the floor of the step rejects (the scalar driver's check after a
         // rejection): the lane ends with StepTooSmall / NonFinite.
-        for l in 0..W {
+        for l in 0..N {
             if !live[l] || acc_ok[l] || hidden[l] > 0.0 {
                 continue;
             }
@@ -350,11 +350,11 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
         let mut full_built = false;
         let checked = need.iter().any(|&x| x);
         if sampled {
-            let due: [bool; W] =
+            let due: [bool; N] =
                 std::array::from_fn(|l| acc_ok[l] & !busy[l] & !last[l] & (t_new[l] >= ln.next_sample[l]));
             if due.iter().any(|&d| d) {
-                let dense: &LaneDense<6> = if M8 {
-                    for l in 0..W {
+                let dense: &LaneDense<6, N> = if M8 {
+                    for l in 0..N {
                         ln.n_extra[l] += 3 * (due[l] & !(ok[l] & need[l])) as u64;
                     }
                     if checked {
@@ -362,7 +362,7 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
                         full_built = true;
                         &full
                     } else {
-                        let mut f = SliderRhs::<UNI, COUL> { c: &ln.c, contact: &ln.contact, fzl: &mut fzl_scratch };
+                        let mut f = SliderRhs::<UNI, COUL, N> { c: &ln.c, contact: &ln.contact, fzl: &mut fzl_scratch };
                         dop853_dense_into(&mut samp, &mut f, &ALL_COMPS, &ln.y, &yn, &ln.f, &hh, &kk, &mut extra);
                         &samp
                     }
@@ -371,7 +371,7 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
                     dopri5_dense_into(&mut samp, &ALL_COMPS, &ln.y, &yn, st, &hh);
                     &samp
                 };
-                for l in 0..W {
+                for l in 0..N {
                     if due[l] {
                         sample_on_lane(&mut ln, l, dense, (t_start[l], t_new[l], hh[l]), &yn);
                         attn[l] = false;
@@ -381,19 +381,19 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
         }
 
         // ---- the common accepted step: commit on the lanes ----
-        let plain: [bool; W] = std::array::from_fn(|l| acc_ok[l] && !attn[l]);
+        let plain: [bool; N] = std::array::from_fn(|l| acc_ok[l] && !attn[l]);
         each6!(i, {
-            for l in 0..W {
+            for l in 0..N {
                 ln.y[i][l] = if plain[l] { yn[i][l] } else { ln.y[i][l] };
                 ln.f[i][l] = if plain[l] { fnew[i][l] } else { ln.f[i][l] };
             }
         });
         for e in 0..NE {
-            for l in 0..W {
+            for l in 0..N {
                 ln.g0[e][l] = if plain[l] { g1[e][l] } else { ln.g0[e][l] };
             }
         }
-        for l in 0..W {
+        for l in 0..N {
             let p = plain[l];
             ln.t[l] = if p { t_new[l] } else { ln.t[l] };
             let z = yn[idx::Z][l];
@@ -406,12 +406,12 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
             ln.max_z[l] = if p { ln.max_z[l].max(z.abs()) } else { ln.max_z[l] };
         }
         if steady {
-            for l in 0..W {
+            for l in 0..N {
                 let p = plain[l];
                 ln.peak[l] = if p { ln.peak[l].max(yn[idx::Z][l].abs()) } else { ln.peak[l] };
             }
             each6!(i, {
-                for l in 0..W {
+                for l in 0..N {
                     ln.peaks[i][l] = if plain[l] { ln.peaks[i][l].max(yn[i][l].abs()) } else { ln.peaks[i][l] };
                 }
             });
@@ -421,11 +421,11 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
         if attn.iter().any(|&a| a) {
             // A lane whose extra stages the hidden-crossing check built (and counted) takes its
             // coefficients from `full`, the same numbers the scalar `Dop853Dense` would compute.
-            if M8 && UNI && !full_built && (0..W).any(|l| attn[l] && need[l]) {
+            if M8 && UNI && !full_built && (0..N).any(|l| attn[l] && need[l]) {
                 dop853_poly_into(&mut full, &ALL_COMPS, &ln.y, &yn, &ln.f, &hh, &kk, &extra);
                 full_built = true;
             }
-            for l in 0..W {
+            for l in 0..N {
                 if !attn[l] {
                     continue;
                 }
@@ -548,15 +548,15 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool>(
 /// longer busy. A lane with a reading the cold path would act on (zero, NaN, or a sign change
 /// after the check: a crossing to locate) is left as it was, busy.
 #[inline(never)]
-fn pending_on_lanes<const COUL: bool, const C: usize>(
-    ln: &mut Lanes<'_>,
-    dense: &LaneDense<C>,
-    cand: &[bool; W],
-    g1: &[L; NE],
-    (t_start, t_new, hh): (&L, &L, &L),
-    busy: &mut [bool; W],
+fn pending_on_lanes<const COUL: bool, const C: usize, const N: usize>(
+    ln: &mut Lanes<'_, N>,
+    dense: &LaneDense<C, N>,
+    cand: &[bool; N],
+    g1: &[Lw<N>; NE],
+    (t_start, t_new, hh): (&Lw<N>, &Lw<N>, &Lw<N>),
+    busy: &mut [bool; N],
 ) {
-    for l in 0..W {
+    for l in 0..N {
         if !cand[l] {
             continue;
         }
@@ -573,7 +573,7 @@ fn pending_on_lanes<const COUL: bool, const C: usize>(
             if tc >= t1 {
                 continue;
             }
-            let gc = events_at::<COUL>(&ln.c, &dense.eval_lane(l, (tc - t0) / hh[l]), l)[e];
+            let gc = events_at::<COUL, N>(&ln.c, &dense.eval_lane(l, (tc - t0) / hh[l]), l)[e];
             if gc == 0.0 || gc.is_nan() || cross(gc, g1[e][l]) {
                 here = false;
                 break;
@@ -611,25 +611,25 @@ const FAR: f64 = 4.0;
 /// comes closest to zero (relative to its start value) inside the step, 0 where none turns.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn near_events<const COUL: bool>(
-    c: &Coef,
-    y0: &V6,
-    f0: &V6,
-    y1: &V6,
-    f1: &V6,
-    g0: &[[f64; W]; NE],
-    g1: &[[f64; W]; NE],
-    pend: &[[bool; W]; NE],
-    ok: &[bool; W],
-    hh: &[f64; W],
-    turn: &mut L,
-) -> [bool; W] {
+fn near_events<const COUL: bool, const N: usize>(
+    c: &Coef<N>,
+    y0: &Vw<N>,
+    f0: &Vw<N>,
+    y1: &Vw<N>,
+    f1: &Vw<N>,
+    g0: &[[f64; N]; NE],
+    g1: &[[f64; N]; NE],
+    pend: &[[bool; N]; NE],
+    ok: &[bool; N],
+    hh: &[f64; N],
+    turn: &mut Lw<N>,
+) -> [bool; N] {
     // d/dt of each event function (`events_lanes`) at both ends, lane-wise (vectorised).
-    let (mut d0, mut d1) = ([[0.0; W]; NE], [[0.0; W]; NE]);
-    event_rates_lanes::<COUL>(c, y0, f0, &mut d0);
-    event_rates_lanes::<COUL>(c, y1, f1, &mut d1);
-    let mut near = [false; W];
-    for l in 0..W {
+    let (mut d0, mut d1) = ([[0.0; N]; NE], [[0.0; N]; NE]);
+    event_rates_lanes::<COUL, N>(c, y0, f0, &mut d0);
+    event_rates_lanes::<COUL, N>(c, y1, f1, &mut d1);
+    let mut near = [false; N];
+    for l in 0..N {
         let mut clear = true;
         for e in 0..NE {
             let travel = FAR * hh[l] * (d0[e][l].abs() + d1[e][l].abs());
@@ -641,7 +641,7 @@ fn near_events<const COUL: bool>(
     if !near.iter().any(|&x| x) {
         return near;
     }
-    for l in 0..W {
+    for l in 0..N {
         if !near[l] {
             continue;
         }
@@ -667,8 +667,8 @@ fn near_events<const COUL: bool>(
 /// The rates of the event functions of [`events_lanes`] on the lanes, from the state `y` and its
 /// derivative `f` (the slider's `event_rates`).
 #[inline(always)]
-fn event_rates_lanes<const COUL: bool>(c: &Coef, y: &V6, f: &V6, d: &mut [L; NE]) {
-    for l in 0..W {
+fn event_rates_lanes<const COUL: bool, const N: usize>(c: &Coef<N>, y: &Vw<N>, f: &Vw<N>, d: &mut [Lw<N>; NE]) {
+    for l in 0..N {
         let (z, zd) = (y[idx::Z][l], y[idx::ZD][l]);
         d[event::GAP][l] = zd;
         d[event::NORMAL][l] =
@@ -680,7 +680,13 @@ fn event_rates_lanes<const COUL: bool>(c: &Coef, y: &V6, f: &V6, d: &mut [L; NE]
 
 /// Lane `l`'s samples inside its accepted step (before the lane's state is committed: `ln.y`
 /// holds the step's start, `yn` its end): [`sample_lane`] into its sampler's output.
-fn sample_on_lane(ln: &mut Lanes<'_>, l: usize, dense: &LaneDense<6>, span: (f64, f64, f64), yn: &V6) {
+fn sample_on_lane<const N: usize>(
+    ln: &mut Lanes<'_, N>,
+    l: usize,
+    dense: &LaneDense<6, N>,
+    span: (f64, f64, f64),
+    yn: &Vw<N>,
+) {
     let Some(sd) = ln.side[l].as_mut() else { return };
     let Watch::Sample(smp) = &mut sd.obs.inner else { return };
     ln.next_sample[l] = sample_lane(smp.t_eval, &mut smp.out, dense, l, span, &ln.y, yn);

@@ -1,10 +1,10 @@
 //! The slider on the lanes: per-lane coefficients, the right-hand side of MODEL.md §2-3 for
 //! bilateral or unilateral contact and the constant or Coulomb/Stribeck law, the event functions
-//! (`model::Slider::events`) and the scalar driver's hidden-crossing check, on eight trajectories
+//! (`model::Slider::events`) and the scalar driver's hidden-crossing check, on `N` trajectories
 //! at once.
 
 use crate::model::{event, idx, Slider};
-use crate::ode::lanes::{cross, exp_lanes, splat, LaneDense, LaneRhs, Lw, Vw, L, V6, W};
+use crate::ode::lanes::{cross, exp_lanes, splat, LaneDense, LaneRhs, Lw, Vw, W};
 
 /// Event functions of the slider (gap, law normal force, sliding velocity, escape).
 pub(super) const NE: usize = 4;
@@ -112,24 +112,30 @@ impl<const N: usize> Coef<N> {
     }
 }
 
-/// Right-hand side of the eight lanes and the dynamic law force `F_z` of each (the force the
+/// Right-hand side of the `N` lanes and the dynamic law force `F_z` of each (the force the
 /// contact law gives, whether or not it acts). `UNI`: unilateral contact (the mask `contact`
 /// selects the law force or no normal force); `COUL`: the regularised Coulomb/Stribeck law.
 #[inline(always)]
-pub(super) fn rhs<const UNI: bool, const COUL: bool>(c: &Coef, contact: &[bool; W], y: &V6, out: &mut V6, fzl: &mut L) {
-    let mut fz = [0.0; W];
-    for l in 0..W {
+pub(super) fn rhs<const UNI: bool, const COUL: bool, const N: usize>(
+    c: &Coef<N>,
+    contact: &[bool; N],
+    y: &Vw<N>,
+    out: &mut Vw<N>,
+    fzl: &mut Lw<N>,
+) {
+    let mut fz = [0.0; N];
+    for l in 0..N {
         let (z, zd, ph) = (y[0][l], y[1][l], y[4][l]);
         let f = -c.ks[l] * z + c.ka[l] * z * z - c.c[l] * zd + c.kphi[l] * ph;
         fzl[l] = f;
         fz[l] = if UNI && !contact[l] { -c.fst[l] } else { f };
     }
-    let mut fx = [0.0; W];
+    let mut fx = [0.0; N];
     if COUL {
-        let mut a = [0.0; W];
-        let mut b = [0.0; W];
-        let mut vr = [0.0; W];
-        for l in 0..W {
+        let mut a = [0.0; N];
+        let mut b = [0.0; N];
+        let mut vr = [0.0; N];
+        for l in 0..N {
             let v = c.v[l] - (y[3][l] + c.sl[l] * y[5][l]);
             vr[l] = v;
             a[l] = -v.abs() * c.inv_vs[l];
@@ -137,7 +143,7 @@ pub(super) fn rhs<const UNI: bool, const COUL: bool>(c: &Coef, contact: &[bool; 
         }
         let ea = exp_lanes(&a);
         let eb = exp_lanes(&b);
-        for l in 0..W {
+        for l in 0..N {
             let mu = c.mu_k[l] + c.dmu[l] * ea[l];
             // tanh(v/eps) = sign(v) (1 - e^{-2|v|/eps}) / (1 + e^{-2|v|/eps}).
             let th = ((1.0 - eb[l]) / (1.0 + eb[l])).copysign(vr[l]);
@@ -145,11 +151,11 @@ pub(super) fn rhs<const UNI: bool, const COUL: bool>(c: &Coef, contact: &[bool; 
             fx[l] = mu * normal * th - c.stat[l];
         }
     } else {
-        for l in 0..W {
+        for l in 0..N {
             fx[l] = c.mu[l] * fz[l];
         }
     }
-    for l in 0..W {
+    for l in 0..N {
         let (z, zd, x, xd, ph, phd) = (y[0][l], y[1][l], y[2][l], y[3][l], y[4][l], y[5][l]);
         out[0][l] = zd;
         out[1][l] = fz[l] * c.inv_m[l] - c.dz[l] * zd - c.wz2[l] * z;
@@ -161,24 +167,24 @@ pub(super) fn rhs<const UNI: bool, const COUL: bool>(c: &Coef, contact: &[bool; 
 }
 
 /// [`rhs`] as the lane kit's [`LaneRhs`]: the law force of the last evaluation is left in `fzl`.
-pub(super) struct SliderRhs<'a, const UNI: bool, const COUL: bool> {
-    pub(super) c: &'a Coef,
-    pub(super) contact: &'a [bool; W],
-    pub(super) fzl: &'a mut L,
+pub(super) struct SliderRhs<'a, const UNI: bool, const COUL: bool, const N: usize> {
+    pub(super) c: &'a Coef<N>,
+    pub(super) contact: &'a [bool; N],
+    pub(super) fzl: &'a mut Lw<N>,
 }
 
-impl<const UNI: bool, const COUL: bool> LaneRhs<W> for SliderRhs<'_, UNI, COUL> {
+impl<const UNI: bool, const COUL: bool, const N: usize> LaneRhs<N> for SliderRhs<'_, UNI, COUL, N> {
     #[inline(always)]
-    fn eval(&mut self, y: &V6, out: &mut V6) {
-        rhs::<UNI, COUL>(self.c, self.contact, y, out, self.fzl);
+    fn eval(&mut self, y: &Vw<N>, out: &mut Vw<N>) {
+        rhs::<UNI, COUL, N>(self.c, self.contact, y, out, self.fzl);
     }
 }
 
 /// The slider's event functions on the lanes (`model::Slider::events`), from the state and the
 /// dynamic law force.
 #[inline(always)]
-pub(super) fn events_lanes<const COUL: bool>(c: &Coef, y: &V6, fzl: &L, g: &mut [L; NE]) {
-    for l in 0..W {
+pub(super) fn events_lanes<const COUL: bool, const N: usize>(c: &Coef<N>, y: &Vw<N>, fzl: &Lw<N>, g: &mut [Lw<N>; NE]) {
+    for l in 0..N {
         g[event::GAP][l] = c.zst[l] + y[idx::Z][l];
         g[event::NORMAL][l] = c.fst[l] + fzl[l];
         // No event under the constant law (see `Slider::events`).
@@ -190,7 +196,7 @@ pub(super) fn events_lanes<const COUL: bool>(c: &Coef, y: &V6, fzl: &L, g: &mut 
 /// The event functions of lane `l` from its interpolant's components there: EV_COMPS (5 values,
 /// speed-dependent friction) or EV_COMPS_CONST (3: z, zd, phi), as `Slider::events` computes them.
 #[inline(always)]
-pub(super) fn events_at<const COUL: bool>(c: &Coef, v: &[f64], l: usize) -> [f64; NE] {
+pub(super) fn events_at<const COUL: bool, const N: usize>(c: &Coef<N>, v: &[f64], l: usize) -> [f64; NE] {
     let n = v.len();
     let (ip, ixd, iphd) = if n == 5 { (3, 2, 4) } else { (2, usize::MAX, usize::MAX) };
     let at = |k: usize| if k < n { v[k] } else { 0.0 };
@@ -211,17 +217,17 @@ pub(super) fn events_at<const COUL: bool>(c: &Coef, v: &[f64], l: usize) -> [f64
 /// `x` (0 where none).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-pub(super) fn hidden_crossings<const COUL: bool, const C: usize>(
-    c: &Coef,
-    dense: &LaneDense<C>,
-    g0: &[L; NE],
-    g1: &[L; NE],
-    pend: &[[bool; W]; NE],
-    ok: &[bool; W],
-    turn: &L,
-    hidden: &mut L,
+pub(super) fn hidden_crossings<const COUL: bool, const C: usize, const N: usize>(
+    c: &Coef<N>,
+    dense: &LaneDense<C, N>,
+    g0: &[Lw<N>; NE],
+    g1: &[Lw<N>; NE],
+    pend: &[[bool; N]; NE],
+    ok: &[bool; N],
+    turn: &Lw<N>,
+    hidden: &mut Lw<N>,
 ) {
-    let g_at = |v: [f64; C], l: usize| events_at::<COUL>(c, &v, l);
+    let g_at = |v: [f64; C], l: usize| events_at::<COUL, N>(c, &v, l);
     let hit_of = |g: &[f64; NE], l: usize| {
         let mut hit = false;
         for e in 0..NE {
@@ -229,18 +235,18 @@ pub(super) fn hidden_crossings<const COUL: bool, const C: usize>(
         }
         hit
     };
-    let mut found = [false; W];
+    let mut found = [false; N];
     for q in 1..=3 {
         let th = q as f64 / 4.0;
         let v = dense.eval(th);
-        for l in 0..W {
+        for l in 0..N {
             let g = g_at(std::array::from_fn(|k| v[k][l]), l);
             let take = hit_of(&g, l) & ok[l] & !found[l];
             hidden[l] = if take { th } else { hidden[l] };
             found[l] |= take;
         }
     }
-    for l in 0..W {
+    for l in 0..N {
         let x = turn[l];
         if x > 0.0 && ok[l] && !(found[l] && hidden[l] <= x) {
             let v = dense.eval_lane(l, x);

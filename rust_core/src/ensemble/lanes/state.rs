@@ -1,4 +1,4 @@
-//! The state of a lane driver: the vector side of the eight lanes ([`Lanes`]), each lane's scalar
+//! The state of a lane driver: the vector side of the `N` lanes ([`Lanes`]), each lane's scalar
 //! side ([`Side`]: the observers of its task, its events and options), and the set-up and teardown
 //! of a trajectory in a lane (refill, finish, idle) with the copies between the two sides.
 
@@ -6,7 +6,7 @@ use super::slider::{Coef, NE};
 use crate::ensemble::{Task, TrajectoryResult};
 use crate::model::{idx, ContactMode, Slider, State};
 use crate::ode::controller::initial_step;
-use crate::ode::lanes::{Row, Rows, L, LN_ERR_FLOOR, V6, W};
+use crate::ode::lanes::{Lw, Row, Rows, Vw, LN_ERR_FLOOR};
 use crate::ode::{Control, Observer, OdeSystem, Options, Outcome, SampleStore, Sampler, Stats, StepView, MAX_EVENTS};
 use crate::steady::{
     end_status, options_for, run_failure, status_of, summarize, Extremes, ExtremesObserver, RunResult, SteadyObserver,
@@ -94,38 +94,38 @@ pub(super) struct Side<'a> {
     pub(super) obs: ExtremesObserver<'a, Watch<'a>>,
 }
 
-/// The vector side of the eight lanes.
-pub(super) struct Lanes<'a> {
-    pub(super) c: Coef,
-    pub(super) y: V6,
+/// The vector side of the `N` lanes.
+pub(super) struct Lanes<'a, const N: usize> {
+    pub(super) c: Coef<N>,
+    pub(super) y: Vw<N>,
     /// f(t, y) in the lane's mode: the FSAL stage.
-    pub(super) f: V6,
-    pub(super) t: L,
-    pub(super) h: L,
-    pub(super) ln_err_old: L,
-    pub(super) rejected: [bool; W],
-    pub(super) n_acc: [u64; W],
-    pub(super) n_rej: [u64; W],
+    pub(super) f: Vw<N>,
+    pub(super) t: Lw<N>,
+    pub(super) h: Lw<N>,
+    pub(super) ln_err_old: Lw<N>,
+    pub(super) rejected: [bool; N],
+    pub(super) n_acc: [u64; N],
+    pub(super) n_rej: [u64; N],
     /// Right-hand sides of DOP853's interpolant built on the lanes (hidden-crossing checks).
-    pub(super) n_extra: [u64; W],
+    pub(super) n_extra: [u64; N],
     /// The method is DOP853 (else DP5).
     pub(super) m8: bool,
-    pub(super) contact: [bool; W],
-    pub(super) g0: [L; NE],
-    pub(super) pend: [[bool; W]; NE],
+    pub(super) contact: [bool; N],
+    pub(super) g0: [Lw<N>; NE],
+    pub(super) pend: [[bool; N]; NE],
     /// Where `pend` is set, the pending event's time (the side's `pend`), else NaN.
-    pub(super) pend_t: [L; NE],
-    pub(super) min_n: L,
-    pub(super) max_gap: L,
-    pub(super) min_vr: L,
-    pub(super) max_z: L,
+    pub(super) pend_t: [Lw<N>; NE],
+    pub(super) min_n: Lw<N>,
+    pub(super) max_gap: Lw<N>,
+    pub(super) min_vr: Lw<N>,
+    pub(super) max_z: Lw<N>,
     /// Steady watcher: largest |z| and |y_c| since the last section, the rest floor (-inf: none).
-    pub(super) peak: L,
-    pub(super) peaks: V6,
-    pub(super) rest: L,
+    pub(super) peak: Lw<N>,
+    pub(super) peaks: Vw<N>,
+    pub(super) rest: Lw<N>,
     /// Next `t_eval` time of each lane (+inf: none).
-    pub(super) next_sample: L,
-    pub(super) side: [Option<Side<'a>>; W],
+    pub(super) next_sample: Lw<N>,
+    pub(super) side: [Option<Side<'a>>; N],
 }
 
 /// Everything the set-up and teardown of a lane needs.
@@ -139,13 +139,20 @@ pub(super) struct Input<'a, 'b> {
     pub(super) feed: &'b Feed<'a>,
 }
 
-pub(super) fn sync_to_side(min_n: &L, max_gap: &L, min_vr: &L, max_z: &L, l: usize, sd: &mut Side<'_>) {
+pub(super) fn sync_to_side<const N: usize>(
+    min_n: &Lw<N>,
+    max_gap: &Lw<N>,
+    min_vr: &Lw<N>,
+    max_z: &Lw<N>,
+    l: usize,
+    sd: &mut Side<'_>,
+) {
     sd.obs.ext =
         Extremes { min_normal_force: min_n[l], max_gap: max_gap[l], min_slip_velocity: min_vr[l], max_abs_z: max_z[l] };
 }
 
 /// Copy what the scalar observers changed back onto the lanes.
-pub(super) fn sync_from_side(ln: &mut Lanes<'_>, l: usize, steady: bool, sampled: bool) {
+pub(super) fn sync_from_side<const N: usize>(ln: &mut Lanes<'_, N>, l: usize, steady: bool, sampled: bool) {
     let sd = ln.side[l].as_ref().expect("live");
     let e = sd.obs.ext;
     ln.min_n[l] = e.min_normal_force;
@@ -169,8 +176,8 @@ pub(super) fn sync_from_side(ln: &mut Lanes<'_>, l: usize, steady: bool, sampled
 
 /// Write lane `l`'s result (ended at `(t, y)` with step size `h` and `outcome`) and mark it idle.
 #[cold]
-pub(super) fn finish(
-    ln: &mut Lanes<'_>,
+pub(super) fn finish<const N: usize>(
+    ln: &mut Lanes<'_, N>,
     l: usize,
     t: f64,
     y: State,
@@ -218,7 +225,7 @@ fn conclude(run: RunResult, sd: &mut Side<'_>) -> TrajectoryResult {
 }
 
 /// Harmless values in an idle lane: at rest, far from every end condition and event.
-fn idle(ln: &mut Lanes<'_>, l: usize) {
+fn idle<const N: usize>(ln: &mut Lanes<'_, N>, l: usize) {
     for k in 0..6 {
         ln.y[k][l] = 0.0;
         ln.f[k][l] = 0.0;
@@ -240,7 +247,12 @@ fn idle(ln: &mut Lanes<'_>, l: usize) {
 /// Load the next trajectory that needs a step into lane `l` (trajectories that end before their
 /// first step get their result here); leave the lane idle when none is left.
 #[cold]
-pub(super) fn refill<'a>(ln: &mut Lanes<'a>, l: usize, inp: &Input<'a, '_>, out: &mut Vec<(usize, TrajectoryResult)>) {
+pub(super) fn refill<'a, const N: usize>(
+    ln: &mut Lanes<'a, N>,
+    l: usize,
+    inp: &Input<'a, '_>,
+    out: &mut Vec<(usize, TrajectoryResult)>,
+) {
     loop {
         // The next trajectory of the call, shared by every worker of it.
         let i = inp.feed.next.fetch_add(1, Ordering::Relaxed);
