@@ -233,10 +233,9 @@ fn dispatch<const M8: bool>(job: Job<'_>) -> Vec<RunResult> {
 /// ensemble (Zen 4, one thread, 4,000 trajectories, builds alternating): the DOP853 end state
 /// 28-31k -> 42.5k trajectories/s at rtol 1e-6 and 13.4-13.7k -> 18-18.7k at 1e-9, DP5 19-20k
 /// -> 22-23.5k; with 501 samples DP5 16.3k -> 20.4k, but DOP853 18.5k -> 15.8k, so DOP853 with
-/// samples keeps 8. The slider's lane driver (`ensemble::lanes`) keeps 8 too: its any-lane work
-/// (events, the hidden-crossing check's extra stages) runs for all lanes as soon as one needs
-/// it, and 16 lanes made the census 10 % slower.
-pub(crate) const W_AVX512: usize = 16;
+/// samples keeps 8 (its stages, interpolant and 16 lanes outgrow L1). The slider's lane driver
+/// (`ensemble::lanes`) runs 16 only for end states (`lanes::W_FINAL_AVX512`).
+pub const W_AVX512: usize = 16;
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]

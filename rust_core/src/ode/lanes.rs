@@ -1,8 +1,8 @@
 //! The lane-batched integration kit: `N` trajectories at once in structure-of-arrays form
 //! (`[f64; N]` per state component, [`Lw`] and [`Vw`]), so that the stage arithmetic of `N`
 //! trajectories runs in SIMD registers (plain loops over the lanes that LLVM vectorises). Every
-//! function is generic in `N`: the slider's lane driver runs [`W`] = 8 lanes, the bilateral
-//! batch 16 in its AVX-512 copy (two registers per operation).
+//! function is generic in `N`: the lane drivers (`crate::ensemble::batch`, `crate::ensemble::lanes`)
+//! run [`W`] = 8 lanes, and 16 for end states in their AVX-512 copies (two registers per operation).
 //!
 //! Generic over the right-hand side (a closure on the lanes), it holds what any lane-batched
 //! explicit integrator needs: the lane types, branch-free `exp` and `ln` for the PI controller in

@@ -24,7 +24,7 @@
 //!   lane-batched paths in `crate::ensemble`);
 //! - `driver.rs`: [`integrate`], the adaptive loop, and fixed-step integration;
 //! - `lanes.rs`: the kit for lane-batched (SIMD) integration: lane types, one DOPRI5 or DOP853
-//!   attempt on eight trajectories, their interpolants, the PI controller in log form;
+//!   attempt on `N` trajectories (8 or 16), their interpolants, the PI controller in log form;
 //! - tests: `test_systems.rs` (problems with known solutions), `method_tests.rs` (orders of
 //!   convergence), `driver/tests.rs`, `driver/hidden_crossing_tests.rs`.
 

@@ -2,8 +2,10 @@
 //! regularised Coulomb/Stribeck law, output at `t_eval`, and runs to a steady state.
 //!
 //! [`run_lanes`] integrates many trajectories [`W`] = 8 at a time in structure-of-arrays form (the
-//! generic lane kit `ode::lanes`; end states 16 at a time in the AVX-512 copy, [`W_FINAL_AVX512`]), as [`super::batch`] does for the bilateral constant-`mu` end
-//! state, and refills a lane as soon as its trajectory ends. What it adds is everything the scalar driver does around the step:
+//! generic lane kit `ode::lanes`; end states 16 at a time in the AVX-512 copy,
+//! [`W_FINAL_AVX512`]), as [`super::batch`] does for the bilateral constant-`mu` end state, and
+//! refills a lane as soon as its trajectory ends. What it adds is everything the scalar driver
+//! does around the step:
 //!
 //! - **Modes per lane.** Each lane knows whether its pin is on or off the disk; the contact force
 //!   is selected branch-free from a per-lane mask, so lanes in different modes share the step.
@@ -261,14 +263,14 @@ fn dispatch_cpu<const UNI: bool, const COUL: bool, const M8: bool>(
 }
 
 /// Lanes of the AVX-512 copy for end states (`Task::Final`): two registers per operation, as in
-/// the bilateral batch (`batch::W_AVX512`). Runs with samples or to a steady state keep [`W`] = 8:
+/// the bilateral batch (`batch::W_AVX512`). Runs with samples or to a steady state keep `W` = 8:
 /// their any-lane work (the interpolant for samples, the hidden-crossing check's extra stages and
 /// the cold visits of sections) runs for every lane as soon as one lane needs it; 16 lanes made
 /// the census 10 % slower and the unilateral DOP853 run with 501 samples 25 % slower. Measured
 /// on the unilateral issue-2 ensemble (Zen 4, one thread, 4,000 trajectories, builds
 /// alternating): DOP853 end state 27.9-29.9k -> 31.5-32.4k trajectories/s at rtol 1e-6 and
 /// 12.4-13.3k -> 15.0-15.3k at 1e-9, DP5 14.7k -> 15.4-15.8k.
-pub(crate) const W_FINAL_AVX512: usize = 16;
+pub const W_FINAL_AVX512: usize = 16;
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
