@@ -474,7 +474,7 @@ pub(crate) fn dop853_step<F: LaneRhs<N>, const N: usize>(
 }
 
 /// A step's interpolant on the lanes, for `C` selected components of the state.
-pub(crate) struct LaneDense<const C: usize, const N: usize = W> {
+pub(crate) struct LaneDense<const C: usize, const N: usize> {
     y0: [Lw<N>; C],
     /// DP5: `dy, bspl, r4, r5` (`y0 + (dy + (bspl + (r4 + r5 (1-x)) x) (1-x)) x`);
     /// DOP853: `c0..c6` (Hairer's `contd8` polynomial).

@@ -4,7 +4,7 @@
 //! at once.
 
 use crate::model::{event, idx, Slider};
-use crate::ode::lanes::{cross, exp_lanes, splat, LaneDense, LaneRhs, Lw, Vw, W};
+use crate::ode::lanes::{cross, exp_lanes, splat, LaneDense, LaneRhs, Lw, Vw};
 
 /// Event functions of the slider (gap, law normal force, sliding velocity, escape).
 pub(super) const NE: usize = 4;
@@ -18,7 +18,7 @@ pub(super) const EV_COMPS_CONST: [usize; 3] = [idx::Z, idx::ZD, idx::PHI];
 
 /// Per-lane coefficients of the right-hand side and the tolerances (shared with `batch`).
 #[derive(Clone, Copy)]
-pub(crate) struct Coef<const N: usize = W> {
+pub(crate) struct Coef<const N: usize> {
     pub(crate) ks: Lw<N>,
     pub(crate) ka: Lw<N>,
     pub(crate) c: Lw<N>,
