@@ -142,7 +142,10 @@ def test_contact_opening_unilateral_events_and_zero_force():
     ds, status = run(uni, 0.2, 30e-6)
     assert status == "success"
     assert float(ds.max_gap) > 10e-6
-    assert abs(float(ds.min_normal_force)) < 1e-9  # N = 0 while open, never tension
+    # N = 0 while open, never tension: at a lift-off event N is zero to the event's time tolerance
+    # (1e-13 s) times its rate, k0 |zd| <= 2e5 N/s here, so within 2e-8 N. A lift-off stepped across
+    # would leave tension of order k0 |zd| h, about 1 N. The bound, 1e-9 of the load (8.4e-8 N):
+    assert -1e-9 * float(uni.normal_load) < float(ds.min_normal_force) <= 0.0
     assert int(ds.n_events) >= 6  # lift-offs and landings are located events
     ds, _ = run(uni.replace(mu=0.215), 0.2, 1e-6)
     assert float(ds.max_gap) < 0 and int(ds.n_events) == 0

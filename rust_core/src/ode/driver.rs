@@ -49,7 +49,7 @@
 //! the dense output and the event functions only; a system's own finite-difference Jacobian is not
 //! counted in `n_rhs` (it is one `n_jac`).
 
-use super::controller::{initial_step, Controller, FAC_MIN};
+use super::controller::{initial_step, Controller, ModeSteps, FAC_MIN};
 use super::dop853::Dop853;
 use super::dopri5::Dopri5;
 use super::events::{crosses, hidden_crossing, step_events, StepEnd};
@@ -191,6 +191,7 @@ where
         initial_step(sys, mode, t, &y, &f, t_end, St::ORDER, &opts.atol, opts.rtol, h_max, &mut stats.n_rhs)
     };
     let mut rejected = false;
+    let mut mode_steps = ModeSteps::<S::Mode>::default();
 
     loop {
         let floor = opts.h_min_rel * t.abs().max(1.0);
@@ -285,10 +286,12 @@ where
             done!(ev.t1, ev.y1, ev.new_mode, outcome);
         }
 
+        let mut h_after_switch = None;
         if let Some(sw) = ev.switched {
             // Restart at the event in the new mode: fresh derivative, fresh event values.
             t = ev.t1;
             y = ev.y1;
+            let mode_before = mode;
             mode = ev.new_mode;
             f = sys.rhs(t, &y, mode);
             stats.n_rhs += 1;
@@ -305,6 +308,7 @@ where
                 };
             }
             ctl.reset();
+            h_after_switch = Some(mode_steps.switch(mode_before, mode, h_next));
         } else {
             t = t_new;
             y = y_new;
@@ -320,7 +324,7 @@ where
             }
         }
         st.begin(sys, mode, t, &y, &f, &mut stats);
-        h = h_next;
+        h = h_after_switch.unwrap_or(h_next);
     }
 }
 

@@ -5,7 +5,7 @@
 use super::slider::{Coef, NE};
 use crate::ensemble::{Task, TrajectoryResult};
 use crate::model::{idx, ContactMode, Slider, State};
-use crate::ode::controller::initial_step;
+use crate::ode::controller::{initial_step, ModeSteps};
 use crate::ode::lanes::{Lw, Row, Rows, Vw, LN_ERR_FLOOR};
 use crate::ode::{Control, Observer, OdeSystem, Options, Outcome, SampleStore, Sampler, Stats, StepView, MAX_EVENTS};
 use crate::steady::{
@@ -92,6 +92,8 @@ pub(super) struct Side<'a> {
     /// Right-hand sides outside the steps (start, starting step, restarts) and located events.
     pub(super) stats: Stats,
     pub(super) obs: ExtremesObserver<'a, Watch<'a>>,
+    /// The first step after a mode switch, as the scalar driver takes it.
+    pub(super) steps: ModeSteps<ContactMode>,
 }
 
 /// The vector side of the `N` lanes.
@@ -281,7 +283,17 @@ pub(super) fn refill<'a, const N: usize>(
         let mut obs = ExtremesObserver { s, ext: Extremes::default(), inner: watch };
         obs.ext.update(s, &y0, mode);
         let opts = options_for(s, &inp.tol);
-        let mut sd = Side { i, s, opts, t_end, mode, pend: [None; MAX_EVENTS], stats: Stats::default(), obs };
+        let mut sd = Side {
+            i,
+            s,
+            opts,
+            t_end,
+            mode,
+            pend: [None; MAX_EVENTS],
+            stats: Stats::default(),
+            obs,
+            steps: ModeSteps::default(),
+        };
         let early = |outcome: Outcome, n_rhs: u64, sd: &mut Side<'a>| {
             sd.stats.n_rhs = n_rhs;
             let status = status_of(outcome, y0[idx::Z].abs() >= s.p.escape_limit * (1.0 - 1e-9));
