@@ -309,6 +309,8 @@ where
             }
             ctl.reset();
             h_after_switch = Some(mode_steps.switch(mode_before, mode, h_next));
+            // The first step in the new mode does not grow the next (as after a rejection).
+            rejected = true;
         } else {
             t = t_new;
             y = y_new;

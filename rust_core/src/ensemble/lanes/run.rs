@@ -485,6 +485,7 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool, const 
                     let sd = ln.side[l].as_mut().expect("live");
                     let (t, y1, mode) = (ev.t1, ev.y1, ev.new_mode);
                     ln.h[l] = sd.steps.switch(sd.mode, mode, ln.h[l]);
+                    ln.rejected[l] = true;
                     sd.mode = mode;
                     let f = sd.s.rhs(&y1, mode);
                     sd.stats.n_rhs += 1;
