@@ -145,3 +145,16 @@ def test_the_recurrence_tests_pilot_is_irregular_under_moved_inputs():
     for d in runs:
         np.testing.assert_array_equal(d.attractor_reached.values[pil], ref.attractor_reached.values[pil])
         assert int(d.recurrence.sum()) >= 64 // 4, int(d.recurrence.sum())
+
+
+@pytest.mark.parametrize("method", ["dop853", "dopri5"])
+def test_landings_without_wasted_rejections_under_moved_inputs(method):
+    """test_simulate's bound on rejected steps over the seed's bouncing cycle (under 1 % of the
+    accepted steps; 6 % and 4 % before the first-step rule), under moved starts and rtol."""
+    m = ts.SliderModel(contact="unilateral")
+    orbit, _ = ts.follow_cycle(m)
+    y = np.asarray(orbit.state0.values, dtype=np.float64)
+    for r in (1e-6,) + tuple(1e-6 * f for f in RTOL_FACTORS):
+        for y0 in [y] + [moved(y, k) for k in ULPS]:
+            ds = ts.simulate(m, 0.5, y0=y0, method=method, rtol=r, t_eval=[0.0, 0.5])
+            assert int(ds.n_events) >= 150 and int(ds.n_reject) < 0.01 * int(ds.n_accept), (r, y0[0])

@@ -188,3 +188,19 @@ def test_batched_path_locates_the_escape_as_the_scalar_path_does():
             assert ts.STATUS_NAMES[int(batch.status[i])] == "diverged"
             assert abs(float(batch.z_end[i])) == pytest.approx(1e-3, rel=1e-9)
             assert float(batch.max_abs_z[i]) == pytest.approx(float(one.max_abs_z), rel=1e-9)
+
+
+@pytest.mark.parametrize("method", ["dop853", "dopri5"])
+def test_landings_on_the_bouncing_cycle_do_not_waste_rejected_steps(method):
+    # On the seed's bouncing cycle (about 200 contact events in 0.5 s) the first step after each
+    # landing used to come from the free flight and be rejected: 52 of 867 accepted DOP853 steps,
+    # 105 of 2,651 Dopri5 steps. The first step after a switch is now capped at the step the run had
+    # when it last left the mode it enters (`ModeSteps`): 2 and 4. The bound, 1 % of the accepted
+    # steps, is a quarter of the old rate and several times the new one.
+    m = ts.SliderModel(contact="unilateral")
+    orbit, _ = ts.follow_cycle(m)
+    ds = ts.simulate(m, 0.5, y0=np.asarray(orbit.state0.values, dtype=float), method=method, rtol=1e-6,
+                     t_eval=[0.0, 0.5])  # fmt: skip
+    assert ts.STATUS_NAMES[int(ds.status)] == "success"
+    assert int(ds.n_events) >= 150  # it bounces: lift-offs and landings
+    assert int(ds.n_reject) < 0.01 * int(ds.n_accept)
