@@ -265,7 +265,7 @@ where
             ratio = ratio.min(1.0);
         }
         rejected = false;
-        let h_next = (h * ratio).min(h_max);
+        let mut h_next = (h * ratio).min(h_max);
 
         // ---- events on the accepted step ----
         let mut busy = false;
@@ -286,7 +286,6 @@ where
             done!(ev.t1, ev.y1, ev.new_mode, outcome);
         }
 
-        let mut h_after_switch = None;
         if let Some(sw) = ev.switched {
             // Restart at the event in the new mode: fresh derivative, fresh event values.
             t = ev.t1;
@@ -308,7 +307,7 @@ where
                 };
             }
             ctl.reset();
-            h_after_switch = Some(mode_steps.switch(mode_before, mode, h_next));
+            h_next = mode_steps.switch(mode_before, mode, h_next);
             // The first step in the new mode does not grow the next (as after a rejection).
             rejected = true;
         } else {
@@ -326,7 +325,7 @@ where
             }
         }
         st.begin(sys, mode, t, &y, &f, &mut stats);
-        h = h_after_switch.unwrap_or(h_next);
+        h = h_next;
     }
 }
 
