@@ -141,9 +141,15 @@ def arm_frequencies(arm_length, base: SliderModel | None = None) -> dict[str, np
     base = SliderModel() if base is None else base
     arm = _check_positive("arm_length", arm_length)
     ratio = arm / L_SEED
+    # The power one element at a time, with the C library's pow: numpy's vectorised power (SIMD
+    # kernels chosen by the CPU, e.g. on AVX-512) rounds differently from its scalar path in the
+    # last bit, so a sweep's point and apparatus_model() at the same arm length were different
+    # models (one ulp of omega_friction at 10.99 cm), with different census samples and, on
+    # chaotic runs, different fates, and both moved with the CPU.
+    power = np.vectorize(math.pow, otypes=[np.float64])
     out = {}
     for mode, field in MODE_FIELDS.items():
-        w = getattr(base, field) * ratio ** ARM_EXPONENTS[mode]
+        w = getattr(base, field) * power(ratio, ARM_EXPONENTS[mode])
         # Exactly the base value at l_seed (x**p for x == 1 is exact, kept explicit for clarity).
         w = np.where(ratio == 1.0, getattr(base, field), w)
         out[field] = float(w) if w.ndim == 0 else w
