@@ -59,7 +59,9 @@ Early stops
     (zero on any cycle of multiplicity up to 8, so an approach to a cycle shrinks it block after
     block) agrees within 25 % and stays above ``max(100 periodic_tol, 1e-3)`` (in characteristic
     sizes: a cycle that cannot repeat to a tight ``periodic_tol`` is not irregular), and each
-    component's largest excursion agrees within 5 % (a slow decay or growth shows there).
+    component's largest excursion agrees within 5 % (a slow decay or growth shows there) or,
+    where chaotic motion spreads it more, drifts by less than 5 % per two blocks (a least-squares
+    line through the largest excursions of the blocks' eight sub-blocks each).
     Measured on the default sweep's 361 censused points at K = 16 (5,776 samples,
     ``benches/bench_census.py --compare``, 2026-11-26), the simulated time falls from 65,281 s to
     26,200 s and 59 labels (1.0 %) differ from runs to ``t_max`` = 30 s: 46 cycles and 13 returns

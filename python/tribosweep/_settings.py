@@ -203,7 +203,9 @@ class Irregular:
         as irregular once three consecutive blocks of Poincare sections agree: the mean distance of
         each section state to the nearest of the 8 before it within 25 % (and above
         ``max(100 periodic_tol, 1e-3)`` of the characteristic sizes), and the largest excursion of
-        each component within 5 %. Off, it runs to ``t_max`` (``census_t_max`` in the census).
+        each component within 5 % or, where chaotic motion spreads it more, drifting by less than
+        5 % per two blocks (a least-squares line through its eight sub-blocks' largest excursions
+        per block). Off, it runs to ``t_max`` (``census_t_max`` in the census).
     window : float, s
         Window after the transient (0.5: about 50 torsion periods; the spectrum's bins are
         12.6 rad/s apart and the parabola refines the peak well within one).
@@ -212,7 +214,12 @@ class Irregular:
     ftle_tau : float, s
         Segment of the largest finite-time Lyapunov exponent (0.05: about 5 torsion periods).
     ftle_segments : int
-        Segments averaged (40, >= 2).
+        Segments averaged at most (40, >= 2).
+    ftle_min_segments : int
+        Segments averaged at least (10, >= 2; ``ftle_segments`` where that is fewer): a point
+        whose exponent is then 5 standard errors or more from 0 (clearly chaotic) stops, the
+        others run on until it is or ``ftle_segments`` are done. ``ftle_min_segments >=
+        ftle_segments``: every point runs them all, as before 2026-11-26.
     ftle_warmup : int
         Segments run first and not averaged (4, >= 0: the separation turns into the most
         unstable direction).
@@ -227,6 +234,7 @@ class Irregular:
     sample_dt: float = 1e-4
     ftle_tau: float = 0.05
     ftle_segments: int = 40
+    ftle_min_segments: int = 10
     ftle_warmup: int = 4
     ftle_d0: float = 1e-8
     ftle_rtol: float = 1e-11
@@ -243,6 +251,7 @@ class Irregular:
         _set(self, "ftle_tau", _checks.positive("ftle_tau", self.ftle_tau))
         _set(self, "ftle_segments", _count("ftle_segments", self.ftle_segments, 2))
         _set(self, "ftle_warmup", _count("ftle_warmup", self.ftle_warmup, 0))
+        _set(self, "ftle_min_segments", _count("ftle_min_segments", self.ftle_min_segments, 2))
         d0 = _checks.positive("ftle_d0", self.ftle_d0)
         if not d0 < 1e-3:
             raise ValueError(f"ftle_d0 = {self.ftle_d0!r} is out of range: must be in (0, 1e-3) (a separation small "
@@ -285,6 +294,7 @@ _FLAT: tuple[tuple[str, str, str], ...] = (
     ("irregular_sample_dt", "irregular", "sample_dt"),
     ("ftle_tau", "irregular", "ftle_tau"),
     ("ftle_segments", "irregular", "ftle_segments"),
+    ("ftle_min_segments", "irregular", "ftle_min_segments"),
     ("ftle_warmup", "irregular", "ftle_warmup"),
     ("ftle_d0", "irregular", "ftle_d0"),
     ("ftle_rtol", "irregular", "ftle_rtol"),

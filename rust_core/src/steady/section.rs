@@ -49,8 +49,13 @@ pub(crate) struct SectionWatcher {
 
 /// Largest relative spread of three consecutive blocks' mean repetition residuals for stationary motion.
 pub const STATIONARY_RESIDUAL_TOL: f64 = 0.25;
-/// Largest relative spread of three consecutive blocks' largest excursions (each compared component).
+/// Largest relative spread of three consecutive blocks' largest excursions (each compared
+/// component), or of the drift of their sub-blocks' largest excursions over two blocks fitted by
+/// least squares: a decay or a growth, however slow, shows there first.
 pub const STATIONARY_PEAK_TOL: f64 = 0.05;
+/// Sub-blocks per block: besides its largest excursion, a block records each component's largest
+/// excursion in each of its sub-blocks, for the trend test of [`STATIONARY_PEAK_TOL`].
+pub const STATIONARY_SUBBLOCKS: usize = 8;
 /// The residual floor of the stationarity test in units of `periodic_tol`, and never below
 /// [`STATIONARY_MIN_RESIDUAL`].
 pub const STATIONARY_FLOOR: f64 = 100.0;
@@ -61,11 +66,13 @@ pub const STATIONARY_FLOOR: f64 = 100.0;
 pub const STATIONARY_MIN_RESIDUAL: f64 = 1e-3;
 
 /// One block of sections: the mean repetition residual and the largest excursion of each
-/// component, both in units of the characteristic sizes.
+/// component, both in units of the characteristic sizes, and the largest excursions of each
+/// sub-block.
 #[derive(Clone, Copy, Default)]
 struct Block {
     residual: f64,
     peaks: [f64; 6],
+    sub: [[f64; 6]; STATIONARY_SUBBLOCKS],
 }
 
 /// Block statistics of the section states, for the stationarity test.
@@ -76,7 +83,11 @@ struct Block {
 /// irregular motion it stays of the order of the attractor's spread. The motion is stationary
 /// when, over the newest three blocks, the mean residual is above the floor and spread by less
 /// than `STATIONARY_RESIDUAL_TOL`, and each component's largest excursion by less than
-/// `STATIONARY_PEAK_TOL` (a decay or a growth, however slow, shows there first).
+/// `STATIONARY_PEAK_TOL` (a decay or a growth, however slow, shows there first) or, where
+/// chaotic motion spreads a block's largest excursion by more (it is an extreme of a fluctuating
+/// quantity), the drift over two blocks of a least-squares line through the largest excursions of
+/// the three blocks' [`STATIONARY_SUBBLOCKS`] sub-blocks each is below `STATIONARY_PEAK_TOL`. A
+/// drift hidden by the fluctuations passes: the fluctuations bound what the test can see.
 ///
 /// What it may take for irregular motion: an approach to a cycle whose residual shrinks by less
 /// than 25 % per two blocks (multiplier above 0.9994 per section for the default blocks of 256
@@ -87,6 +98,8 @@ struct Stationarity {
     n: usize,
     sum: f64,
     peaks: [f64; 6],
+    /// The largest excursions of each sub-block of the block being filled.
+    sub: [[f64; 6]; STATIONARY_SUBBLOCKS],
     done: [Block; 3],
     n_done: usize,
     /// Fingerprints of known attractors (`SteadyOptions::known_irregular`).
@@ -109,17 +122,20 @@ fn close(a: f64, b: f64, tol: f64) -> bool {
 impl Stationarity {
     /// Add one section's residual and excursions; `true` when this completed a block.
     fn add(&mut self, residual: f64, peaks: [f64; 6]) -> bool {
+        let g = self.subblocks();
+        let sub = &mut self.sub[self.n * g / self.block];
         self.n += 1;
         self.sum += residual;
-        for (m, p) in self.peaks.iter_mut().zip(peaks) {
+        for ((m, s), p) in self.peaks.iter_mut().zip(sub.iter_mut()).zip(peaks) {
             *m = m.max(p);
+            *s = s.max(p);
         }
         if self.n < self.block {
             return false;
         }
-        self.done[self.n_done % 3] = Block { residual: self.sum / self.n as f64, peaks: self.peaks };
+        self.done[self.n_done % 3] = Block { residual: self.sum / self.n as f64, peaks: self.peaks, sub: self.sub };
         self.n_done += 1;
-        (self.n, self.sum, self.peaks) = (0, 0.0, [0.0; 6]);
+        (self.n, self.sum, self.peaks, self.sub) = (0, 0.0, [0.0; 6], [[0.0; 6]; STATIONARY_SUBBLOCKS]);
         true
     }
 
@@ -133,9 +149,37 @@ impl Stationarity {
             close(lo, hi, tol)
         };
         let r = self.done.map(|b| b.residual);
-        r.iter().all(|&x| x >= floor)
-            && spread_ok(r, STATIONARY_RESIDUAL_TOL)
-            && comps.iter().all(|&c| spread_ok(self.done.map(|b| b.peaks[c]), STATIONARY_PEAK_TOL))
+        let peaks_ok = |c: usize| {
+            spread_ok(self.done.map(|b| b.peaks[c]), STATIONARY_PEAK_TOL) || self.drift(c).abs() <= STATIONARY_PEAK_TOL
+        };
+        r.iter().all(|&x| x >= floor) && spread_ok(r, STATIONARY_RESIDUAL_TOL) && comps.iter().all(|&c| peaks_ok(c))
+    }
+
+    /// Sub-blocks of a block ([`STATIONARY_SUBBLOCKS`], fewer only for blocks of fewer sections).
+    fn subblocks(&self) -> usize {
+        STATIONARY_SUBBLOCKS.min(self.block)
+    }
+
+    /// The drift of component `c` over two blocks relative to its mean: the least-squares line
+    /// through the newest three blocks' sub-block excursions, in time order. Chaotic motion
+    /// spreads the blocks' largest excursions by more than [`STATIONARY_PEAK_TOL`] (a block's
+    /// largest is an extreme of a fluctuating quantity), while its fitted drift stays small; a
+    /// steady decay or growth moves both.
+    fn drift(&self, c: usize) -> f64 {
+        let g = self.subblocks();
+        let ys = (0..3).flat_map(|i| self.done[(self.n_done + i) % 3].sub[..g].iter().map(move |s| s[c]));
+        let n = (3 * g) as f64;
+        let (xm, ym) = ((n - 1.0) / 2.0, ys.clone().sum::<f64>() / n);
+        let (mut sxy, mut sxx) = (0.0, 0.0);
+        for (x, y) in ys.enumerate() {
+            let dx = x as f64 - xm;
+            (sxy, sxx) = (sxy + dx * (y - ym), sxx + dx * dx);
+        }
+        if ym > 0.0 {
+            sxy / sxx * (2 * g) as f64 / ym
+        } else {
+            0.0
+        }
     }
 
     /// The mean of the newest three blocks (the fingerprint of a stationary run).
@@ -237,6 +281,7 @@ impl SectionWatcher {
                 n: 0,
                 sum: 0.0,
                 peaks: [0.0; 6],
+                sub: [[0.0; 6]; STATIONARY_SUBBLOCKS],
                 done: [Block::default(); 3],
                 n_done: 0,
                 known: opts.known_irregular,

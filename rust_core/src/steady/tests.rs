@@ -139,6 +139,44 @@ fn stationary_irregular_motion_stops_after_three_blocks_and_nothing_else_does() 
     assert_eq!(watch(&tight, 3000, jitter), ("running", 3000));
 }
 
+/// Independent draws with an exponential tail (`P(X > k)` about `2^-k`): the leading zero bits of
+/// a hashed `n` (splitmix64) plus a uniform fraction from a second hash. Integer arithmetic only:
+/// the same bits on every machine.
+fn heavy(n: usize) -> f64 {
+    let mix = |k: u64| {
+        let mut z = k.wrapping_add(1).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    };
+    let n = n as u64;
+    mix(n).leading_zeros() as f64 + (mix(n + (1 << 32)) >> 11) as f64 / (1u64 << 53) as f64
+}
+
+/// Chaotic-like section states: the torus with its amplitude scaled per section by `1 + 0.05 X_n`
+/// ([`heavy`]), and grown by `growth` per section.
+fn noisy(growth: f64) -> impl Fn(usize) -> State {
+    move |n: usize| torus(1.0)(n) * ((1.0 + 0.05 * heavy(n)) * (1.0 + growth).powi(n as i32))
+}
+
+#[test]
+fn fluctuating_excursions_pass_by_their_trend_and_a_drift_under_them_does_not() {
+    let opts = SteadyOptions { watch_x: false, irregular_block: 256, ..SteadyOptions::default() };
+    // The largest z excursion of each of the first three blocks spreads by 8 %: the spread test
+    // of the blocks' largest excursions alone (5 %) does not pass them.
+    let zmax = |b: usize| (8 + 256 * b..8 + 256 * (b + 1)).map(|n| noisy(0.0)(n)[idx::Z].abs()).fold(0.0, f64::max);
+    let m = [zmax(0), zmax(1), zmax(2)];
+    let (lo, hi) = (m.iter().copied().fold(f64::INFINITY, f64::min), m.iter().copied().fold(0.0, f64::max));
+    assert!(lo < 0.95 * hi, "{m:?}");
+    // Their sub-blocks show no drift: stationary after three blocks.
+    assert_eq!(watch(&opts, 10_000, noisy(0.0)), ("irregular", 8 + 3 * 256));
+    // Growing by 0.025 % per section (13 % per two blocks) under the same fluctuations: never
+    // stationary over ten more blocks.
+    assert_eq!(watch(&opts, 8 + 13 * 256, noisy(2.5e-4)), ("running", 8 + 13 * 256));
+    // Decaying as fast: the same.
+    assert_eq!(watch(&opts, 8 + 13 * 256, noisy(-2.5e-4)), ("running", 8 + 13 * 256));
+}
+
 #[test]
 fn a_block_on_a_known_irregular_attractor_stops_the_run_and_nothing_else_does() {
     let opts = SteadyOptions { watch_x: false, irregular_block: 32, ..SteadyOptions::default() };
