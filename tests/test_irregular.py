@@ -87,6 +87,54 @@ def test_benettin_gives_the_lorenz_exponent():
     assert abs(pooled - 0.9056) < 4 * np.sqrt(np.sum(res["ftle_se"] ** 2)) / 3 + 0.02
 
 
+def _noise_propagator(mean: float, sd: float, seed: int):
+    """A propagator whose separation grows by ``exp(tau r)`` per segment, ``r`` ~ N(mean, sd) drawn
+    per row and segment: segment rates of known mean and spread."""
+    rng = np.random.default_rng(seed)
+
+    def propagate(states, tau, rows):
+        m = len(rows)
+        base, copy = states[:m], states[m:]
+        r = mean + sd * rng.standard_normal(m)
+        return np.concatenate([base, base + (copy - base) * np.exp(tau * r)[:, None]]), np.ones(2 * m, dtype=bool)
+
+    return propagate
+
+
+def test_a_clearly_nonzero_exponent_stops_after_the_least_segments_and_a_zero_one_runs_them_all():
+    # Rates of mean 3 and spread 1 per segment: 5 standard errors from 0 long before 10 segments,
+    # so every point stops at min_segments = 10, with the mean and standard error of those 10.
+    y0, scale = np.zeros((200, 2)), np.ones(2)
+    res = _irregular.benettin(_noise_propagator(3.0, 1.0, 1), y0, scale, tau=1.0, segments=40, warmup=0,
+                              min_segments=10)  # fmt: skip
+    assert np.all(res["segments"] == 10) and np.all(np.isnan(res["rates"][:, 10:]))
+    np.testing.assert_allclose(res["ftle"], res["rates"][:, :10].mean(axis=1), rtol=1e-12)
+    np.testing.assert_allclose(res["ftle_se"], res["rates"][:, :10].std(axis=1, ddof=1) / np.sqrt(10), rtol=1e-12)
+    # The pooled estimate is unbiased: within 4 of its standard errors (1/sqrt(2000)) of 3.
+    assert abs(res["ftle"].mean() - 3.0) < 4 / np.sqrt(2000)
+    # An exactly zero exponent (no stretching at all: every rate 0, standard error 0) is never
+    # "5 standard errors from 0": all 40 segments.
+    flat = _irregular.benettin(_noise_propagator(0.0, 0.0, 2), y0[:5], scale, tau=1.0, segments=40, warmup=0,
+                               min_segments=10)  # fmt: skip
+    assert np.all(flat["segments"] == 40) and np.all(flat["ftle"] == 0.0)
+    # Without min_segments every point runs all segments, as before.
+    full = _irregular.benettin(_noise_propagator(3.0, 1.0, 1), y0[:5], scale, tau=1.0, segments=40, warmup=0)
+    assert np.all(full["segments"] == 40)
+
+
+def test_the_sequential_stop_rarely_calls_a_zero_exponent_nonzero():
+    # Under a true exponent of 0 (rates N(0, 1)) the looks at 10, 11, ..., 39 segments call a
+    # point decided with probability 0.13 % (a Monte Carlo of 200,000 such points, 2026-11-26).
+    # Of 4,000 points: expected 5.3, standard deviation 2.3; asserted at most 5.3 + 4 x 2.3 = 15.
+    # The decided ones end at least 5 standard errors from 0 by construction; the rest run all 40.
+    res = _irregular.benettin(_noise_propagator(0.0, 1.0, 3), np.zeros((4000, 2)), np.ones(2), tau=1.0,
+                              segments=40, warmup=0, min_segments=10)  # fmt: skip
+    early = res["segments"] < 40
+    assert early.sum() <= 15, early.sum()
+    assert np.all(np.abs(res["ftle"][early]) >= _irregular.FTLE_DECISIVE * res["ftle_se"][early])
+    assert abs(res["ftle"].mean()) < 4 * np.sqrt(1 / 40 / 4000) + 0.01
+
+
 # --- the slider: a periodic cycle and a chaotic point -----------------------------------------
 
 
@@ -118,7 +166,10 @@ def test_a_stribeck_point_is_chaotic():
     # of its runs (rtol 1e-10, 1e-11, 1e-12), the segment (25, 50, 100 ms) and the start on the
     # attractor; a numerical artefact would scale with them. Asserted: from three different starts
     # (the ends of 20-30 s transients, one batched call) the exponent is > 8 standard errors above 0,
-    # in 40-250 1/s, and the three agree within their errors.
+    # in 40-250 1/s, and the three agree within their errors. Since 2026-11-26 a clearly chaotic
+    # point stops after ftle_min_segments = 10 segments once 5 standard errors from 0 (here 8-9:
+    # 139, 97, 107 +- 16, 11, 13 1/s, against 123, 103, 102 +- 7, 6, 6 over all 40 segments, at a
+    # third of the right-hand sides); asserted: decided chaotic, > 5 standard errors.
     m = STRIBECK_MODEL
     pp, names, vals = _point(m, 87.77777777777777, 0.07566666666666667, 0.2)
     ends = []
@@ -131,7 +182,7 @@ def test_a_stribeck_point_is_chaotic():
     out = _irregular.measure(m.values(), m.contact, m.friction_law, pp3, np.arange(3), np.array(ends))
     f, se = out["irregular_ftle"], out["irregular_ftle_se"]
     assert (out["status"] == ts.STATUS["success"]).all()
-    assert np.all(f > 8 * se), (f, se)
+    assert np.all(f > _irregular.FTLE_DECISIVE * se), (f, se)
     assert np.all((f > 40) & (f < 250)), f
     assert np.ptp(f) < 4 * np.sqrt(2) * se.max(), (f, se)
     # Bouncing and irregular: z ranges beyond the static penetration; the spectrum peaks near the
@@ -225,6 +276,7 @@ def test_method_linear_says_it_computed_no_motion():
         (dict(ftle_segments=1), r"ftle_segments = 1 .*integer in \[2, "),
         (dict(ftle_segments=10.0), r"ftle_segments = 10.0 .*integer"),
         (dict(ftle_warmup=-1), r"ftle_warmup = -1 .*integer in \[0, "),
+        (dict(ftle_min_segments=1), r"ftle_min_segments = 1 .*integer in \[2, "),
         (dict(ftle_d0=0.01), r"ftle_d0 = 0.01 .*\(0, 1e-3\)"),
         (dict(ftle_rtol=0.0), r"ftle_rtol = 0.0"),
         (dict(irregular_window=1e-3), r"irregular_window = 0.001 .*16 irregular_sample_dt"),

@@ -126,7 +126,9 @@ _SETTINGS: dict[str, tuple[str, object, str, str]] = {
     "irregular_window": ("irregular", float, "S", "measurement window of irregular motion [s]"),
     "irregular_sample_dt": ("irregular", float, "S", "its sampling interval [s]"),
     "ftle_tau": ("irregular", float, "S", "segment of the Lyapunov exponent [s]"),
-    "ftle_segments": ("irregular", int, "M", "segments averaged into the exponent (>= 2)"),
+    "ftle_segments": ("irregular", int, "M", "segments averaged into the exponent at most (>= 2)"),
+    "ftle_min_segments": ("irregular", int, "M", "segments averaged at least; a point 5 standard errors from 0 "
+                          "stops there (>= 2)"),
     "ftle_warmup": ("irregular", int, "M", "segments run first and not counted"),
     "ftle_d0": ("irregular", float, "D", "separation of the two trajectories in characteristic sizes"),
     "ftle_rtol": ("irregular", float, "R", "tolerance of the exponent's runs"),

@@ -83,6 +83,7 @@ def sweep(
     irregular_sample_dt: float = _D.irregular.sample_dt,
     ftle_tau: float = _D.irregular.ftle_tau,
     ftle_segments: int = _D.irregular.ftle_segments,
+    ftle_min_segments: int = _D.irregular.ftle_min_segments,
     ftle_warmup: int = _D.irregular.ftle_warmup,
     ftle_d0: float = _D.irregular.ftle_d0,
     ftle_rtol: float = _D.irregular.ftle_rtol,
@@ -217,9 +218,11 @@ def sweep(
     ftle_tau : float, s
         Segment length of its largest finite-time Lyapunov exponent ``irregular_ftle`` (0.05:
         about 5 torsion periods; see ``tribosweep._irregular``).
-    ftle_segments, ftle_warmup : int
-        Segments averaged (40, >= 2; the standard error ``irregular_ftle_se`` is their spread over
-        ``sqrt(ftle_segments)``) and run first without counting (4, >= 0).
+    ftle_segments, ftle_min_segments, ftle_warmup : int
+        Segments averaged at most (40, >= 2; the standard error ``irregular_ftle_se`` is their
+        spread over the square root of their number), at least (10, >= 2: a point whose exponent
+        is then 5 standard errors from 0, clearly chaotic, stops; the others run on) and run
+        first without counting (4, >= 0).
     ftle_d0 : float
         Separation of the two trajectories in units of the characteristic sizes (1e-8).
     ftle_rtol : float
@@ -332,7 +335,8 @@ def sweep(
         unstable_disturbance=unstable_disturbance, shooting_rtol=shooting_rtol,
         shooting_tol=shooting_tol, irregular_block=irregular_block, irregular_window=irregular_window,
         irregular_sample_dt=irregular_sample_dt,
-        ftle_tau=ftle_tau, ftle_segments=ftle_segments, ftle_warmup=ftle_warmup, ftle_d0=ftle_d0, ftle_rtol=ftle_rtol,
+        ftle_tau=ftle_tau, ftle_segments=ftle_segments, ftle_min_segments=ftle_min_segments,
+        ftle_warmup=ftle_warmup, ftle_d0=ftle_d0, ftle_rtol=ftle_rtol,
         y0=_settings.disturbance(disturbance),
     )  # fmt: skip
     f_ref = wear_reference.frequency_hz(model)

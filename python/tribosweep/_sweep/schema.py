@@ -292,7 +292,8 @@ def point_specs(dims: tuple[str, ...], *, wear_rate: bool = False) -> list[VarSp
         "only where regime is irregular (a bounded transient that neither repeated nor decayed by t_max), from where "
         "it ended: Benettin's two-trajectory method, separation solver_ftle_d0 in units of the characteristic sizes "
         "(|z_st|, |z_st| w_t, |z_st|, |z_st| w_t, |z_st|/L, |z_st| w_t/L), renormalised every solver_ftle_tau seconds, "
-        "mean of ln(d_k/d0)/tau over solver_ftle_segments segments after solver_ftle_warmup; about 0 (within a few "
+        "mean of ln(d_k/d0)/tau over the segments after solver_ftle_warmup: solver_ftle_min_segments, or more until "
+        "the mean is 5 irregular_ftle_se from 0, at most solver_ftle_segments; about 0 (within a few "
         "irregular_ftle_se): quasi-periodic, or still creeping onto a cycle; clearly > 0: chaotic"
     )
     by_name["irregular_omega"].attrs["comment"] = (
