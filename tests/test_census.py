@@ -312,6 +312,34 @@ def test_mode_shapes_are_eigenvectors():
         assert np.abs(j @ vec - mode * vec).max() <= 1e-12 * np.abs(mode * vec).max()
 
 
+@pytest.mark.parametrize("law", ["coulomb", "switch"])
+def test_speed_dependent_mode_shapes_are_eigenvectors_without_lapack(monkeypatch, law):
+    # Under speed-dependent friction the shapes come from the null space of J - lambda I by
+    # Gaussian elimination in complex arithmetic (no LAPACK: OpenBLAS picks its kernels by CPU).
+    # Each satisfies J v = lambda v to rounding, with z = 1, and matches the null vector of an SVD
+    # (LAPACK, computed first) to 1e-11 of its size.
+    model = SEED_U.replace(friction_law=law, mu_static=0.3)
+    v = {k: np.array([x]) for k, x in model.values().items()}
+    j = _census.jacobians(v, law)[0]
+    lam = np.linalg.eigvals(j)
+    lam = lam[lam.imag > 0]
+    ref = []
+    for mode in lam:
+        vh = np.linalg.svd(j - mode * np.eye(6))[2][-1].conj()
+        ref.append(vh / vh[0])
+
+    def no_lapack(*a, **k):
+        raise AssertionError("LAPACK called")
+
+    for name in ("svd", "eig", "eigvals", "solve", "lstsq", "qr"):
+        monkeypatch.setattr(np.linalg, name, no_lapack)
+    for mode, r in zip(lam, ref):
+        vec = _census._mode_shape_numeric(j[None], np.array([mode]))[0]
+        assert vec[0] == 1.0
+        assert np.abs(j @ vec - mode * vec).max() <= 1e-12 * np.abs(mode * vec).max()
+        assert np.abs(vec - r).max() <= 1e-11 * np.abs(r).max()
+
+
 def test_halton_is_the_radical_inverse():
     # Base 3: 1/3, 2/3, 1/9, 4/9, 7/9, 2/9 (indices 1..6 written backwards after the point).
     np.testing.assert_allclose(_census.halton(6, 3), [1 / 3, 2 / 3, 1 / 9, 4 / 9, 7 / 9, 2 / 9], rtol=1e-15)

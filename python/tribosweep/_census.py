@@ -121,6 +121,9 @@ import numpy as np
 from . import _core
 from ._codes import ATTRACTOR_NAMES, OUTCOME_NAMES, STATUS, STATUS_NAMES
 from ._irregular import characteristic_sizes
+from ._modes import jacobians, mode_shape
+from ._modes import mode_shape_numeric as _mode_shape_numeric
+from ._modes import static as _static
 from ._settings import DEFAULTS
 
 #: Steady-state outcome name -> attractor index (-1: failed, left out of the fractions).
@@ -193,106 +196,6 @@ def point_shift(values: Mapping[str, float], friction_law: str) -> np.ndarray:
     return (words >> np.uint64(11)).astype(np.float64) / float(2**53)
 
 
-def _static(v: Mapping[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
-    f, k0, ka = v["normal_load"], v["contact_stiffness"], v["contact_quadratic"]
-    z_st = -2.0 * f / (k0 + np.sqrt(k0 * k0 + 4.0 * ka * f))  # cancellation-free, docs/model.md §3
-    return z_st, k0 - 2.0 * ka * z_st
-
-
-def mode_shape(v: Mapping[str, np.ndarray], lam: np.ndarray) -> np.ndarray:
-    """Eigenvectors ``(n, 6)`` with ``z = 1`` for eigenvalues ``lam`` (n,) of steady sliding, constant friction.
-
-    Closed form of docs/model.md §2 linearised: with ``z = 1`` the torsion equation gives ``phi``,
-    then the frictional equation ``x``. Only complex arithmetic: no LAPACK, so the shapes do not
-    depend on which BLAS kernels a machine picks.
-    """
-    z_st, k_s = _static(v)
-    c = v["torsion_sign"] * v["moment_arm"] / v["inertia"] * v["mu"]
-    lt = lam * lam + 2.0 * v["zeta_torsion"] * v["omega_torsion"] * lam + v["omega_torsion"] ** 2
-    lx = lam * lam + 2.0 * v["zeta_friction"] * v["omega_friction"] * lam + v["omega_friction"] ** 2
-    phi = c * (-k_s - v["contact_damping"] * lam) / (lt - c * v["twist_coupling"])
-    fz = -k_s - v["contact_damping"] * lam + v["twist_coupling"] * phi
-    x = v["mu"] * fz / v["mass"] / lx
-    one = np.ones_like(lam)
-    return np.stack([one, lam, x, lam * x, phi, lam * phi], axis=1)
-
-
-def _mode_shape_numeric(j: np.ndarray, lam: np.ndarray) -> np.ndarray:
-    """Eigenvectors from the null space of ``J - lam I`` (speed-dependent friction: x acts back)."""
-    out = np.empty((lam.size, 6), dtype=complex)
-    for i in range(lam.size):
-        _, _, vh = np.linalg.svd(j[i] - lam[i] * np.eye(6))
-        vec = vh[-1].conj()
-        out[i] = vec / vec[0] if abs(vec[0]) > 1e-12 * np.abs(vec).max() else vec / np.abs(vec).max()
-    return out
-
-
-_LINEAR_FIELDS = (
-    "mass", "inertia", "moment_arm", "omega_normal", "omega_friction", "omega_torsion", "zeta_normal",
-    "zeta_friction", "zeta_torsion", "contact_stiffness", "contact_quadratic", "contact_damping",
-    "twist_coupling", "mu", "normal_load", "sliding_speed", "torsion_sign", "friction_regularization",
-    "mu_static", "stribeck_velocity",
-)  # fmt: skip
-
-
-def jacobians(values: Mapping[str, np.ndarray | float], friction_law: str = "constant") -> np.ndarray:
-    """Jacobians of steady sliding ``y = 0`` (in contact), shape ``(n, 6, 6)``, docs/model.md §2.
-
-    Parameters
-    ----------
-    values : mapping of str to float or 1-D array
-        Every real SliderModel field (SI units); arrays of one length ``n`` and scalars broadcast.
-    friction_law : {"constant", "coulomb", "switch"}
-        Friction law (the Coulomb law adds the Stribeck slope and the tanh regularisation; the
-        switch law the Stribeck slope).
-
-    Returns
-    -------
-    numpy.ndarray, shape (n, 6, 6), 1/s and 1/s^2
-        ``d rhs / dy`` for the state ``[z, zd, x, xd, phi, phid]``.
-    """
-    v = {k: np.asarray(values[k], dtype=np.float64) for k in _LINEAR_FIELDS}
-    n = int(np.broadcast_shapes(*(a.shape for a in v.values()), (1,))[0])
-    v = {k: np.broadcast_to(a, (n,)) for k, a in v.items()}
-    f, k0, ka = v["normal_load"], v["contact_stiffness"], v["contact_quadratic"]
-    z_st = -2.0 * f / (k0 + np.sqrt(k0 * k0 + 4.0 * ka * f))  # cancellation-free root, docs/model.md §3
-    k_s = k0 - 2.0 * ka * z_st
-    dfz = np.zeros((n, 6))
-    dfz[:, 0] = -k_s
-    dfz[:, 1] = -v["contact_damping"]
-    dfz[:, 4] = v["twist_coupling"]
-    s, arm = v["torsion_sign"], v["moment_arm"]
-    if friction_law == "constant":
-        dfx = dfz * v["mu"][:, None]
-    elif friction_law in ("coulomb", "switch"):
-        # F_x = mu(v_r) N tanh(v_r/eps) - mu(V) F_st, v_r = V - xd - s L phid (docs/model.md §2); the
-        # switch law slips at y = 0 (V > eta) with sign(v_r) = 1 in place of the tanh.
-        vel, vs, mus, eps = v["sliding_speed"], v["stribeck_velocity"], v["mu_static"], v["friction_regularization"]
-        e = np.exp(-vel / vs)
-        mu_k = (v["mu"] - mus * e) / (1.0 - e)
-        mu_v = mu_k + (mus - mu_k) * e
-        th = np.tanh(vel / eps) if friction_law == "coulomb" else np.ones_like(vel)
-        dmu = -(mus - mu_k) / vs * e
-        dg = dmu * th + mu_v * (1.0 - th * th) / eps
-        dfx = dfz * (mu_v * th)[:, None]
-        dfx[:, 3] -= f * dg
-        dfx[:, 5] -= f * dg * s * arm
-    else:
-        raise ValueError(f"friction_law = {friction_law!r} is not valid: must be 'constant', 'coulomb' or 'switch'")
-    m = v["mass"]
-    wz, wx, wt = v["omega_normal"], v["omega_friction"], v["omega_torsion"]
-    j = np.zeros((n, 6, 6))
-    j[:, 0, 1] = j[:, 2, 3] = j[:, 4, 5] = 1.0
-    j[:, 1, :] = dfz / m[:, None]
-    j[:, 3, :] = dfx / m[:, None]
-    j[:, 5, :] = (s * arm / v["inertia"])[:, None] * dfx
-    j[:, 1, 0] -= wz * wz
-    j[:, 1, 1] -= 2.0 * v["zeta_normal"] * wz
-    j[:, 3, 2] -= wx * wx
-    j[:, 3, 3] -= 2.0 * v["zeta_friction"] * wx
-    j[:, 5, 4] -= wt * wt
-    j[:, 5, 5] -= 2.0 * v["zeta_torsion"] * wt
-    return j
 
 
 

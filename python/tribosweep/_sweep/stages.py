@@ -108,7 +108,8 @@ def mode_start(full: Mapping[str, np.ndarray], friction_law: str, sel: np.ndarra
 
     A disturbance along the mode that self-excites (the torsion mode) reaches the attractor far
     sooner than one in ``z`` alone, which mostly excites the heavily damped normal mode. The mode
-    shape is the census's closed form (no LAPACK: the same bits on every machine's BLAS);
+    shape is the census's closed form, or under speed-dependent friction a null vector by
+    elimination (:mod:`tribosweep._modes`: no LAPACK, the same bits on every machine);
     ``eigenvalues`` are the core's, ``(sel.size, 6)``.
     """
     n = max(np.size(v) for v in full.values())
@@ -120,8 +121,10 @@ def mode_start(full: Mapping[str, np.ndarray], friction_law: str, sel: np.ndarra
         v = _census.mode_shape(sub, lam)
     else:
         v = _census._mode_shape_numeric(_census.jacobians(sub, friction_law), lam)
-    # Rotate so that z is real and positive at t = 0 (zd then follows from the mode), scale |z|.
-    v = v * np.exp(-1j * np.angle(v[:, 0]))[:, None]
+    # Rotate so that z is real and positive at t = 0 (zd then follows from the mode), scale |z|:
+    # multiplying by conj(z) does both without angle() and exp() (numpy's arctan2 on arrays runs a
+    # SIMD kernel that the CPU picks: other last bits, other chaotic transients, on other machines).
+    v = v * np.conj(v[:, :1])
     y0 = v.real / np.maximum(np.abs(v[:, :1].real), 1e-300) * np.asarray(z_amp)[:, None]
     return np.ascontiguousarray(y0)
 
