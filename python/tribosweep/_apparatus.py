@@ -64,7 +64,7 @@ MODE_FIELDS: dict[str, str] = {"normal": "omega_normal", "friction": "omega_fric
 
 
 def fit_arm_power_laws() -> dict[str, dict]:
-    """Least-squares power laws ``f = c l^p`` to the report's arm-length tables (log-log lstsq).
+    """Least-squares power laws ``f = c l^p`` to the report's arm-length tables (a line in log-log).
 
     Normal from both tables, frictional and torsional from appendix 3.
 
@@ -80,8 +80,14 @@ def fit_arm_power_laws() -> dict[str, dict]:
         tables = {name: t for name, t in ARM_TABLES.items() if mode in t}
         lengths = np.concatenate([np.asarray(t["arm_length"]) for t in tables.values()])
         freqs = np.concatenate([np.asarray(t[mode]) for t in tables.values()])
-        a = np.column_stack([np.ones_like(lengths), np.log(lengths)])
-        (log_c, p), *_ = np.linalg.lstsq(a, np.log(freqs), rcond=None)
+        # The least-squares line through (log l, log f) in closed form, with the C library's
+        # scalar log and correctly rounded sums (math.fsum): np.log on arrays and LAPACK's lstsq
+        # pick kernels by CPU, and these exponents scale every arm length's frequencies.
+        xs = [math.log(x) for x in lengths.tolist()]
+        ys = [math.log(y) for y in freqs.tolist()]
+        xm, ym = math.fsum(xs) / len(xs), math.fsum(ys) / len(ys)
+        p = math.fsum((x - xm) * (y - ym) for x, y in zip(xs, ys)) / math.fsum((x - xm) ** 2 for x in xs)
+        log_c = ym - p * xm
         per_table = {}
         for name, t in tables.items():
             arm = np.asarray(t["arm_length"])
