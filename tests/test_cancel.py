@@ -84,13 +84,15 @@ def _many(n: int) -> dict[str, np.ndarray]:
 SLOW_CALLS = {
     # One trajectory of 10^5 s of bouncing (an hour of work); t_eval keeps it from storing steps.
     "simulate": lambda: ts.simulate(BOUNCING, 1e5, t_eval=[1e5], y0=[0.1e-6, 0, 0, 0, 0, 0]),
-    # 30,000 trajectories of 20 s on the batch route (bilateral end state), two threads. Few long
-    # runs rather than many short ones: a cancelled call still marks and moves every unfinished
-    # result (1.5-2 us each, measured 2026-11-26: 300,000 of 1 s took 0.5-1.0 s to stop, 30,000
-    # of 20 s 0.03-0.04 s), and that part of the reaction is not what this test is about.
+    # 30,000 trajectories of 20 s on the batch route (bilateral end state), two threads: the
+    # loops' own reaction (many short runs: "ensemble batch, many" below).
     "ensemble batch": lambda: ts.ensemble(SEED, 20.0, _many(30_000), threads=2),
     # ... on the lanes (unilateral), one thread.
     "ensemble lanes": lambda: ts.ensemble(SEED.replace(contact="unilateral"), 20.0, _many(30_000), threads=1),
+    # Many short runs: what a cancelled call does with every unfinished result. Each once got a
+    # boxed summary, allocated and faulted in: 0.5-1.0 s to stop 300,000 (2.3 s for 10^6); now
+    # 0.05-0.09 s (0.19-0.29 s), 2026-11-26.
+    "ensemble batch, many": lambda: ts.ensemble(SEED, 1.0, _many(300_000), threads=2),
     # ... on the scalar driver (Rodas4 is not lane-batched).
     "ensemble scalar": lambda: ts.ensemble(SEED, 1.0, _many(100_000), method="rodas4", threads=2),
     # Runs to steady state that never repeat to 1e-15: each would go on to t_max = 10^4 s.
