@@ -34,11 +34,12 @@ size, still linear) at exponents up to 200 1/s. ``segments = 40`` (2 s) makes th
 a fifth of the segment spread, where it is needed: a point whose exponent is 5 standard errors
 from 0 after ``min_segments = 10`` (0.5 s; chaotic points of the Stribeck sweep are 8-9 there)
 stops, at a third of the cost of 40 (:data:`FTLE_DECISIVE`). ``warmup = 4`` segments (0.2 s)
-let the separation turn from its arbitrary start into the most unstable direction (the normal mode's transverse contraction,
-about 50 1/s, is gone after a segment; the torsion mode's, about 0.3-1 1/s, is not, which is why
-the estimate of a periodic motion scatters about 0 by its standard error). The separation is
-integrated at ``rtol = 1e-11``: the sweep's 1e-8 is as large as ``d0`` itself in the same units,
-and the two runs' independent step errors would then be the separation.
+let the separation turn from its arbitrary start into the most unstable direction (the normal
+mode's transverse contraction, about 50 1/s, is gone after a segment; the torsion mode's, about
+0.3-1 1/s, is not, which is why the estimate of a periodic motion scatters about 0 by its
+standard error). The separation is integrated at ``rtol = 1e-11``: the sweep's 1e-8 is as large
+as ``d0`` itself in the same units, and the two runs' independent step errors would then be the
+separation.
 """
 
 from __future__ import annotations
