@@ -196,9 +196,6 @@ def point_shift(values: Mapping[str, float], friction_law: str) -> np.ndarray:
     return (words >> np.uint64(11)).astype(np.float64) / float(2**53)
 
 
-
-
-
 def starts(
     full: Mapping[str, np.ndarray], friction_law: str, samples: int, scale: float, eigenvalues: np.ndarray
 ) -> np.ndarray:

@@ -208,10 +208,12 @@ def benettin(
             r = rates[idx, :m]
             decided = np.abs(r.mean(axis=1)) > FTLE_DECISIVE * r.std(axis=1, ddof=1) / math.sqrt(m)
             running[idx[decided]] = False
-    with np.errstate(invalid="ignore", divide="ignore"):
-        ftle = np.where(alive, np.nanmean(np.where(alive[:, None], rates, 0.0), axis=1), np.nan)
-        sd = np.nanstd(np.where(alive[:, None], rates, 0.0), axis=1, ddof=1)
-        se = np.where(alive, sd / np.sqrt(np.maximum(used, 1)), np.nan)
+    # Over each point's own segments (NaN after it stopped); every live point has at least 2.
+    m = np.maximum(used, 2)
+    mean = np.nansum(rates, axis=1) / m
+    sd = np.sqrt(np.nansum((rates - mean[:, None]) ** 2, axis=1) / (m - 1))
+    ftle = np.where(alive, mean, np.nan)
+    se = np.where(alive, sd / np.sqrt(m), np.nan)
     return {"ftle": ftle, "ftle_se": se, "rates": rates, "segments": used, "ok": alive, "y_end": y}
 
 

@@ -97,8 +97,8 @@ struct Stationarity {
     block: usize,
     n: usize,
     sum: f64,
-    peaks: [f64; 6],
-    /// The largest excursions of each sub-block of the block being filled.
+    /// The largest excursions of each sub-block of the block being filled (the block's own are
+    /// their maxima).
     sub: [[f64; 6]; STATIONARY_SUBBLOCKS],
     done: [Block; 3],
     n_done: usize,
@@ -126,16 +126,16 @@ impl Stationarity {
         let sub = &mut self.sub[self.n * g / self.block];
         self.n += 1;
         self.sum += residual;
-        for ((m, s), p) in self.peaks.iter_mut().zip(sub.iter_mut()).zip(peaks) {
-            *m = m.max(p);
+        for (s, p) in sub.iter_mut().zip(peaks) {
             *s = s.max(p);
         }
         if self.n < self.block {
             return false;
         }
-        self.done[self.n_done % 3] = Block { residual: self.sum / self.n as f64, peaks: self.peaks, sub: self.sub };
+        let peaks = std::array::from_fn(|c| self.sub[..g].iter().fold(0.0, |m: f64, s| m.max(s[c])));
+        self.done[self.n_done % 3] = Block { residual: self.sum / self.n as f64, peaks, sub: self.sub };
         self.n_done += 1;
-        (self.n, self.sum, self.peaks, self.sub) = (0, 0.0, [0.0; 6], [[0.0; 6]; STATIONARY_SUBBLOCKS]);
+        (self.n, self.sum, self.sub) = (0, 0.0, [[0.0; 6]; STATIONARY_SUBBLOCKS]);
         true
     }
 
@@ -280,7 +280,6 @@ impl SectionWatcher {
                 block: opts.irregular_block,
                 n: 0,
                 sum: 0.0,
-                peaks: [0.0; 6],
                 sub: [[0.0; 6]; STATIONARY_SUBBLOCKS],
                 done: [Block::default(); 3],
                 n_done: 0,
