@@ -119,6 +119,13 @@ impl Slider {
         d
     }
 
+    /// The static sliding force removed from the dynamic friction force, `mu(V) F_st` times
+    /// `tanh(V/eps)` (tanh law) or 1 (switch law) [N].
+    #[inline]
+    pub fn static_friction(&self) -> f64 {
+        self.static_friction
+    }
+
     /// Total friction force the pin needs to stick, `F_req = stick_force + mu(V) F_st` [N].
     #[inline]
     pub fn required_friction(&self, y: &State) -> f64 {
@@ -381,9 +388,9 @@ impl OdeSystem<6> for Slider {
         }
     }
 
-    /// Exact rates of the first four event functions along the flow (`f` = the right-hand side at
-    /// `y`); the switch law's band and stick functions have none here (NaN).
-    fn event_rates(&self, _t: f64, y: &State, f: &State, _mode: ContactMode, d: &mut [f64; MAX_EVENTS]) -> bool {
+    /// Exact rates of the event functions along the flow (`f` = the right-hand side at `y` in
+    /// `mode`); a switch-law function that is the constant 1 in `mode` has rate 0.
+    fn event_rates(&self, _t: f64, y: &State, f: &State, mode: ContactMode, d: &mut [f64; MAX_EVENTS]) -> bool {
         let p = &self.p;
         let (z, zd) = (y[idx::Z], y[idx::ZD]);
         d.fill(f64::NAN);
@@ -393,6 +400,13 @@ impl OdeSystem<6> for Slider {
             d[event::SLIP] = self.slip_velocity_gradient().dot(f);
         }
         d[event::ESCAPE] = -z.signum() * zd;
+        if p.friction_law == FrictionLaw::Switch {
+            let (band, bound) = switch_live(mode);
+            let dv = d[event::SLIP];
+            d[event::BAND_HI] = if band { dv } else { 0.0 };
+            d[event::BAND_LO] = if band { dv } else { 0.0 };
+            d[event::STICK] = if bound { self.stick_margin_gradient(y).dot(f) } else { 0.0 };
+        }
         true
     }
 
@@ -422,6 +436,18 @@ impl OdeSystem<6> for Slider {
     }
 }
 
+/// Which of the switch law's event functions are live in `mode` (see `Slider::switch_events`):
+/// the band edges (slip and transition) and the stick bound (stick and transition).
+#[inline]
+pub(crate) fn switch_live(mode: ContactMode) -> (bool, bool) {
+    match mode {
+        ContactMode::Contact => (true, false),
+        ContactMode::Transition => (true, true),
+        ContactMode::Stick => (false, true),
+        ContactMode::Free => (false, false),
+    }
+}
+
 impl Slider {
     /// The switch law's event functions. Each is live only in the modes it can end: the band
     /// edges in slip and transition, the stick bound in stick and transition. Elsewhere it is the
@@ -430,12 +456,7 @@ impl Slider {
     #[inline(never)]
     fn switch_events(&self, y: &State, v_r: f64, mode: ContactMode, g: &mut [f64; MAX_EVENTS]) {
         let eta = self.p.stick_band;
-        let (band, bound) = match mode {
-            ContactMode::Contact => (true, false),
-            ContactMode::Transition => (true, true),
-            ContactMode::Stick => (false, true),
-            ContactMode::Free => (false, false),
-        };
+        let (band, bound) = switch_live(mode);
         g[event::BAND_HI] = if band { v_r - eta } else { 1.0 };
         g[event::BAND_LO] = if band { v_r + eta } else { 1.0 };
         g[event::STICK] = if bound { self.stick_margin(y) } else { 1.0 };
