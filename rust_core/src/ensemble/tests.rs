@@ -84,7 +84,7 @@ fn the_policy_picks_the_fastest_route_that_applies() {
         ("DOP853", &bil, Settings { method: Method::Dop853, ..dp5 }, Task::Final, Route::Batch),
         ("Rodas4", &bil, Settings { method: Method::Rodas4, ..dp5 }, Task::Final, Route::Scalar),
         ("unilateral", &uni, dp5, Task::Final, Route::Lanes),
-        ("switch law", &sw, dp5, Task::Final, Route::Scalar),
+        ("switch law", &sw, dp5, Task::Final, Route::Lanes),
         ("mixed contact models", &mixed, dp5, Task::Final, Route::Scalar),
         ("no trajectory", &[], dp5, Task::Final, Route::Scalar),
         (

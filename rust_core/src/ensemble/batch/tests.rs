@@ -303,7 +303,7 @@ fn one_path() {
 
 /// Throughput against the lane route and the scalar driver in the same process (single thread;
 /// the four are interleaved and the best of five taken, against a noisy machine), both methods:
-/// `cargo test --release -p tribosweep-core batch::tests::throughput -- --ignored --nocapture`.
+/// `cargo test --profile release -p tribosweep-core batch::tests::throughput -- --ignored --nocapture`.
 #[test]
 #[ignore]
 fn throughput() {

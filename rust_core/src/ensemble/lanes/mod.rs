@@ -1,5 +1,6 @@
-//! Lane-batched Dormand–Prince 5(4) for the whole slider model: unilateral contact, the
-//! regularised Coulomb/Stribeck law, output at `t_eval`, and runs to a steady state.
+//! Lane-batched Dormand–Prince 5(4) and DOP853 for the whole slider model: unilateral contact,
+//! the regularised Coulomb/Stribeck law and the event-driven switch law (stick-slip), output at
+//! `t_eval`, and runs to a steady state.
 //!
 //! [`run_lanes`] integrates many trajectories [`W`] = 8 at a time in structure-of-arrays form (the
 //! generic lane kit `ode::lanes`; end states 16 at a time in the AVX-512 copy,
@@ -7,11 +8,14 @@
 //! refills a lane as soon as its trajectory ends. What it adds is everything the scalar driver
 //! does around the step:
 //!
-//! - **Modes per lane.** Each lane knows whether its pin is on or off the disk; the contact force
-//!   is selected branch-free from a per-lane mask, so lanes in different modes share the step.
-//! - **Events per lane, never stepped across.** After every accepted step the four event
-//!   functions of the slider (gap, law normal force, sliding velocity, escape) are evaluated on all
-//!   lanes at once; for the unilateral model they are also evaluated at the three interior points of
+//! - **Modes per lane.** Each lane knows whether its pin is on or off the disk and, under the
+//!   switch law, whether it slips, sticks or is in transition across the stick band; the contact
+//!   and friction forces are selected branch-free from per-lane masks, so lanes in different modes
+//!   share the step.
+//! - **Events per lane, never stepped across.** After every accepted step the event functions of
+//!   the slider (gap, law normal force, sliding velocity, escape; the switch law's two band edges
+//!   and stick bound) are evaluated on all lanes at once; for the unilateral model and the switch
+//!   law they are also evaluated at the three interior points of
 //!   each step's dense output and at the turning point of the function most likely to touch zero
 //!   (the scalar driver's hidden-crossing check), and a lane with a
 //!   crossing and its return inside its step redoes the step ending inside the excursion. A lane
@@ -68,7 +72,7 @@ use state::Feed;
 /// Whether [`run_lanes`] integrates sliders with these parameters (the contact models and
 /// friction laws it knows).
 pub fn supports(p: &Params) -> bool {
-    matches!(p.friction_law, FrictionLaw::Constant | FrictionLaw::Coulomb)
+    matches!(p.friction_law, FrictionLaw::Constant | FrictionLaw::Coulomb | FrictionLaw::Switch)
 }
 
 /// Whether [`run_lanes`] integrates with this method (the explicit Dormand–Prince pair and DOP853).
@@ -215,26 +219,30 @@ fn dispatch(
 ) -> Vec<(usize, TrajectoryResult)> {
     let Some(first) = sliders.first() else { return Vec::new() };
     let uni = first.p.contact == ContactModel::Unilateral;
-    let coul = first.p.friction_law == FrictionLaw::Coulomb;
     let m8 = method == Method::Dop853;
     macro_rules! go {
-        ($u:literal, $c:literal, $m:literal) => {
-            dispatch_cpu::<$u, $c, $m>(sliders, y0s, t_end, tol, task, feed)
+        ($u:literal, $c:expr, $m:literal) => {
+            dispatch_cpu::<$u, { $c as u8 }, $m>(sliders, y0s, t_end, tol, task, feed)
         };
     }
-    match (uni, coul, m8) {
-        (false, false, false) => go!(false, false, false),
-        (false, true, false) => go!(false, true, false),
-        (true, false, false) => go!(true, false, false),
-        (true, true, false) => go!(true, true, false),
-        (false, false, true) => go!(false, false, true),
-        (false, true, true) => go!(false, true, true),
-        (true, false, true) => go!(true, false, true),
-        (true, true, true) => go!(true, true, true),
+    use FrictionLaw::{Constant as C, Coulomb as T, Switch as S};
+    match (uni, first.p.friction_law, m8) {
+        (false, C, false) => go!(false, C, false),
+        (false, T, false) => go!(false, T, false),
+        (false, S, false) => go!(false, S, false),
+        (true, C, false) => go!(true, C, false),
+        (true, T, false) => go!(true, T, false),
+        (true, S, false) => go!(true, S, false),
+        (false, C, true) => go!(false, C, true),
+        (false, T, true) => go!(false, T, true),
+        (false, S, true) => go!(false, S, true),
+        (true, C, true) => go!(true, C, true),
+        (true, T, true) => go!(true, T, true),
+        (true, S, true) => go!(true, S, true),
     }
 }
 
-fn dispatch_cpu<const UNI: bool, const COUL: bool, const M8: bool>(
+fn dispatch_cpu<const UNI: bool, const LAW: u8, const M8: bool>(
     sliders: &[Slider],
     y0s: &[State],
     t_end: f64,
@@ -248,18 +256,18 @@ fn dispatch_cpu<const UNI: bool, const COUL: bool, const M8: bool>(
             // SAFETY: the CPU supports the features the function is compiled for.
             return unsafe {
                 if matches!(task, Task::Final) {
-                    run_avx512::<UNI, COUL, M8, W_FINAL_AVX512>(sliders, y0s, t_end, tol, task, feed)
+                    run_avx512::<UNI, LAW, M8, W_FINAL_AVX512>(sliders, y0s, t_end, tol, task, feed)
                 } else {
-                    run_avx512::<UNI, COUL, M8, W>(sliders, y0s, t_end, tol, task, feed)
+                    run_avx512::<UNI, LAW, M8, W>(sliders, y0s, t_end, tol, task, feed)
                 }
             };
         }
         if std::is_x86_feature_detected!("avx2") {
             // SAFETY: as above.
-            return unsafe { run_avx2::<UNI, COUL, M8>(sliders, y0s, t_end, tol, task, feed) };
+            return unsafe { run_avx2::<UNI, LAW, M8>(sliders, y0s, t_end, tol, task, feed) };
         }
     }
-    run_impl::<UNI, COUL, M8, W>(sliders, y0s, t_end, tol, task, feed)
+    run_impl::<UNI, LAW, M8, W>(sliders, y0s, t_end, tol, task, feed)
 }
 
 /// Lanes of the AVX-512 copy for end states (`Task::Final`): two registers per operation, as in
@@ -277,7 +285,7 @@ pub const W_FINAL_AVX512: usize = 16;
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
-unsafe fn run_avx512<const UNI: bool, const COUL: bool, const M8: bool, const N: usize>(
+unsafe fn run_avx512<const UNI: bool, const LAW: u8, const M8: bool, const N: usize>(
     sliders: &[Slider],
     y0s: &[State],
     t_end: f64,
@@ -285,12 +293,12 @@ unsafe fn run_avx512<const UNI: bool, const COUL: bool, const M8: bool, const N:
     task: Task<'_>,
     feed: &Feed<'_>,
 ) -> Vec<(usize, TrajectoryResult)> {
-    run_impl::<UNI, COUL, M8, N>(sliders, y0s, t_end, tol, task, feed)
+    run_impl::<UNI, LAW, M8, N>(sliders, y0s, t_end, tol, task, feed)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn run_avx2<const UNI: bool, const COUL: bool, const M8: bool>(
+unsafe fn run_avx2<const UNI: bool, const LAW: u8, const M8: bool>(
     sliders: &[Slider],
     y0s: &[State],
     t_end: f64,
@@ -298,7 +306,7 @@ unsafe fn run_avx2<const UNI: bool, const COUL: bool, const M8: bool>(
     task: Task<'_>,
     feed: &Feed<'_>,
 ) -> Vec<(usize, TrajectoryResult)> {
-    run_impl::<UNI, COUL, M8, W>(sliders, y0s, t_end, tol, task, feed)
+    run_impl::<UNI, LAW, M8, W>(sliders, y0s, t_end, tol, task, feed)
 }
 
 #[cfg(test)]

@@ -2,7 +2,10 @@
 //! the controller, the common accepted step on the lanes, and the cold path for lanes that need
 //! their scalar side (the scalar driver's event code, observers, the end of a run).
 
-use super::slider::{events_at, events_lanes, hidden_crossings, Coef, SliderRhs, EV_COMPS, EV_COMPS_CONST, NE};
+use super::slider::{
+    event_rates_lanes, events_at, events_lanes, hidden_crossings, n_events, Coef, Modes, SliderRhs, EV_COMPS,
+    EV_COMPS_CONST, NE, SWITCH, TANH,
+};
 use super::state::{finish, refill, sync_from_side, sync_to_side, Feed, Input, Lanes, Side, Watch};
 use crate::cancel;
 use crate::ensemble::{Task, TrajectoryResult};
@@ -22,7 +25,7 @@ use crate::steady::Tolerances;
 
 /// The portable path (the tests check that the SIMD copies agree bitwise).
 #[inline(always)]
-pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool, const N: usize>(
+pub(super) fn run_impl<const UNI: bool, const LAW: u8, const M8: bool, const N: usize>(
     sliders: &[Slider],
     y0s: &[State],
     t_end: f64,
@@ -51,7 +54,7 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool, const 
         n_rej: [0; N],
         n_extra: [0; N],
         m8: M8,
-        contact: [true; N],
+        modes: Modes::new(),
         g0: [splat(1.0); NE],
         pend: [[false; N]; NE],
         pend_t: [splat(f64::NAN); NE],
@@ -68,6 +71,10 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool, const 
     let steady = matches!(task, Task::Steady { .. });
     let sampled = matches!(task, Task::Sampled(_));
     let h_min_rel = Options::<6>::new(rtol, 1.0).h_min_rel;
+    // The law's event functions, and whether steps are checked inside for hidden crossings (as
+    // `steady::options_for` sets `interior_checks`: unilateral contact or the switch law).
+    let ne = n_events(LAW);
+    let checks = UNI || LAW == SWITCH;
     for l in 0..N {
         refill(&mut ln, l, &inp, &mut out);
     }
@@ -83,6 +90,7 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool, const 
     // path (`full`, valid where `full_built`).
     let mut ev5 = LaneDense::<5, N>::new();
     let mut ev3 = LaneDense::<3, N>::new();
+    let mut ev6 = LaneDense::<6, N>::new();
     let mut samp = LaneDense::<6, N>::new();
     let mut full = LaneDense::<6, N>::new();
     let mut yn = [zero; 6];
@@ -146,7 +154,7 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool, const 
         }
 
         let c = &ln.c;
-        let cm = &ln.contact;
+        let cm = &ln.modes;
         let y = &ln.y;
         let k1 = &ln.f;
         // The error measure: the squared RMS norm for DP5 (`err <= 1` iff `err^2 <= 1`, no square
@@ -154,7 +162,7 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool, const 
         // state is left in `fzl` by the last right-hand side.
         let (err, fin) = if M8 {
             dop853_step(
-                &mut SliderRhs::<UNI, COUL, N> { c, contact: cm, fzl: &mut fzl },
+                &mut SliderRhs::<UNI, LAW, N> { c, m: cm, fzl: &mut fzl },
                 y,
                 k1,
                 &hh,
@@ -165,7 +173,7 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool, const 
             )
         } else {
             dopri5_step(
-                &mut SliderRhs::<UNI, COUL, N> { c, contact: cm, fzl: &mut fzl },
+                &mut SliderRhs::<UNI, LAW, N> { c, m: cm, fzl: &mut fzl },
                 y,
                 k1,
                 &hh,
@@ -182,8 +190,8 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool, const 
         }
 
         // ---- events at the step end; hidden crossings inside the step (unilateral) ----
-        let mut g1 = [zero; NE];
-        events_lanes::<COUL, N>(c, &yn, &fzl, &mut g1);
+        let mut g1 = [splat(1.0); NE];
+        events_lanes::<LAW, N>(c, cm, &yn, &fzl, &mut g1);
         // Theta of the interior point to end a redone step at (0: none).
         let mut hidden = zero;
         // The lanes whose step needs the hidden-crossing check (`near_events`): the check runs
@@ -192,8 +200,8 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool, const 
         // `turn`: each near lane's turning point of the event function most likely to touch zero
         // inside the step (0: none), checked on the interpolant beside the three fixed points.
         let mut turn = zero;
-        let need = if UNI {
-            near_events::<COUL, N>(c, y, k1, &yn, fnew, &ln.g0, &g1, &ln.pend, &ok, &hh, &mut turn)
+        let need = if checks {
+            near_events::<LAW, N>(c, cm, y, k1, &yn, fnew, &ln.g0, &g1, &ln.pend, &ok, &hh, &mut turn)
         } else {
             [false; N]
         };
@@ -212,18 +220,18 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool, const 
                 ($comps:expr, $dense:expr) => {{
                     let dense = $dense;
                     if M8 {
-                        let mut f = SliderRhs::<UNI, COUL, N> { c, contact: cm, fzl: &mut fzl_scratch };
+                        let mut f = SliderRhs::<UNI, LAW, N> { c, m: cm, fzl: &mut fzl_scratch };
                         dop853_dense_into(dense, &mut f, $comps, y, &yn, k1, &hh, &kk, &mut extra);
                     } else {
                         dopri5_dense_into(dense, $comps, y, &yn, [k1, &k[1], &k[2], &k[3], &k[4], &k[5]], &hh);
                     }
-                    hidden_crossings::<COUL, _, N>(c, dense, &ln.g0, &g1, &ln.pend, &ok, &turn, &mut hidden);
+                    hidden_crossings::<LAW, _, N>(c, cm, dense, &ln.g0, &g1, &ln.pend, &ok, &turn, &mut hidden);
                 }};
             }
-            if COUL {
-                check!(&EV_COMPS, &mut ev5)
-            } else {
-                check!(&EV_COMPS_CONST, &mut ev3)
+            match LAW {
+                SWITCH => check!(&ALL_COMPS, &mut ev6),
+                TANH => check!(&EV_COMPS, &mut ev5),
+                _ => check!(&EV_COMPS_CONST, &mut ev3),
             }
         }
 
@@ -275,7 +283,7 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool, const 
         // ---- which accepted lanes need the cold path ----
         let mut busy = [false; N];
         let mut attn = [false; N];
-        for e in 0..NE {
+        for e in 0..ne {
             for l in 0..N {
                 busy[l] |= ln.pend[e][l] | cross(ln.g0[e][l], g1[e][l]);
             }
@@ -286,23 +294,23 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool, const 
         // same coefficients with the same operations (the scalar's bits). Whatever the cold path would decide
         // otherwise (a crossing after the check, a zero or NaN reading, a zero at the step end)
         // still goes there.
-        if UNI {
+        if checks {
             // Lanes the check counted its interpolant for (the cold path reuses it uncounted),
             // busy with no sign change and no zero at the step end.
             let mut cand = [false; N];
             for l in 0..N {
                 let mut quiet = true;
-                for e in 0..NE {
+                for e in 0..ne {
                     quiet &= !cross(ln.g0[e][l], g1[e][l]) & (g1[e][l] != 0.0);
                 }
                 cand[l] = busy[l] & acc_ok[l] & need[l] & ok[l] & quiet;
             }
             if cand.iter().any(|&x| x) {
                 let span = (&t_start, &t_new, &hh);
-                if COUL {
-                    pending_on_lanes::<COUL, 5, N>(&mut ln, &ev5, &cand, &g1, span, &mut busy);
-                } else {
-                    pending_on_lanes::<COUL, 3, N>(&mut ln, &ev3, &cand, &g1, span, &mut busy);
+                match LAW {
+                    SWITCH => pending_on_lanes::<LAW, 6, N>(&mut ln, &ev6, &cand, &g1, span, &mut busy),
+                    TANH => pending_on_lanes::<LAW, 5, N>(&mut ln, &ev5, &cand, &g1, span, &mut busy),
+                    _ => pending_on_lanes::<LAW, 3, N>(&mut ln, &ev3, &cand, &g1, span, &mut busy),
                 }
             }
         }
@@ -362,7 +370,7 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool, const 
                         full_built = true;
                         &full
                     } else {
-                        let mut f = SliderRhs::<UNI, COUL, N> { c: &ln.c, contact: &ln.contact, fzl: &mut fzl_scratch };
+                        let mut f = SliderRhs::<UNI, LAW, N> { c: &ln.c, m: &ln.modes, fzl: &mut fzl_scratch };
                         dop853_dense_into(&mut samp, &mut f, &ALL_COMPS, &ln.y, &yn, &ln.f, &hh, &kk, &mut extra);
                         &samp
                     }
@@ -388,7 +396,7 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool, const 
                 ln.f[i][l] = if plain[l] { fnew[i][l] } else { ln.f[i][l] };
             }
         });
-        for e in 0..NE {
+        for e in 0..ne {
             for l in 0..N {
                 ln.g0[e][l] = if plain[l] { g1[e][l] } else { ln.g0[e][l] };
             }
@@ -397,7 +405,7 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool, const 
             let p = plain[l];
             ln.t[l] = if p { t_new[l] } else { ln.t[l] };
             let z = yn[idx::Z][l];
-            let normal = if UNI && !ln.contact[l] { 0.0 } else { ln.c.fst[l] + fzl[l] };
+            let normal = if UNI && !ln.modes.contact[l] { 0.0 } else { ln.c.fst[l] + fzl[l] };
             let gap = g1[event::GAP][l];
             let vr = ln.c.v[l] - (yn[idx::XD][l] + ln.c.sl[l] * yn[idx::PHID][l]);
             ln.min_n[l] = if p { ln.min_n[l].min(normal) } else { ln.min_n[l] };
@@ -421,7 +429,7 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool, const 
         if attn.iter().any(|&a| a) {
             // A lane whose extra stages the hidden-crossing check built (and counted) takes its
             // coefficients from `full`, the same numbers the scalar `Dop853Dense` would compute.
-            if M8 && UNI && !full_built && (0..N).any(|l| attn[l] && need[l]) {
+            if M8 && checks && !full_built && (0..N).any(|l| attn[l] && need[l]) {
                 dop853_poly_into(&mut full, &ALL_COMPS, &ln.y, &yn, &ln.f, &hh, &kk, &extra);
                 full_built = true;
             }
@@ -441,8 +449,8 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool, const 
                     })
                 };
                 let ks: [State; 13];
-                let g0: [f64; MAX_EVENTS] = std::array::from_fn(|e| if e < NE { ln.g0[e][l] } else { 0.0 });
-                let g1l: [f64; MAX_EVENTS] = std::array::from_fn(|e| if e < NE { g1[e][l] } else { 0.0 });
+                let g0: [f64; MAX_EVENTS] = std::array::from_fn(|e| if e < ne { ln.g0[e][l] } else { 0.0 });
+                let g1l: [f64; MAX_EVENTS] = std::array::from_fn(|e| if e < ne { g1[e][l] } else { 0.0 });
                 let ln_ref = &mut ln;
                 let sd = ln_ref.side[l].as_mut().expect("attention only on live lanes");
                 sync_to_side(&ln_ref.min_n, &ln_ref.max_gap, &ln_ref.min_vr, &ln_ref.max_z, l, sd);
@@ -465,14 +473,14 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool, const 
                             Dop853Dense::from_stages(sd.s, sd.mode, &ks, &y0, &y1, t_start[l], hh[l])
                         }
                     };
-                    let ev = cold_step(sd, &dense, busy[l], span, &g0, &g1l);
+                    let ev = cold_step(sd, &dense, busy[l], span, ne, &g0, &g1l);
                     sd.stats.n_rhs += dense.extra_rhs();
                     ev
                 } else {
                     ks = gather();
                     let k7s: &[State; 7] = ks[..7].try_into().expect("seven stages");
                     let dense = Dopri5Dense::from_stages(k7s, &y0, &y1, t_start[l], hh[l]);
-                    cold_step(sd, &dense, busy[l], span, &g0, &g1l)
+                    cold_step(sd, &dense, busy[l], span, ne, &g0, &g1l)
                 };
                 sync_from_side(&mut ln, l, steady, sampled);
                 if let Some(outcome) = ev.end {
@@ -496,26 +504,25 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool, const 
                     }
                     let mut g = [0.0; MAX_EVENTS];
                     sd.s.events(t, &y1, mode, &mut g);
-                    for e in 0..NE {
+                    for e in 0..ne {
                         sd.pend[e] = match sw.pend_before[e] {
                             Some(ts) if t <= sw.t_check[e] => Some(ts),
                             _ if e == sw.index || g[e] == 0.0 => Some(t),
                             _ => None,
                         };
                     }
-                    let contact = mode.in_contact();
                     let pend = sd.pend;
                     for i in 0..6 {
                         ln.y[i][l] = y1[i];
                         ln.f[i][l] = f[i];
                     }
-                    for e in 0..NE {
+                    for e in 0..ne {
                         ln.g0[e][l] = g[e];
                         ln.pend[e][l] = pend[e].is_some();
                         ln.pend_t[e][l] = pend[e].unwrap_or(f64::NAN);
                     }
                     ln.t[l] = t;
-                    ln.contact[l] = contact;
+                    ln.modes.set(l, mode);
                     ln.ln_err_old[l] = LN_ERR_FLOOR;
                 } else {
                     for i in 0..6 {
@@ -524,7 +531,7 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool, const 
                     }
                     ln.t[l] = t_new[l];
                     let sd = ln.side[l].as_mut().expect("live");
-                    for e in 0..NE {
+                    for e in 0..ne {
                         ln.g0[e][l] = g1[e][l];
                         if sd.pend[e].is_none() && g1[e][l] == 0.0 {
                             sd.pend[e] = Some(t_new[l]);
@@ -550,7 +557,7 @@ pub(super) fn run_impl<const UNI: bool, const COUL: bool, const M8: bool, const 
 /// longer busy. A lane with a reading the cold path would act on (zero, NaN, or a sign change
 /// after the check: a crossing to locate) is left as it was, busy.
 #[inline(never)]
-fn pending_on_lanes<const COUL: bool, const C: usize, const N: usize>(
+fn pending_on_lanes<const LAW: u8, const C: usize, const N: usize>(
     ln: &mut Lanes<'_, N>,
     dense: &LaneDense<C, N>,
     cand: &[bool; N],
@@ -567,7 +574,7 @@ fn pending_on_lanes<const COUL: bool, const C: usize, const N: usize>(
         let guard = sd.opts.event_guard;
         let mut clear = [false; NE];
         let mut here = true;
-        for e in 0..NE {
+        for e in 0..n_events(LAW) {
             if !ln.pend[e][l] {
                 continue;
             }
@@ -575,7 +582,7 @@ fn pending_on_lanes<const COUL: bool, const C: usize, const N: usize>(
             if tc >= t1 {
                 continue;
             }
-            let gc = events_at::<COUL, N>(&ln.c, &dense.eval_lane(l, (tc - t0) / hh[l]), l)[e];
+            let gc = events_at::<LAW, N>(&ln.c, &ln.modes, &dense.eval_lane(l, (tc - t0) / hh[l]), l)[e];
             if gc == 0.0 || gc.is_nan() || cross(gc, g1[e][l]) {
                 here = false;
                 break;
@@ -585,7 +592,7 @@ fn pending_on_lanes<const COUL: bool, const C: usize, const N: usize>(
         if !here {
             continue;
         }
-        for e in 0..NE {
+        for e in 0..n_events(LAW) {
             if clear[e] {
                 ln.pend[e][l] = false;
                 ln.pend_t[e][l] = f64::NAN;
@@ -613,8 +620,9 @@ const FAR: f64 = 4.0;
 /// comes closest to zero (relative to its start value) inside the step, 0 where none turns.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn near_events<const COUL: bool, const N: usize>(
+fn near_events<const LAW: u8, const N: usize>(
     c: &Coef<N>,
+    m: &Modes<N>,
     y0: &Vw<N>,
     f0: &Vw<N>,
     y1: &Vw<N>,
@@ -628,12 +636,12 @@ fn near_events<const COUL: bool, const N: usize>(
 ) -> [bool; N] {
     // d/dt of each event function (`events_lanes`) at both ends, lane-wise (vectorised).
     let (mut d0, mut d1) = ([[0.0; N]; NE], [[0.0; N]; NE]);
-    event_rates_lanes::<COUL, N>(c, y0, f0, &mut d0);
-    event_rates_lanes::<COUL, N>(c, y1, f1, &mut d1);
+    event_rates_lanes::<LAW, N>(c, m, y0, f0, &mut d0);
+    event_rates_lanes::<LAW, N>(c, m, y1, f1, &mut d1);
     let mut near = [false; N];
     for l in 0..N {
         let mut clear = true;
-        for e in 0..NE {
+        for e in 0..n_events(LAW) {
             let travel = FAR * hh[l] * (d0[e][l].abs() + d1[e][l].abs());
             // NaN anywhere: not far (the check runs).
             clear &= pend[e][l] | ((g0[e][l].abs() > travel) & (g1[e][l].abs() > travel));
@@ -649,7 +657,7 @@ fn near_events<const COUL: bool, const N: usize>(
         }
         // The turning point whose cubic model dips deepest towards zero (fraction of g0 left).
         let mut best = f64::INFINITY;
-        for e in 0..NE {
+        for e in 0..n_events(LAW) {
             let (a, b) = (g0[e][l], g1[e][l]);
             if pend[e][l] {
                 continue;
@@ -664,20 +672,6 @@ fn near_events<const COUL: bool, const N: usize>(
         }
     }
     near
-}
-
-/// The rates of the event functions of [`events_lanes`] on the lanes, from the state `y` and its
-/// derivative `f` (the slider's `event_rates`).
-#[inline(always)]
-fn event_rates_lanes<const COUL: bool, const N: usize>(c: &Coef<N>, y: &Vw<N>, f: &Vw<N>, d: &mut [Lw<N>; NE]) {
-    for l in 0..N {
-        let (z, zd) = (y[idx::Z][l], y[idx::ZD][l]);
-        d[event::GAP][l] = zd;
-        d[event::NORMAL][l] =
-            (-c.ks[l] + 2.0 * c.ka[l] * z) * zd - c.c[l] * f[idx::ZD][l] + c.kphi[l] * y[idx::PHID][l];
-        d[event::SLIP][l] = if COUL { -(f[idx::XD][l] + c.sl[l] * f[idx::PHID][l]) } else { 0.0 };
-        d[event::ESCAPE][l] = -z.signum() * zd;
-    }
 }
 
 /// Lane `l`'s samples inside its accepted step (before the lane's state is committed: `ln.y`
@@ -702,6 +696,7 @@ fn cold_step<D: StepDense<6>>(
     dense: &D,
     busy: bool,
     ((t0, y0), (t1, y1)): ((f64, &State), (f64, &State)),
+    ne: usize,
     g0: &[f64; MAX_EVENTS],
     g1: &[f64; MAX_EVENTS],
 ) -> StepEnd<6, ContactMode> {
@@ -716,7 +711,7 @@ fn cold_step<D: StepDense<6>>(
             mode,
             (t0, y0),
             (t1, y1),
-            NE,
+            ne,
             g0,
             g1,
             &mut sd.pend,

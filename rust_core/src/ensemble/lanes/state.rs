@@ -2,7 +2,7 @@
 //! side ([`Side`]: the observers of its task, its events and options), and the set-up and teardown
 //! of a trajectory in a lane (refill, finish, idle) with the copies between the two sides.
 
-use super::slider::{Coef, NE};
+use super::slider::{Coef, Modes, NE};
 use crate::ensemble::{Task, TrajectoryResult};
 use crate::model::{idx, ContactMode, Slider, State};
 use crate::ode::controller::{initial_step, ModeSteps};
@@ -112,7 +112,7 @@ pub(super) struct Lanes<'a, const N: usize> {
     pub(super) n_extra: [u64; N],
     /// The method is DOP853 (else DP5).
     pub(super) m8: bool,
-    pub(super) contact: [bool; N],
+    pub(super) modes: Modes<N>,
     pub(super) g0: [Lw<N>; NE],
     pub(super) pend: [[bool; N]; NE],
     /// Where `pend` is set, the pending event's time (the side's `pend`), else NaN.
@@ -235,7 +235,7 @@ fn idle<const N: usize>(ln: &mut Lanes<'_, N>, l: usize) {
     ln.t[l] = 0.0;
     ln.h[l] = 0.0;
     ln.c.esc[l] = f64::INFINITY;
-    ln.contact[l] = true;
+    ln.modes.set(l, ContactMode::Contact);
     for e in 0..NE {
         ln.g0[e][l] = 1.0;
         ln.pend[e][l] = false;
@@ -328,9 +328,12 @@ pub(super) fn refill<'a, const N: usize>(
         let order = if ln.m8 { 8 } else { 5 };
         let h0 = initial_step(s, mode, 0.0, &y0, &f0, t_end, order, &opts.atol, opts.rtol, f64::INFINITY, &mut n_rhs);
         sd.stats.n_rhs = n_rhs;
-        let mut g = [0.0; MAX_EVENTS];
+        let mut g = [1.0; MAX_EVENTS];
         s.events(0.0, &y0, mode, &mut g);
+        // Functions the law does not have stay 1 (never pending, never crossing).
+        let ne = s.n_events();
         for e in 0..NE {
+            g[e] = if e < ne { g[e] } else { 1.0 };
             if g[e] == 0.0 {
                 sd.pend[e] = Some(0.0);
             }
@@ -351,7 +354,7 @@ pub(super) fn refill<'a, const N: usize>(
         ln.n_acc[l] = 0;
         ln.n_rej[l] = 0;
         ln.n_extra[l] = 0;
-        ln.contact[l] = mode.in_contact();
+        ln.modes.set(l, mode);
         let e = sd.obs.ext;
         ln.min_n[l] = e.min_normal_force;
         ln.max_gap[l] = e.max_gap;

@@ -1,5 +1,5 @@
 use super::*;
-use crate::model::{ContactMode, Params};
+use crate::model::{event, ContactMode, Params};
 use crate::ode::{Control, Observer};
 use crate::status::Status;
 use crate::steady::{run, run_observed, run_sampled, run_to_steady, SteadyOptions, SteadyOutcome};
@@ -35,6 +35,17 @@ fn scenes(n: usize) -> Vec<(&'static str, Vec<Slider>, Vec<State>, f64)> {
         stribeck_velocity: 0.02,
         ..seed
     };
+    // The switch law (Leine et al.) on the stick-slip scene with a band of 0.1 mm/s, and with
+    // unilateral contact at 0.05 m/s from 40 um (the pin leaves the disk and sticks).
+    let switch = Params { friction_law: FrictionLaw::Switch, stick_band: 1e-4, ..stick };
+    let switch_uni = Params {
+        contact: ContactModel::Unilateral,
+        friction_law: FrictionLaw::Switch,
+        mu_static: 0.3,
+        sliding_speed: 0.05,
+        stick_band: 1e-4,
+        ..seed
+    };
     let z = |z0: f64, k: usize| vec![State::new(z0, 0.0, 0.0, 0.0, 0.0, 0.0); k];
     let mk = |base: Params, name: &str, vals: Vec<f64>| -> Vec<Slider> {
         vals.into_iter()
@@ -50,6 +61,8 @@ fn scenes(n: usize) -> Vec<(&'static str, Vec<Slider>, Vec<State>, f64)> {
         ("unilateral", mk(uni, "mu", linspace(0.29, 0.31, n)), z(30e-6, n), 0.2),
         ("stick_slip", mk(stick, "mu", linspace(0.21, 0.22, 2)), z(1e-6, 2), 0.2),
         ("large_amplitude", mk(Params { mu: 0.35, ..uni }, "normal_load", linspace(145.0, 155.0, n)), z(40e-6, n), 0.2),
+        ("switch", mk(switch, "mu", linspace(0.21, 0.22, n)), z(1e-6, n), 0.2),
+        ("switch_unilateral", mk(switch_uni, "normal_load", linspace(110.0, 130.0, n)), z(40e-6, n), 0.2),
     ]
 }
 
@@ -356,20 +369,29 @@ fn results_do_not_depend_on_the_batch() {
             // The portable code, at 8 lanes and at the AVX-512 end-state copy's 16, for every task:
             // a lane's arithmetic does not depend on the lane count.
             macro_rules! portable {
-                ($n:expr) => {
-                    match (s[0].p.contact == ContactModel::Unilateral, method == Method::Dop853) {
-                        (true, false) => {
-                            run_impl::<true, false, false, { $n }>(&s, &y0, 0.1, &t, task, &Feed::new(None))
-                        }
-                        (false, false) => {
-                            run_impl::<false, false, false, { $n }>(&s, &y0, 0.1, &t, task, &Feed::new(None))
-                        }
-                        (true, true) => run_impl::<true, false, true, { $n }>(&s, &y0, 0.1, &t, task, &Feed::new(None)),
-                        (false, true) => {
-                            run_impl::<false, false, true, { $n }>(&s, &y0, 0.1, &t, task, &Feed::new(None))
-                        }
+                ($n:expr) => {{
+                    let f = Feed::new(None);
+                    macro_rules! go {
+                        ($u:literal, $c:expr, $m:literal) => {
+                            run_impl::<$u, { $c as u8 }, $m, { $n }>(&s, &y0, 0.1, &t, task, &f)
+                        };
                     }
-                };
+                    use FrictionLaw::{Constant as C, Coulomb as T, Switch as S};
+                    match (s[0].p.contact == ContactModel::Unilateral, s[0].p.friction_law, method == Method::Dop853) {
+                        (false, C, false) => go!(false, C, false),
+                        (false, T, false) => go!(false, T, false),
+                        (false, S, false) => go!(false, S, false),
+                        (true, C, false) => go!(true, C, false),
+                        (true, T, false) => go!(true, T, false),
+                        (true, S, false) => go!(true, S, false),
+                        (false, C, true) => go!(false, C, true),
+                        (false, T, true) => go!(false, T, true),
+                        (false, S, true) => go!(false, S, true),
+                        (true, C, true) => go!(true, C, true),
+                        (true, T, true) => go!(true, T, true),
+                        (true, S, true) => go!(true, S, true),
+                    }
+                }};
             }
             for (lanes, portable) in [(W, sorted(portable!(W))), (W_FINAL_AVX512, sorted(portable!(W_FINAL_AVX512)))] {
                 for i in 0..s.len() {
@@ -408,7 +430,7 @@ fn failures_and_trivial_runs() {
 }
 
 /// Throughput against the scalar driver in the same process, one thread, best of five:
-/// `cargo test --release -p tribosweep-core lanes::tests::throughput -- --ignored --nocapture`.
+/// `cargo test --profile release -p tribosweep-core lanes::tests::throughput -- --ignored --nocapture`.
 #[test]
 #[ignore]
 fn throughput() {
@@ -446,7 +468,7 @@ fn throughput() {
 
 /// Census-like runs to steady state (the seed, unilateral, from disturbances of 1-60 um on z and
 /// phi): lanes against the scalar driver, one thread, best of three:
-/// `cargo test --release -p tribosweep-core lanes::tests::steady_throughput -- --ignored --nocapture`.
+/// `cargo test --profile release -p tribosweep-core lanes::tests::steady_throughput -- --ignored --nocapture`.
 /// `LANES_PATH=lanes|scalar` runs one path only (for `perf`).
 #[test]
 #[ignore]
@@ -507,7 +529,7 @@ fn steady_throughput() {
 /// Microbenchmark of the lane kernels alone (no events, no controller), on the bilateral seed:
 /// ns per 8-lane DP5 attempt, DOP853 attempt and DOP853 interpolant of the event components,
 /// portable and in the AVX2 / AVX-512 copies the lane driver dispatches to:
-/// `cargo test --release -p tribosweep-core lanes::tests::step_kernels -- --ignored --nocapture`.
+/// `cargo test --profile release -p tribosweep-core lanes::tests::step_kernels -- --ignored --nocapture`.
 #[test]
 #[ignore]
 fn step_kernels() {
@@ -547,7 +569,7 @@ fn kernels() -> String {
     for l in 0..W {
         c.set(l, &s, &[1e-12; 6]);
     }
-    let contact = [true; W];
+    let modes = super::slider::Modes::<W>::new();
     let mut fzl = [0.0; W];
     let mut y: V6 = [[0.0; W]; 6];
     for l in 0..W {
@@ -556,13 +578,13 @@ fn kernels() -> String {
     let hh = [1e-5; W];
     let n = 200_000;
     let mut k1: V6 = [[0.0; W]; 6];
-    super::slider::rhs::<false, false, W>(&c, &contact, &y, &mut k1, &mut fzl);
+    super::slider::rhs::<false, { FrictionLaw::Constant as u8 }, W>(&c, &modes, &y, &mut k1, &mut fzl);
     let mut yn: V6 = [[0.0; W]; 6];
     let mut acc = 0.0;
     let mut k = [[[0.0; W]; 6]; 6];
     let t0 = Instant::now();
     for _ in 0..n {
-        let mut f = super::slider::SliderRhs::<false, false, W> { c: &c, contact: &contact, fzl: &mut fzl };
+        let mut f = super::slider::SliderRhs::<false, { FrictionLaw::Constant as u8 }, W> { c: &c, m: &modes, fzl: &mut fzl };
         let (e, _) = dopri5_step(&mut f, &y, &k1, &hh, 1e-8, &c.atol, &mut k, &mut yn);
         acc += e[0];
         y = yn;
@@ -572,7 +594,7 @@ fn kernels() -> String {
     let mut kk = [[[0.0; W]; 6]; 16];
     let t0 = Instant::now();
     for _ in 0..n {
-        let mut f = super::slider::SliderRhs::<false, false, W> { c: &c, contact: &contact, fzl: &mut fzl };
+        let mut f = super::slider::SliderRhs::<false, { FrictionLaw::Constant as u8 }, W> { c: &c, m: &modes, fzl: &mut fzl };
         let (e, _) = dop853_step(&mut f, &y, &k1, &hh, 1e-8, &c.atol, &mut kk, &mut yn);
         acc += e[0];
         y = yn;
@@ -583,7 +605,7 @@ fn kernels() -> String {
     let mut d = LaneDense::new();
     let t0 = Instant::now();
     for _ in 0..n {
-        let mut f = super::slider::SliderRhs::<false, false, W> { c: &c, contact: &contact, fzl: &mut fzl };
+        let mut f = super::slider::SliderRhs::<false, { FrictionLaw::Constant as u8 }, W> { c: &c, m: &modes, fzl: &mut fzl };
         dop853_dense_into(&mut d, &mut f, &super::slider::EV_COMPS, &y, &yn, &k1, &hh, &kk, &mut extra);
         acc += d.eval(0.5)[0][0];
         y[0][0] += 1e-30;
@@ -594,7 +616,7 @@ fn kernels() -> String {
 
 /// The lane driver on the bilateral seed, end state after 5 s from z = 1-10 um (no contact opens), DP5 and DOP853 at
 /// rtol 1e-8, one thread: ns per lane-step (against `step_kernels`, the driver's own cost):
-/// `cargo test --release -p tribosweep-core lanes::tests::driver_cost -- --ignored --nocapture`.
+/// `cargo test --profile release -p tribosweep-core lanes::tests::driver_cost -- --ignored --nocapture`.
 #[test]
 #[ignore]
 fn driver_cost() {
@@ -698,5 +720,31 @@ fn bouncing_never_misses_the_return_to_the_disk() {
         let r = crate::steady::run(&s, &y0[k], 5.0, Method::Dop853, &tol(1e-8));
         assert_eq!(r.status, crate::status::Status::Success, "scalar start {k}: {:?}", r.failure);
         assert!(r.extremes.max_abs_z < 5e-4);
+    }
+}
+
+/// The switch-law scenes exercise what they are there for: every run enters and leaves the
+/// stick band and sticks (band-edge and stick-bound events), and on the unilateral scene the pin
+/// also leaves the disk.
+#[test]
+fn switch_scenes_stick_and_bounce() {
+    for (name, s, y0, t_end) in scenes(6) {
+        if !name.starts_with("switch") {
+            continue;
+        }
+        for i in 0..s.len() {
+            let (r, log) = run_observed(&s[i], &y0[i], t_end, Method::Dopri5, &tol(1e-8), Log(Vec::new()));
+            let mut count = [0; 7];
+            for e in &log.0 {
+                count[e.0] += 1;
+            }
+            println!("{name} #{i}: {:?}, events by index {count:?}", r.status);
+            assert_eq!(r.status, Status::Success, "{name} #{i}");
+            let band = count[event::BAND_HI] + count[event::BAND_LO];
+            assert!(band >= 4 && count[event::STICK] >= 2, "{name} #{i}: {count:?}");
+            if name == "switch_unilateral" {
+                assert!(count[event::GAP] + count[event::NORMAL] >= 4, "{name} #{i}: {count:?}");
+            }
+        }
     }
 }
