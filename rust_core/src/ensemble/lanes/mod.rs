@@ -242,6 +242,9 @@ fn dispatch(
     }
 }
 
+/// Out of line, as each of the copies it picks from: inlined into [`dispatch`], the twelve
+/// portable bodies made one function that LLVM's optimisation took minutes over.
+#[inline(never)]
 fn dispatch_cpu<const UNI: bool, const LAW: u8, const M8: bool>(
     sliders: &[Slider],
     y0s: &[State],
@@ -267,7 +270,20 @@ fn dispatch_cpu<const UNI: bool, const LAW: u8, const M8: bool>(
             return unsafe { run_avx2::<UNI, LAW, M8>(sliders, y0s, t_end, tol, task, feed) };
         }
     }
-    run_impl::<UNI, LAW, M8, W>(sliders, y0s, t_end, tol, task, feed)
+    run_portable::<UNI, LAW, M8, W>(sliders, y0s, t_end, tol, task, feed)
+}
+
+/// The portable copy (no CPU features beyond the target's baseline).
+#[inline(never)]
+pub(super) fn run_portable<const UNI: bool, const LAW: u8, const M8: bool, const N: usize>(
+    sliders: &[Slider],
+    y0s: &[State],
+    t_end: f64,
+    tol: &Tolerances,
+    task: Task<'_>,
+    feed: &Feed<'_>,
+) -> Vec<(usize, TrajectoryResult)> {
+    run_impl::<UNI, LAW, M8, N>(sliders, y0s, t_end, tol, task, feed)
 }
 
 /// Lanes of the AVX-512 copy for end states (`Task::Final`): two registers per operation, as in
