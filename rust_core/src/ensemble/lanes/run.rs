@@ -197,9 +197,9 @@ pub(super) fn run_impl<const UNI: bool, const LAW: u8, const M8: bool, const N: 
         // The lanes whose step needs the hidden-crossing check (`near_events`): the check runs
         // when any does, and acts, counts and leaves its extra stages (DOP853) for those only, so
         // that a lane's run does not depend on the other lanes of its batch.
-        // `turn`: each near lane's turning point of the event function most likely to touch zero
-        // inside the step (0: none), checked on the interpolant beside the three fixed points.
-        let mut turn = zero;
+        // `turn[e]`: each near lane's turning point of event function `e` inside the step (0:
+        // none), checked on the interpolant beside the three fixed points, as the scalar does.
+        let mut turn = [zero; NE];
         let need = if checks {
             near_events::<LAW, N>(c, cm, y, k1, &yn, fnew, &ln.g0, &g1, &ln.pend, &ok, &hh, &mut turn)
         } else {
@@ -616,8 +616,8 @@ const FAR: f64 = 4.0;
 /// method does not hold (steps are a small fraction of the period). When it skips, the check would
 /// have found nothing, so the run is the same; on the disk, far from lift-off, it always skips.
 ///
-/// For the near lanes, `turn[l]` is the [`turn_point`] of the event function whose cubic model
-/// comes closest to zero (relative to its start value) inside the step, 0 where none turns.
+/// For the near lanes, `turn[e][l]` is the [`turn_point`] of event function `e` (not pending)
+/// inside the step, 0 where it does not turn: the scalar driver checks each one.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn near_events<const LAW: u8, const N: usize>(
@@ -632,7 +632,7 @@ fn near_events<const LAW: u8, const N: usize>(
     pend: &[[bool; N]; NE],
     ok: &[bool; N],
     hh: &[f64; N],
-    turn: &mut Lw<N>,
+    turn: &mut [Lw<N>; NE],
 ) -> [bool; N] {
     // d/dt of each event function (`events_lanes`) at both ends, lane-wise (vectorised).
     let (mut d0, mut d1) = ([[0.0; N]; NE], [[0.0; N]; NE]);
@@ -655,19 +655,12 @@ fn near_events<const LAW: u8, const N: usize>(
         if !near[l] {
             continue;
         }
-        // The turning point whose cubic model dips deepest towards zero (fraction of g0 left).
-        let mut best = f64::INFINITY;
         for e in 0..n_events(LAW) {
-            let (a, b) = (g0[e][l], g1[e][l]);
             if pend[e][l] {
                 continue;
             }
-            if let Some((x, p)) = turn_point(a, b, d0[e][l], d1[e][l], hh[l]) {
-                let left = p / a;
-                if left < best {
-                    best = left;
-                    turn[l] = x;
-                }
+            if let Some((x, _)) = turn_point(g0[e][l], g1[e][l], d0[e][l], d1[e][l], hh[l]) {
+                turn[e][l] = x;
             }
         }
     }

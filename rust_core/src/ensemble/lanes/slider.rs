@@ -375,10 +375,10 @@ pub(super) fn event_rates_lanes<const LAW: u8, const N: usize>(
 }
 
 /// The scalar driver's hidden-crossing check on all lanes at once: at the three interior points
-/// `x = 1/4, 1/2, 3/4` of each accepted step's interpolant and at each lane's own turning point
-/// `turn[l]` (0: none; see `run::near_events`), an event function that is not pending and differs
-/// in sign from the step start while the step end does not. `hidden[l]` becomes the earliest such
-/// `x` (0 where none).
+/// `x = 1/4, 1/2, 3/4` of each accepted step's interpolant and at each lane's turning points
+/// `turn[e][l]` of its event functions (0: none; see `run::near_events`), an event function that
+/// is not pending and differs in sign from the step start while the step end does not.
+/// `hidden[l]` becomes the earliest such `x` (0 where none).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 pub(super) fn hidden_crossings<const LAW: u8, const C: usize, const N: usize>(
@@ -389,7 +389,7 @@ pub(super) fn hidden_crossings<const LAW: u8, const C: usize, const N: usize>(
     g1: &[Lw<N>; NE],
     pend: &[[bool; N]; NE],
     ok: &[bool; N],
-    turn: &Lw<N>,
+    turn: &[Lw<N>; NE],
     hidden: &mut Lw<N>,
 ) {
     let g_at = |v: [f64; C], l: usize| events_at::<LAW, N>(c, m, &v, l);
@@ -411,12 +411,15 @@ pub(super) fn hidden_crossings<const LAW: u8, const C: usize, const N: usize>(
             found[l] |= take;
         }
     }
-    for l in 0..N {
-        let x = turn[l];
-        if x > 0.0 && ok[l] && !(found[l] && hidden[l] <= x) {
-            let v = dense.eval_lane(l, x);
-            if hit_of(&g_at(v, l), l) {
-                hidden[l] = x;
+    for tu in turn.iter().take(n_events(LAW)) {
+        for l in 0..N {
+            let x = tu[l];
+            if x > 0.0 && ok[l] && !(found[l] && hidden[l] <= x) {
+                let v = dense.eval_lane(l, x);
+                if hit_of(&g_at(v, l), l) {
+                    hidden[l] = x;
+                    found[l] = true;
+                }
             }
         }
     }
