@@ -410,6 +410,25 @@ impl OdeSystem<6> for Slider {
         true
     }
 
+    /// The switch law's band edges count one way per mode: in slip only entries into the band
+    /// (`BAND_HI` falling, `BAND_LO` rising), in a transition only exits. The other way acts on
+    /// nothing (`friction_after_switch` keeps the mode) and is an artefact: stick that ends in
+    /// slip at once (`band_exit`) leaves `v_r` on its edge, off by the stick phase's integration
+    /// error (1e-16 to 1e-11 m/s) on either side, and the sign of that error decided whether a
+    /// run logged (and cut a step at) an exit crossing just after the switch.
+    fn crossing_counts(&self, mode: ContactMode, i: usize, rising: bool) -> bool {
+        let inward = match i {
+            event::BAND_HI => !rising,
+            event::BAND_LO => rising,
+            _ => return true,
+        };
+        match mode {
+            ContactMode::Contact => inward,
+            ContactMode::Transition => !inward,
+            _ => true,
+        }
+    }
+
     fn on_event(&self, _t: f64, y: &State, mode: ContactMode, index: usize) -> EventAction<ContactMode> {
         match index {
             event::ESCAPE => EventAction::Stop,

@@ -372,7 +372,7 @@ where
                 (tc, gc)
             }
         };
-        if crosses(ga, g1[i]) {
+        if crosses(ga, g1[i]) && sys.crossing_counts(mode, i, ga < 0.0) {
             // From the start of the step, the search starts at the root of the function's cubic
             // model (after a pending event's check time, the model's root may be that event's).
             let guess = if ta == t {

@@ -109,6 +109,17 @@ pub trait OdeSystem<const N: usize> {
         false
     }
 
+    /// Whether a sign change of event function `i` in `mode` is an event: `rising` from negative
+    /// to non-negative, else from positive to non-positive. Both directions by default. A system
+    /// restricts a function to one direction where a crossing the other way can only be an
+    /// artefact that acts on nothing (a function left within the integration error of its zero
+    /// by an earlier switch): counted, it would cut the step and enter the log as the sign of
+    /// that error happens to fall. The hidden-crossing check is unchanged (an excursion inside a
+    /// step crosses both ways).
+    fn crossing_counts(&self, _mode: Self::Mode, _i: usize, _rising: bool) -> bool {
+        true
+    }
+
     /// Action at a located event `index` at `(t, y)` in `mode`.
     fn on_event(&self, _t: f64, _y: &SVector<f64, N>, _mode: Self::Mode, _index: usize) -> EventAction<Self::Mode> {
         EventAction::Continue
