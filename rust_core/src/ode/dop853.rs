@@ -14,7 +14,6 @@
 //! error weights and `BHH_j` the 3rd-order weights (subtracted from `b_j`).
 #![allow(clippy::excessive_precision, clippy::unreadable_literal)]
 
-use super::controller::error_norm;
 use super::stepper::{combine, weighted, StepDense, Stepper};
 use super::{Dense, OdeSystem, Stats};
 use nalgebra::SVector;
@@ -400,11 +399,19 @@ impl<const N: usize, S: OdeSystem<N>> Stepper<N, S> for Dop853<N> {
         let err5 = weighted([ER_1, ER_6, ER_7, ER_8, ER_9, ER_10, ER_11, ER_12], used);
         let err3 = weighted([E3_1, A13_6, A13_7, A13_8, E3_9, A13_10, A13_11, E3_12], used);
         self.k = [k1, k2, k3, k4, k5, k6, k7, k8, k9, k10, k11, k12, SVector::zeros()];
-        // Hairer's combination: |h| e5^2 / sqrt(n (e5^2 + 0.01 e3^2)) with the sums of squares
-        // e5^2, e3^2 of the weighted components; error_norm gives the RMS, hence the factors n.
+        // Hairer's combination: |h| e5^2 / sqrt(n (e5^2 + 0.01 e3^2)), e5^2 and e3^2 the sums of
+        // squares of the components weighted by 1/sk. Summed with the lane path's operations
+        // (`lanes::dop853_step`: `e^2 w`, `w = 1/sk^2`), so that both paths' estimates agree to the
+        // bit where their stages do: after a switch the first steps' estimates are at rounding
+        // level (1e-18), and any difference there steered the two paths onto different steps.
         let n = N as f64;
-        let s5 = error_norm(&err5, y, &y_new, atol, rtol).powi(2) * n;
-        let s3 = error_norm(&err3, y, &y_new, atol, rtol).powi(2) * n;
+        let (mut s5, mut s3) = (0.0, 0.0);
+        for i in 0..N {
+            let sk = atol[i] + rtol * y[i].abs().max(y_new[i].abs());
+            let w = 1.0 / (sk * sk);
+            s5 += err5[i] * err5[i] * w;
+            s3 += err3[i] * err3[i] * w;
+        }
         let den = s5 + 0.01 * s3;
         let err = if den > 0.0 {
             h.abs() * s5 / (den * n).sqrt()
