@@ -196,6 +196,7 @@ where
     loop {
         let floor = opts.h_min_rel * t.abs().max(1.0);
         let remaining = t_end - t;
+        h = h.min(sys.step_limit(&y, &f, mode));
         // Land exactly on t_end; stretch by up to 1 % rather than leave a sliver.
         let last = h >= remaining || (1.01 * h >= remaining && remaining <= h_max);
         if last {

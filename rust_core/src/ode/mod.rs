@@ -109,6 +109,13 @@ pub trait OdeSystem<const N: usize> {
         false
     }
 
+    /// The longest step to attempt from `y` (with right-hand side `f` there) in `mode`: where the
+    /// mode's field has a discontinuity ahead that an event ends the mode before, a step whose
+    /// stages reached it would be rejected (often several times over). Unlimited by default.
+    fn step_limit(&self, _y: &SVector<f64, N>, _f: &SVector<f64, N>, _mode: Self::Mode) -> f64 {
+        f64::INFINITY
+    }
+
     /// Whether a sign change of event function `i` in `mode` is an event: `rising` from negative
     /// to non-negative, else from positive to non-positive. Both directions by default. A system
     /// restricts a function to one direction where a crossing the other way can only be an
