@@ -209,15 +209,20 @@ impl Observer<6, ContactMode> for Log {
     }
 }
 
-/// Every contact opening and closing of the unilateral scenes, located by both paths: the same
-/// events in the same order at times that agree to 1e-10 s.
+/// Every event of the unilateral and switch-law scenes (contact opening and closing, band
+/// entries and exits, stick ends), located by both paths at rtol 1e-12: the same events in the
+/// same order at times that agree to 1e-10 s. At rtol 1e-10 the stick ends of the switch scene
+/// differed by up to 2.8e-10 s between the paths with a load moved by one ulp: where the stick
+/// margin falls slowly, the paths' integration errors (of the order of rtol) shift the time its
+/// zero is found. At 1e-12 the largest difference was 4.1e-11 s with the scenes' parameter moved
+/// by -4..+4 ulps.
 #[test]
 fn event_times_agree_to_1e_10_s() {
     for (name, s, y0, t_end) in scenes(6) {
         if name == "seed" || name == "stick_slip" {
             continue;
         }
-        let t = tol(1e-10);
+        let t = tol(1e-12);
         let lanes = lanes5(&s, &y0, t_end, &t, Task::Events);
         let mut worst = 0.0f64;
         let mut n = 0;
