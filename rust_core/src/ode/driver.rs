@@ -5,13 +5,15 @@
 //! no heap allocation inside the loop; every state is an `SVector` on the stack.
 //!
 //! # One step
-//! 1. The stepper attempts `h` from `(t, y)` with `f = f(t, y)` known; the error norm is the
-//!    weighted RMS of [`super::controller::error_norm`]. A non-finite error or state rejects the
+//! 1. The stepper attempts `h` from `(t, y)` with `f = f(t, y)` known, `h` capped by the system's
+//!    `OdeSystem::step_limit` (a discontinuity of the mode's field ahead, which an event ends the
+//!    mode before); the error norm is the weighted RMS of [`super::controller::error_norm`]
+//!    (DOP853: Hairer's combination of two such sums). A non-finite error or state rejects the
 //!    step and cuts `h` by the largest factor; the run ends with `NonFinite` only when that drives
 //!    `h` below the floor `h_min_rel * max(|t|, 1)` (a finite error there gives `StepTooSmall`).
 //! 2. On acceptance the event functions are evaluated once at the step end (and reused as the next
 //!    step's start values). Every sign change `g(start) != 0`, `g(end)` of the other sign or exactly
-//!    zero, is located on the step's dense output by a bracketing root finder (`events::locate`, bracket shrunk to
+//!    zero, in a direction the system counts (`OdeSystem::crossing_counts`; both by default), is located on the step's dense output by a bracketing root finder (`events::locate`, bracket shrunk to
 //!    `event_tol`; the returned time is the bracket end on the far side of the crossing, so that a
 //!    restarted run already sees the new sign).
 //! 3. Located events are processed in time order: `sys.on_event` gives each one's action; the first
