@@ -5,7 +5,7 @@
 //!   the end state, or samples at `t_eval`, of the bilateral constant-`mu` slider (the fastest path;
 //!   only the escape is located).
 //! - [`Route::Lanes`]: [`lanes::run_lanes_threads`], lane-batched Dormand–Prince 5(4) and DOP853 for
-//!   everything else the lanes support (unilateral contact, the Coulomb/Stribeck law, samples at
+//!   everything else the lanes support (unilateral contact, the tanh and switch Stribeck laws, samples at
 //!   `t_eval`, runs to a steady state), with the scalar driver's event code on a cold path.
 //! - [`Route::Scalar`]: the scalar driver through `steady` (`run`, `run_sampled`, `run_to_steady`,
 //!   `run_observed`), one trajectory per work item of [`par_map`]: every method and model.
