@@ -51,6 +51,7 @@ import numpy as np
 
 from . import _core
 from ._codes import STATUS, STATUS_NAMES
+from ._modes import static
 from ._settings import DEFAULTS, Integration, Irregular
 
 _DEF = DEFAULTS.irregular
@@ -71,12 +72,10 @@ def characteristic_sizes(values: Mapping[str, np.ndarray | float]) -> np.ndarray
     As the core's ``steady::characteristic_sizes``: ``|z_st|`` for ``z`` and ``x``, ``|z_st|/L``
     for ``phi`` (``|z_st|`` if ``L = 0``), those times the torsional frequency for the rates.
     """
-    f = np.asarray(values["normal_load"], dtype=np.float64)
-    k0 = np.asarray(values["contact_stiffness"], dtype=np.float64)
-    ka = np.asarray(values["contact_quadratic"], dtype=np.float64)
+    contact = {k: np.asarray(values[k], dtype=np.float64) for k in ("normal_load", "contact_stiffness", "contact_quadratic")}
     arm = np.asarray(values["moment_arm"], dtype=np.float64)
     w = np.asarray(values["omega_torsion"], dtype=np.float64)
-    z = np.abs(2.0 * f / (k0 + np.sqrt(k0 * k0 + 4.0 * ka * f)))  # docs/model.md §3, cancellation-free
+    z = np.abs(static(contact)[0])
     z, arm, w = np.broadcast_arrays(np.atleast_1d(z), arm, w)
     phi = np.where(arm > 0, z / np.where(arm > 0, arm, 1.0), z)
     return np.column_stack([z, z * w, z, z * w, phi, phi * w])
