@@ -405,34 +405,26 @@ fn results_do_not_depend_on_the_batch() {
             }
             use FrictionLaw::{Constant as C, Coulomb as T, Switch as S};
             let key = (s[0].p.contact == ContactModel::Unilateral, s[0].p.friction_law, method == Method::Dop853);
-            let p8 = match key {
-                (false, C, false) => go!(false, C, false, W),
-                (false, T, false) => go!(false, T, false, W),
-                (false, S, false) => go!(false, S, false, W),
-                (true, C, false) => go!(true, C, false, W),
-                (true, T, false) => go!(true, T, false, W),
-                (true, S, false) => go!(true, S, false, W),
-                (false, C, true) => go!(false, C, true, W),
-                (false, T, true) => go!(false, T, true, W),
-                (false, S, true) => go!(false, S, true, W),
-                (true, C, true) => go!(true, C, true, W),
-                (true, T, true) => go!(true, T, true, W),
-                (true, S, true) => go!(true, S, true, W),
-            };
-            let p16 = match key {
-                (false, C, false) => go!(false, C, false, W_FINAL_AVX512),
-                (false, T, false) => go!(false, T, false, W_FINAL_AVX512),
-                (false, S, false) => go!(false, S, false, W_FINAL_AVX512),
-                (true, C, false) => go!(true, C, false, W_FINAL_AVX512),
-                (true, T, false) => go!(true, T, false, W_FINAL_AVX512),
-                (true, S, false) => go!(true, S, false, W_FINAL_AVX512),
-                (false, C, true) => go!(false, C, true, W_FINAL_AVX512),
-                (false, T, true) => go!(false, T, true, W_FINAL_AVX512),
-                (false, S, true) => go!(false, S, true, W_FINAL_AVX512),
-                (true, C, true) => go!(true, C, true, W_FINAL_AVX512),
-                (true, T, true) => go!(true, T, true, W_FINAL_AVX512),
-                (true, S, true) => go!(true, S, true, W_FINAL_AVX512),
-            };
+            // Every model, law and method at `n` lanes; the one the scene needs runs.
+            macro_rules! portable {
+                ($n:expr) => {
+                    match key {
+                        (false, C, false) => go!(false, C, false, $n),
+                        (false, T, false) => go!(false, T, false, $n),
+                        (false, S, false) => go!(false, S, false, $n),
+                        (true, C, false) => go!(true, C, false, $n),
+                        (true, T, false) => go!(true, T, false, $n),
+                        (true, S, false) => go!(true, S, false, $n),
+                        (false, C, true) => go!(false, C, true, $n),
+                        (false, T, true) => go!(false, T, true, $n),
+                        (false, S, true) => go!(false, S, true, $n),
+                        (true, C, true) => go!(true, C, true, $n),
+                        (true, T, true) => go!(true, T, true, $n),
+                        (true, S, true) => go!(true, S, true, $n),
+                    }
+                };
+            }
+            let (p8, p16) = (portable!(W), portable!(W_FINAL_AVX512));
             for (lanes, portable) in [(W, p8), (W_FINAL_AVX512, p16)] {
                 for i in 0..s.len() {
                     assert_eq!(bits(&portable[i]), bits(&all[i]), "{name} portable, {lanes} lanes #{i}");
