@@ -415,9 +415,10 @@ impl OdeSystem<6> for Slider {
         if self.p.friction_law != FrictionLaw::Switch || mode != ContactMode::Contact {
             return f64::INFINITY;
         }
+        // The rate written out as the lanes write it (not `slip_velocity_gradient().dot(f)`),
+        // so that both paths cap a step by the same bits.
         let sl = self.p.torsion_sign * self.p.moment_arm;
-        let vr = self.p.sliding_speed - (y[idx::XD] + sl * y[idx::PHID]);
-        slip_step_limit(vr, -(f[idx::XD] + sl * f[idx::PHID]), self.p.stick_band)
+        slip_step_limit(self.slip_velocity(y), -(f[idx::XD] + sl * f[idx::PHID]), self.p.stick_band)
     }
 
     /// The switch law's band edges count one way per mode: in slip only entries into the band
