@@ -212,7 +212,7 @@ fn dispatch<const M8: bool>(job: Job<'_>) -> Vec<RunResult> {
         if std::is_x86_feature_detected!("avx512f") {
             // SAFETY: the CPU supports the features the function is compiled for.
             return unsafe {
-                if M8 && !job.t_eval.is_empty() {
+                if M8 && job.t_eval.len() > super::SPARSE_SAMPLES {
                     run_avx512::<M8, W>(job)
                 } else {
                     run_avx512::<M8, W_AVX512>(job)
@@ -233,8 +233,9 @@ fn dispatch<const M8: bool>(job: Job<'_>) -> Vec<RunResult> {
 /// ensemble (Zen 4, one thread, 4,000 trajectories, builds alternating): the DOP853 end state
 /// 28-31k -> 42.5k trajectories/s at rtol 1e-6 and 13.4-13.7k -> 18-18.7k at 1e-9, DP5 19-20k
 /// -> 22-23.5k; with 501 samples DP5 16.3k -> 20.4k, but DOP853 18.5k -> 15.8k, so DOP853 with
-/// samples keeps 8 (its stages, interpolant and 16 lanes outgrow L1). The slider's lane driver
-/// (`ensemble::lanes`) runs 16 only for end states (`lanes::W_FINAL_AVX512`).
+/// samples keeps 8 (its stages, interpolant and 16 lanes outgrow L1) where the samples are
+/// many ([`super::SPARSE_SAMPLES`]). The slider's lane driver (`ensemble::lanes`) runs 16 only
+/// for end states and sparse samples (`lanes::W_FINAL_AVX512`).
 pub const W_AVX512: usize = 16;
 
 #[cfg(target_arch = "x86_64")]

@@ -3,8 +3,8 @@
 //! `t_eval`, and runs to a steady state.
 //!
 //! [`run_lanes`] integrates many trajectories [`W`] = 8 at a time in structure-of-arrays form (the
-//! generic lane kit `ode::lanes`; end states 16 at a time in the AVX-512 copy,
-//! [`W_FINAL_AVX512`]), as [`super::batch`] does for the bilateral constant-`mu` end state, and
+//! generic lane kit `ode::lanes`; end states and sparse samples 16 at a time in the AVX-512
+//! copy, [`W_FINAL_AVX512`]), as [`super::batch`] does for the bilateral constant-`mu` end state, and
 //! refills a lane as soon as its trajectory ends. What it adds is everything the scalar driver
 //! does around the step:
 //!
@@ -81,7 +81,7 @@ pub fn supports_method(m: Method) -> bool {
 }
 
 /// Integrate each `sliders[i]` from `y0s[i]` at `t = 0` with `method` (Dormand–Prince 5(4) or
-/// DOP853), 8 (end states on AVX-512: [`W_FINAL_AVX512`]) trajectories at a time on this thread,
+/// DOP853), 8 (end states and sparse samples on AVX-512: [`W_FINAL_AVX512`]) trajectories at a time on this thread,
 /// and compute `task` for each; results in input order.
 ///
 /// Precondition (the caller checks): all sliders share one contact model and one friction law,
@@ -258,7 +258,12 @@ fn dispatch_cpu<const UNI: bool, const LAW: u8, const M8: bool>(
         if std::is_x86_feature_detected!("avx512f") {
             // SAFETY: the CPU supports the features the function is compiled for.
             return unsafe {
-                if matches!(task, Task::Final) {
+                let sparse = match task {
+                    Task::Final => true,
+                    Task::Sampled(te) => te.len() <= super::SPARSE_SAMPLES,
+                    _ => false,
+                };
+                if sparse {
                     run_avx512::<UNI, LAW, M8, W_FINAL_AVX512>(sliders, y0s, t_end, tol, task, feed)
                 } else {
                     run_avx512::<UNI, LAW, M8, W>(sliders, y0s, t_end, tol, task, feed)
@@ -286,8 +291,9 @@ pub(super) fn run_portable<const UNI: bool, const LAW: u8, const M8: bool, const
     run_impl::<UNI, LAW, M8, N>(sliders, y0s, t_end, tol, task, feed)
 }
 
-/// Lanes of the AVX-512 copy for end states (`Task::Final`): two registers per operation, as in
-/// the bilateral batch (`batch::W_AVX512`). Runs with samples or to a steady state keep `W` = 8:
+/// Lanes of the AVX-512 copy for end states (`Task::Final`) and for at most
+/// `ensemble::SPARSE_SAMPLES` output times: two registers per operation, as in the bilateral batch
+/// (`batch::W_AVX512`). Runs with more samples or to a steady state keep `W` = 8:
 /// their any-lane work (the interpolant for samples, the hidden-crossing check's extra stages and
 /// the cold visits of sections) runs for every lane as soon as one lane needs it; 16 lanes made
 /// the census 10 % slower and the unilateral DOP853 run with 501 samples 25 % slower. Measured
