@@ -655,20 +655,23 @@ pub(crate) fn dop853_poly_into<const C: usize, const N: usize>(
             d.c[2][j][l] = dy * 2.0 - (k1[i][l] + k(13)[i][l]) * h;
         }
     }
-    // Row by row, all components at once: C independent sums (each in the scalar `weighted`'s
-    // order, `0 + (a_1 h) k_1 + ... + (a_12 h) k_12`) held in registers, so that their adds
-    // overlap instead of each waiting on the one before.
-    for (r, row) in rows.iter().enumerate() {
-        let mut s = [[0.0; N]; C];
+    // Component by component, the four rows at once: four independent sums (each in the scalar
+    // `weighted`'s order, `0 + (a_1 h) k_1 + ... + (a_12 h) k_12`) held in registers, each stage
+    // row loaded once for all four. Row by row over all components at once, LLVM kept the C sums
+    // in memory (a loop over the components, not unrolled) and every add waited on a store.
+    for (j, &i) in comps.iter().enumerate() {
+        let mut s = [[0.0; N]; 4];
         for m in 0..12 {
-            let a = row[m];
-            for (j, &i) in comps.iter().enumerate() {
-                let km = &st[m][i];
+            let km = &st[m][i];
+            for r in 0..4 {
+                let a = rows[r][m];
                 for l in 0..N {
-                    s[j][l] += (a * hh[l]) * km[l];
+                    s[r][l] += (a * hh[l]) * km[l];
                 }
             }
         }
-        d.c[3 + r] = s;
+        for r in 0..4 {
+            d.c[3 + r][j] = s[r];
+        }
     }
 }
