@@ -194,7 +194,7 @@ pub(super) fn run_impl<const UNI: bool, const LAW: u8, const M8: bool, const N: 
         let fnew: &Vw<N> = if M8 { &kk[12] } else { &k[5] };
         let mut ok = [false; N];
         for l in 0..N {
-            ok[l] = err[l] <= 1.0 && fin[l] && live[l];
+            ok[l] = (err[l] <= 1.0) & fin[l] & live[l];
         }
 
         // ---- events at the step end; hidden crossings inside the step (unilateral) ----
@@ -257,8 +257,9 @@ pub(super) fn run_impl<const UNI: bool, const LAW: u8, const M8: bool, const N: 
         let alpha = if M8 { ALPHA8 } else { ALPHA };
         let mut arg = zero;
         for l in 0..N {
-            arg[l] =
-                if ok[l] { -(alpha * ln_err[l] - BETA * ln.ln_err_old[l] - LN_SAFETY) } else { -alpha * ln_err[l] };
+            // Both, then the bits of one (an `if` here compiled to a branch per lane).
+            let accept = -(alpha * ln_err[l] - BETA * ln.ln_err_old[l] - LN_SAFETY);
+            arg[l] = blend((ok[l] as u64).wrapping_neg(), accept, -alpha * ln_err[l]);
         }
         let r = exp_lanes(&arg);
         let t_start = ln.t;
@@ -397,38 +398,40 @@ pub(super) fn run_impl<const UNI: bool, const LAW: u8, const M8: bool, const N: 
         }
 
         // ---- the common accepted step: commit on the lanes ----
-        let plain: [bool; N] = std::array::from_fn(|l| acc_ok[l] && !attn[l]);
+        let plain: [bool; N] = std::array::from_fn(|l| acc_ok[l] & !attn[l]);
+        // As bit masks: with `if plain[l] { new } else { old }` LLVM kept the lanes' bools in
+        // general registers and committed lane by lane, a branch per lane and component.
+        let keep: [u64; N] = std::array::from_fn(|l| (plain[l] as u64).wrapping_neg());
         each6!(i, {
             for l in 0..N {
-                ln.y[i][l] = if plain[l] { yn[i][l] } else { ln.y[i][l] };
-                ln.f[i][l] = if plain[l] { fnew[i][l] } else { ln.f[i][l] };
+                ln.y[i][l] = blend(keep[l], yn[i][l], ln.y[i][l]);
+                ln.f[i][l] = blend(keep[l], fnew[i][l], ln.f[i][l]);
             }
         });
         for e in 0..ne {
             for l in 0..N {
-                ln.g0[e][l] = if plain[l] { g1[e][l] } else { ln.g0[e][l] };
+                ln.g0[e][l] = blend(keep[l], g1[e][l], ln.g0[e][l]);
             }
         }
         for l in 0..N {
-            let p = plain[l];
-            ln.t[l] = if p { t_new[l] } else { ln.t[l] };
+            let p = keep[l];
+            ln.t[l] = blend(p, t_new[l], ln.t[l]);
             let z = yn[idx::Z][l];
             let normal = if UNI && !ln.modes.contact[l] { 0.0 } else { ln.c.fst[l] + fzl[l] };
             let gap = g1[event::GAP][l];
             let vr = ln.c.v[l] - (yn[idx::XD][l] + ln.c.sl[l] * yn[idx::PHID][l]);
-            ln.min_n[l] = if p { ln.min_n[l].min(normal) } else { ln.min_n[l] };
-            ln.max_gap[l] = if p { ln.max_gap[l].max(gap) } else { ln.max_gap[l] };
-            ln.min_vr[l] = if p { ln.min_vr[l].min(vr) } else { ln.min_vr[l] };
-            ln.max_z[l] = if p { ln.max_z[l].max(z.abs()) } else { ln.max_z[l] };
+            ln.min_n[l] = blend(p, ln.min_n[l].min(normal), ln.min_n[l]);
+            ln.max_gap[l] = blend(p, ln.max_gap[l].max(gap), ln.max_gap[l]);
+            ln.min_vr[l] = blend(p, ln.min_vr[l].min(vr), ln.min_vr[l]);
+            ln.max_z[l] = blend(p, ln.max_z[l].max(z.abs()), ln.max_z[l]);
         }
         if steady {
             for l in 0..N {
-                let p = plain[l];
-                ln.peak[l] = if p { ln.peak[l].max(yn[idx::Z][l].abs()) } else { ln.peak[l] };
+                ln.peak[l] = blend(keep[l], ln.peak[l].max(yn[idx::Z][l].abs()), ln.peak[l]);
             }
             each6!(i, {
                 for l in 0..N {
-                    ln.peaks[i][l] = if plain[l] { ln.peaks[i][l].max(yn[i][l].abs()) } else { ln.peaks[i][l] };
+                    ln.peaks[i][l] = blend(keep[l], ln.peaks[i][l].max(yn[i][l].abs()), ln.peaks[i][l]);
                 }
             });
         }
@@ -609,6 +612,12 @@ fn pending_on_lanes<const LAW: u8, const C: usize, const N: usize>(
         }
         busy[l] = false;
     }
+}
+
+/// `a` where `mask` is all ones, `b` where it is zero (bit for bit).
+#[inline(always)]
+fn blend(mask: u64, a: f64, b: f64) -> f64 {
+    f64::from_bits((a.to_bits() & mask) | (b.to_bits() & !mask))
 }
 
 /// Safety factor of [`near_events`].
