@@ -81,8 +81,8 @@ pub fn supports_method(m: Method) -> bool {
 }
 
 /// Integrate each `sliders[i]` from `y0s[i]` at `t = 0` with `method` (Dormand–Prince 5(4) or
-/// DOP853), 8 (end states and sparse samples on AVX-512: [`W_FINAL_AVX512`]) trajectories at a time on this thread,
-/// and compute `task` for each; results in input order.
+/// DOP853), 8 (end states and sparse samples on AVX-512: [`W_FINAL_AVX512`]) trajectories at a
+/// time on this thread, and compute `task` for each; results in input order.
 ///
 /// Precondition (the caller checks): all sliders share one contact model and one friction law,
 /// which [`supports`] accepts; [`supports_method`] accepts `method`; `sliders.len() ==
