@@ -398,10 +398,10 @@ pub(super) fn run_impl<const UNI: bool, const LAW: u8, const M8: bool, const N: 
         }
 
         // ---- the common accepted step: commit on the lanes ----
-        let plain: [bool; N] = std::array::from_fn(|l| acc_ok[l] & !attn[l]);
-        // As bit masks: with `if plain[l] { new } else { old }` LLVM kept the lanes' bools in
-        // general registers and committed lane by lane, a branch per lane and component.
-        let keep: [u64; N] = std::array::from_fn(|l| (plain[l] as u64).wrapping_neg());
+        // The lanes that commit here (accepted, nothing for the cold path), as bit masks: with
+        // `if plain[l] { new } else { old }` LLVM kept the lanes' bools in general registers and
+        // committed lane by lane, a branch per lane and component.
+        let keep: [u64; N] = std::array::from_fn(|l| ((acc_ok[l] & !attn[l]) as u64).wrapping_neg());
         each6!(i, {
             for l in 0..N {
                 ln.y[i][l] = blend(keep[l], yn[i][l], ln.y[i][l]);
