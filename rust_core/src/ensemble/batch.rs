@@ -56,10 +56,10 @@ use crate::ode::dopri5::Dopri5Dense;
 use crate::ode::events::locate;
 use crate::ode::lanes::{
     dop853_dense_into, dop853_step, dopri5_dense_into, dopri5_step, each6, exp_lanes, lane_state, ln_lanes,
-    sample_lane, splat, LaneDense, LaneRhs, Lw, Row, Vw, ALL_COMPS, ALPHA, ALPHA8, BETA, LN_ERR_FLOOR, LN_SAFETY, W,
+    sample_lanes, splat, LaneDense, LaneRhs, Lw, Row, Vw, ALL_COMPS, ALPHA, ALPHA8, BETA, LN_ERR_FLOOR, LN_SAFETY, W,
 };
 use crate::ode::stepper::StepDense;
-use crate::ode::{Dense, Method, Options, Stats};
+use crate::ode::{Dense, Method, Options, SampleStore, Stats};
 use crate::status::{Failure, Status};
 use crate::steady::{characteristic_sizes, options_for, run_failure, Extremes, RunResult, Tolerances};
 
@@ -211,13 +211,7 @@ fn dispatch<const M8: bool>(job: Job<'_>) -> Vec<RunResult> {
     {
         if std::is_x86_feature_detected!("avx512f") {
             // SAFETY: the CPU supports the features the function is compiled for.
-            return unsafe {
-                if M8 && job.t_eval.len() > super::SPARSE_SAMPLES {
-                    run_avx512::<M8, W>(job)
-                } else {
-                    run_avx512::<M8, W_AVX512>(job)
-                }
-            };
+            return unsafe { run_avx512::<M8, W_AVX512>(job) };
         }
         if std::is_x86_feature_detected!("avx2") {
             // SAFETY: as above.
@@ -227,15 +221,15 @@ fn dispatch<const M8: bool>(job: Job<'_>) -> Vec<RunResult> {
     run_impl::<M8, W>(job)
 }
 
-/// Lanes of the AVX-512 copy, except for DOP853 with samples: two registers per operation, so
-/// that two independent chains of a stage's arithmetic overlap (a stage waits on the one before:
-/// at 8 lanes the step is partly latency-bound). Measured against 8 lanes on the issue-2
-/// ensemble (Zen 4, one thread, 4,000 trajectories, builds alternating): the DOP853 end state
-/// 28-31k -> 42.5k trajectories/s at rtol 1e-6 and 13.4-13.7k -> 18-18.7k at 1e-9, DP5 19-20k
-/// -> 22-23.5k; with 501 samples DP5 16.3k -> 20.4k, but DOP853 18.5k -> 15.8k, so DOP853 with
-/// samples keeps 8 (its stages, interpolant and 16 lanes outgrow L1) where the samples are
-/// many ([`super::SPARSE_SAMPLES`]). The slider's lane driver (`ensemble::lanes`) runs 16 only
-/// for end states and sparse samples (`lanes::W_FINAL_AVX512`).
+/// Lanes of the AVX-512 copy: two registers per operation, so that two independent chains of a
+/// stage's arithmetic overlap (a stage waits on the one before: at 8 lanes the step is partly
+/// latency-bound). Measured against 8 lanes on the issue-2 ensemble (Zen 4, one thread, 4,000
+/// trajectories, builds alternating): the DOP853 end state 28-31k -> 42.5k trajectories/s at rtol
+/// 1e-6 and 13.4-13.7k -> 18-18.7k at 1e-9, DP5 19-20k -> 22-23.5k; with 501 samples DP5 16.3k ->
+/// 20.4k. DOP853 with many samples ran 8 lanes until its interpolant's rows stayed in registers
+/// and the samples were taken on all lanes at once (`lanes::sample_lanes`); since then 16 lanes
+/// win at any number of samples (Zen 5, 1,000 trajectories, rtol 1e-6): 21 samples 34.5k ->
+/// 50k, 501 samples 27k -> 36k, 2,001 samples 20k -> 25k.
 pub const W_AVX512: usize = 16;
 
 #[cfg(target_arch = "x86_64")]
@@ -441,18 +435,16 @@ fn run_impl<const M8: bool, const N: usize>(job: Job<'_>) -> Vec<RunResult> {
             locate_escapes(&esc, &mut yn, &mut fz, &mut ln.t, &mut ln.n_extra);
         }
         if have_dense {
-            let d = &dense;
-            for l in 0..N {
-                if !due[l] {
-                    continue;
-                }
-                // The step as it ends (an escape ends it at the crossing).
-                let span = (t_start[l], ln.t[l], hh[l]);
-                let w = ln.who[l];
+            // The step as it ends (an escape ends it at the crossing).
+            let span = (&t_start, &ln.t, &hh);
+            let who = &ln.who;
+            sample_lanes(&due, &mut next_t, span, &dense, &ln.y, &yn, |l, v| {
+                let w = who[l];
                 let mut row = Row { vals: &mut samples[w * stride..(w + 1) * stride], n: counts[w] };
-                next_t[l] = sample_lane(t_eval, &mut row, d, l, span, &ln.y, &yn);
+                row.push(v);
                 counts[w] = row.n;
-            }
+                t_eval.get(row.n).copied().unwrap_or(f64::INFINITY)
+            });
         }
         for l in 0..N {
             ln.n_acc[l] += ok[l] as u64;

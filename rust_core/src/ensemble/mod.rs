@@ -174,16 +174,6 @@ pub fn supports(route: Route, sliders: &[Slider], settings: &Settings, task: &Ta
     }
 }
 
-/// Most output times for which DOP853 with samples still runs `batch::W_AVX512` lanes (and the
-/// slider's lane driver `lanes::W_FINAL_AVX512`): few samples build the interpolant in few steps,
-/// and the run is an end-state run. Lane width does not change a trajectory's bits, only the
-/// speed. Measured on the issue-2 ensemble, bilateral, DOP853 at rtol 1e-6 (Zen 5, one thread,
-/// 4,000 trajectories, 16 against 8 lanes): 1 sample 69.5k against 46k trajectories/s, 6 samples
-/// 55k against 45k, 11: 48k against 43k, 21: 39k both, 51: 31.5k against 34.4k, 501: 24.3k
-/// against 25.9k. Unilateral (the lane driver): 1 sample 45k against 35k, 6: 38k against 34k,
-/// 11: 33k both.
-pub const SPARSE_SAMPLES: usize = 16;
-
 /// The routing policy: the batch where it applies (the fastest), else the lanes where they
 /// apply, else the scalar driver.
 pub fn route(sliders: &[Slider], settings: &Settings, task: &Task<'_>) -> Route {

@@ -3,8 +3,8 @@
 //! `t_eval`, and runs to a steady state.
 //!
 //! [`run_lanes`] integrates many trajectories [`W`] = 8 at a time in structure-of-arrays form (the
-//! generic lane kit `ode::lanes`; end states and sparse samples 16 at a time in the AVX-512
-//! copy, [`W_FINAL_AVX512`]), as [`super::batch`] does for the bilateral constant-`mu` end state, and
+//! generic lane kit `ode::lanes`; end states and samples 16 at a time in the AVX-512 copy,
+//! [`W_FINAL_AVX512`]), as [`super::batch`] does for the bilateral constant-`mu` end state, and
 //! refills a lane as soon as its trajectory ends. What it adds is everything the scalar driver
 //! does around the step:
 //!
@@ -81,7 +81,7 @@ pub fn supports_method(m: Method) -> bool {
 }
 
 /// Integrate each `sliders[i]` from `y0s[i]` at `t = 0` with `method` (Dormand–Prince 5(4) or
-/// DOP853), 8 (end states and sparse samples on AVX-512: [`W_FINAL_AVX512`]) trajectories at a
+/// DOP853), 8 (end states and samples on AVX-512: [`W_FINAL_AVX512`]) trajectories at a
 /// time on this thread, and compute `task` for each; results in input order.
 ///
 /// Precondition (the caller checks): all sliders share one contact model and one friction law,
@@ -258,12 +258,7 @@ fn dispatch_cpu<const UNI: bool, const LAW: u8, const M8: bool>(
         if std::is_x86_feature_detected!("avx512f") {
             // SAFETY: the CPU supports the features the function is compiled for.
             return unsafe {
-                let sparse = match task {
-                    Task::Final => true,
-                    Task::Sampled(te) => te.len() <= super::SPARSE_SAMPLES,
-                    _ => false,
-                };
-                if sparse {
+                if matches!(task, Task::Final | Task::Sampled(_)) {
                     run_avx512::<UNI, LAW, M8, W_FINAL_AVX512>(sliders, y0s, t_end, tol, task, feed)
                 } else {
                     run_avx512::<UNI, LAW, M8, W>(sliders, y0s, t_end, tol, task, feed)
@@ -291,18 +286,21 @@ pub(super) fn run_portable<const UNI: bool, const LAW: u8, const M8: bool, const
     run_impl::<UNI, LAW, M8, N>(sliders, y0s, t_end, tol, task, feed)
 }
 
-/// Lanes of the AVX-512 copy for end states (`Task::Final`) and for at most
-/// `ensemble::SPARSE_SAMPLES` output times: two registers per operation, as in the bilateral batch
-/// (`batch::W_AVX512`). Runs with more samples or to a steady state keep `W` = 8:
-/// their any-lane work (the interpolant for samples, the hidden-crossing check's extra stages and
-/// the cold visits of sections) runs for every lane as soon as one lane needs it; 16 lanes made
-/// the census 10 % slower and the unilateral DOP853 run with 501 samples 25 % slower. Measured
-/// on the unilateral issue-2 ensemble (Zen 4, one thread, 4,000 trajectories, builds
-/// alternating): DOP853 end state 27.9-29.9k -> 31.5-32.4k trajectories/s at rtol 1e-6 and
-/// 12.4-13.3k -> 15.0-15.3k at 1e-9, DP5 14.7k -> 15.4-15.8k. The price is on end states of
-/// bouncing motion, where a contact event is in some lane almost every step: 512 trajectories at
-/// 120 N, 11 cm, 1 s (438 events each), DOP853 at 1e-6, 1,852-1,905 -> 1,720-1,784 per second
-/// (6 % slower). Runs mostly in contact, like the issue-2 ensemble, gain 20 %.
+/// Lanes of the AVX-512 copy for end states (`Task::Final`) and samples (`Task::Sampled`): two
+/// registers per operation, as in the bilateral batch (`batch::W_AVX512`). Runs to a steady state
+/// keep `W` = 8: their any-lane work (the hidden-crossing check's extra stages and the cold
+/// visits of sections) runs for every lane as soon as one lane needs it; 16 lanes made the census
+/// 10 % slower. Measured on the unilateral issue-2 ensemble (Zen 4, one thread, 4,000
+/// trajectories, builds alternating): DOP853 end state 27.9-29.9k -> 31.5-32.4k trajectories/s at
+/// rtol 1e-6 and 12.4-13.3k -> 15.0-15.3k at 1e-9, DP5 14.7k -> 15.4-15.8k. The price is on end
+/// states of bouncing motion, where a contact event is in some lane almost every step: 512
+/// trajectories at 120 N, 11 cm, 1 s (438 events each), DOP853 at 1e-6, 1,852-1,905 ->
+/// 1,720-1,784 per second (6 % slower). Runs mostly in contact, like the issue-2 ensemble, gain
+/// 20 %. Samples ran 8 lanes beyond 16 output times until they were taken on all lanes at once
+/// (`lanes::sample_lanes`); since then 16 win (Zen 5, 1,000 trajectories, rtol 1e-6, one thread):
+/// DOP853 with 501 samples 25-26k -> 28-29k, DP5 19.2k -> 21.4k; 512 trajectories on the seed's
+/// bouncing cycle (406 events each in 1 s) with 1,001 samples, DOP853 2,570-2,610 -> 2,780-2,840
+/// per second, DP5 1,820 -> 2,510-2,540.
 pub const W_FINAL_AVX512: usize = 16;
 
 #[cfg(target_arch = "x86_64")]

@@ -17,10 +17,10 @@ use crate::ode::events::{step_events, turn_point, StepEnd};
 use crate::ode::lanes::LaneDense;
 use crate::ode::lanes::{
     cross, dop853_dense_into, dop853_poly_into, dop853_step, dopri5_dense_into, dopri5_step, each6, exp_lanes,
-    lane_state, ln_lanes, sample_lane, splat, Lw, Vw, ALL_COMPS, ALPHA, ALPHA8, BETA, LN_ERR_FLOOR, LN_SAFETY,
+    lane_state, ln_lanes, sample_lanes, splat, Lw, Vw, ALL_COMPS, ALPHA, ALPHA8, BETA, LN_ERR_FLOOR, LN_SAFETY,
 };
 use crate::ode::stepper::StepDense;
-use crate::ode::{Control, Observer, OdeSystem, Options, Outcome, StepView, MAX_EVENTS};
+use crate::ode::{Control, Observer, OdeSystem, Options, Outcome, SampleStore, StepView, MAX_EVENTS};
 use crate::steady::Tolerances;
 
 /// The portable path (the tests check that the SIMD copies agree bitwise).
@@ -388,11 +388,12 @@ pub(super) fn run_impl<const UNI: bool, const LAW: u8, const M8: bool, const N: 
                     dopri5_dense_into(&mut samp, &ALL_COMPS, &ln.y, &yn, st, &hh);
                     &samp
                 };
+                let side = &mut ln.side;
+                sample_lanes(&due, &mut ln.next_sample, (&t_start, &t_new, &hh), dense, &ln.y, &yn, |l, v| {
+                    sampler_push(&mut side[l], v)
+                });
                 for l in 0..N {
-                    if due[l] {
-                        sample_on_lane(&mut ln, l, dense, (t_start[l], t_new[l], hh[l]), &yn);
-                        attn[l] = false;
-                    }
+                    attn[l] &= !due[l];
                 }
             }
         }
@@ -684,18 +685,12 @@ fn near_events<const LAW: u8, const N: usize>(
     near
 }
 
-/// Lane `l`'s samples inside its accepted step (before the lane's state is committed: `ln.y`
-/// holds the step's start, `yn` its end): [`sample_lane`] into its sampler's output.
-fn sample_on_lane<const N: usize>(
-    ln: &mut Lanes<'_, N>,
-    l: usize,
-    dense: &LaneDense<6, N>,
-    span: (f64, f64, f64),
-    yn: &Vw<N>,
-) {
-    let Some(sd) = ln.side[l].as_mut() else { return };
-    let Watch::Sample(smp) = &mut sd.obs.inner else { return };
-    ln.next_sample[l] = sample_lane(smp.t_eval, &mut smp.out, dense, l, span, &ln.y, yn);
+/// Appends a sample to the lane's sampler; returns the time of its next sample (infinity: none).
+fn sampler_push(side: &mut Option<Side<'_>>, v: State) -> f64 {
+    let Some(sd) = side.as_mut() else { return f64::INFINITY };
+    let Watch::Sample(smp) = &mut sd.obs.inner else { return f64::INFINITY };
+    smp.out.push(v);
+    smp.t_eval.get(smp.out.len()).copied().unwrap_or(f64::INFINITY)
 }
 
 /// The scalar driver's handling of one accepted step of one lane: its events (located on the
