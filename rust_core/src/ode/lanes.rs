@@ -722,9 +722,9 @@ pub(crate) fn dop853_poly_into<const C: usize, const N: usize>(
     // Component by component, the four rows at once: four independent sums (each in the scalar
     // `weighted`'s order, `0 + (a_1 h) k_1 + ... + (a_12 h) k_12`) held in registers, each stage
     // row loaded once for all four. Row by row over all components at once, LLVM kept the C sums
-    // in memory (a loop over the components, not unrolled) and every add waited on a store.
-    // The rows as four named sums, one lane loop for all four: at 16 lanes a loop over the rows
-    // was not unrolled, and the sums went back to memory (a fifth of a 501-sample run).
+    // in memory (a loop over the components, not unrolled) and every add waited on a store; with
+    // a loop over the four rows, at 16 lanes that loop was not unrolled and the sums went back to
+    // memory too (a fifth of a 501-sample run). Hence four named sums in one lane loop.
     for (j, &i) in comps.iter().enumerate() {
         let (mut s0, mut s1, mut s2, mut s3) = ([0.0; N], [0.0; N], [0.0; N], [0.0; N]);
         for m in 0..12 {
