@@ -56,19 +56,21 @@ use crate::ode::dopri5::Dopri5Dense;
 use crate::ode::events::locate;
 use crate::ode::lanes::{
     dop853_dense_into, dop853_step, dopri5_dense_into, dopri5_step, each6, exp_lanes, lane_state, ln_lanes,
-    sample_lanes, splat, LaneDense, LaneRhs, Lw, Row, Vw, ALL_COMPS, ALPHA, ALPHA8, BETA, LN_ERR_FLOOR, LN_SAFETY, W,
+    sample_lanes, splat, Al, LaneDense, LaneRhs, Lw, Row, Vw, ALL_COMPS, ALPHA, ALPHA8, BETA, LN_ERR_FLOOR, LN_SAFETY,
+    W,
 };
 use crate::ode::stepper::StepDense;
 use crate::ode::{Dense, Method, Options, SampleStore, Stats};
 use crate::status::{Failure, Status};
 use crate::steady::{characteristic_sizes, options_for, run_failure, Extremes, RunResult, Tolerances};
 
-/// The state of the `N` lanes.
+/// The state of the `N` lanes (state and stage first, on 64-byte boundaries, as `Al`).
+#[repr(C, align(64))]
 struct Lanes<const N: usize> {
-    c: Coef<N>,
     y: Vw<N>,
     /// f(t, y): the FSAL stage.
     f: Vw<N>,
+    c: Coef<N>,
     t: Lw<N>,
     h: Lw<N>,
     ln_err_old: Lw<N>,
@@ -288,12 +290,13 @@ fn run_impl<const M8: bool, const N: usize>(job: Job<'_>) -> Vec<RunResult> {
     let mut rounds = 0u64;
 
     // Scratch of the step: DP5's stages k2..k7, DOP853's (see `ode::lanes::dop853_step`), the new state.
-    let mut k = [[zero; 6]; 6];
-    let mut kk = [[zero; 6]; 16];
-    let mut yn = [zero; 6];
+    // The stages on 64-byte boundaries (`Al`).
+    let mut k = Al([[zero; 6]; 6]);
+    let mut kk = Al([[zero; 6]; 16]);
+    let mut yn = Al([zero; 6]);
     let mut fz = zero;
     let mut fz_scratch = zero;
-    let mut extra = [[zero; 6]; 3];
+    let mut extra = Al([[zero; 6]; 3]);
     let mut dense = LaneDense::<6, N>::new();
 
     while ln.who.iter().any(|&w| w != usize::MAX) {

@@ -14,11 +14,11 @@ use crate::ode::controller::{FAC_MAX, FAC_MIN, SAFETY};
 use crate::ode::dop853::Dop853Dense;
 use crate::ode::dopri5::Dopri5Dense;
 use crate::ode::events::{step_events, turn_point, StepEnd};
-use crate::ode::lanes::LaneDense;
 use crate::ode::lanes::{
     cross, dop853_dense_into, dop853_poly_into, dop853_step, dopri5_dense_into, dopri5_step, each6, exp_lanes,
     lane_state, ln_lanes, sample_lanes, splat, Lw, Vw, ALL_COMPS, ALPHA, ALPHA8, BETA, LN_ERR_FLOOR, LN_SAFETY,
 };
+use crate::ode::lanes::{Al, LaneDense};
 use crate::ode::stepper::StepDense;
 use crate::ode::{Control, Observer, OdeSystem, Options, Outcome, SampleStore, StepView, MAX_EVENTS};
 use crate::steady::Tolerances;
@@ -80,10 +80,11 @@ pub(super) fn run_impl<const UNI: bool, const LAW: u8, const M8: bool, const N: 
     }
 
     // Stages of the step: DP5's k2..k7, DOP853's (see `ode::lanes::dop853_step`).
-    let mut k = [[zero; 6]; 6];
-    let mut kk = [[zero; 6]; 16];
+    // On 64-byte boundaries (`Al`).
+    let mut k = Al([[zero; 6]; 6]);
+    let mut kk = Al([[zero; 6]; 16]);
     // DOP853's three extra stages of the interpolant (unilateral: built on the lanes every step).
-    let mut extra = [[zero; 6]; 3];
+    let mut extra = Al([[zero; 6]; 3]);
     // The step's interpolants, built into buffers kept across steps (built and moved per step,
     // they cost copies and zeroing): for the hidden-crossing check (the components its event
     // functions read), for samples, and DOP853's of all components shared by samples and the cold
@@ -93,7 +94,7 @@ pub(super) fn run_impl<const UNI: bool, const LAW: u8, const M8: bool, const N: 
     let mut ev6 = LaneDense::<6, N>::new();
     let mut samp = LaneDense::<6, N>::new();
     let mut full = LaneDense::<6, N>::new();
-    let mut yn = [zero; 6];
+    let mut yn = Al([zero; 6]);
     let mut fzl = zero;
     let mut fzl_scratch = zero;
 

@@ -68,8 +68,10 @@ impl<const N: usize> Modes<N> {
     }
 }
 
-/// Per-lane coefficients of the right-hand side and the tolerances (shared with `batch`).
+/// Per-lane coefficients of the right-hand side and the tolerances (shared with `batch`), on
+/// 64-byte boundaries (as `ode::lanes::Al`).
 #[derive(Clone, Copy)]
+#[repr(C, align(64))]
 pub(crate) struct Coef<const N: usize> {
     pub(crate) ks: Lw<N>,
     pub(crate) ka: Lw<N>,

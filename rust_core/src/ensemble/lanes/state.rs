@@ -96,12 +96,14 @@ pub(super) struct Side<'a> {
     pub(super) steps: ModeSteps<ContactMode>,
 }
 
-/// The vector side of the `N` lanes.
+/// The vector side of the `N` lanes (state and stage first, on 64-byte boundaries, as
+/// `ode::lanes::Al`).
+#[repr(C, align(64))]
 pub(super) struct Lanes<'a, const N: usize> {
-    pub(super) c: Coef<N>,
     pub(super) y: Vw<N>,
     /// f(t, y) in the lane's mode: the FSAL stage.
     pub(super) f: Vw<N>,
+    pub(super) c: Coef<N>,
     pub(super) t: Lw<N>,
     pub(super) h: Lw<N>,
     pub(super) ln_err_old: Lw<N>,
