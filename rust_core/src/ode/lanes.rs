@@ -92,6 +92,13 @@ macro_rules! each6 {
 }
 pub(crate) use each6;
 
+/// `a` where `mask` is all ones, `b` where it is zero (bit for bit): a per-lane select that
+/// vectorises (an `if` on a lane's `bool` often compiled to a branch per lane).
+#[inline(always)]
+pub(crate) fn blend(mask: u64, a: f64, b: f64) -> f64 {
+    f64::from_bits((a.to_bits() & mask) | (b.to_bits() & !mask))
+}
+
 /// `exp` of each lane, branch-free so that it vectorises: `2^n p(r)` with `x = n ln 2 + r`,
 /// `|r| <= ln 2 / 2`, Taylor to degree 12 (relative error below 1e-15). Arguments are clamped to
 /// `[-700, 700]` (the controller clips its factors far inside that).

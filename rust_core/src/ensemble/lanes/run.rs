@@ -15,7 +15,7 @@ use crate::ode::dop853::Dop853Dense;
 use crate::ode::dopri5::Dopri5Dense;
 use crate::ode::events::{step_events, turn_point, StepEnd};
 use crate::ode::lanes::{
-    cross, dop853_dense_into, dop853_poly_into, dop853_step, dopri5_dense_into, dopri5_step, each6, exp_lanes,
+    blend, cross, dop853_dense_into, dop853_poly_into, dop853_step, dopri5_dense_into, dopri5_step, each6, exp_lanes,
     lane_state, ln_lanes, sample_lanes, splat, Lw, Vw, ALL_COMPS, ALPHA, ALPHA8, BETA, LN_ERR_FLOOR, LN_SAFETY,
 };
 use crate::ode::lanes::{Al, LaneDense};
@@ -614,12 +614,6 @@ fn pending_on_lanes<const LAW: u8, const C: usize, const N: usize>(
         }
         busy[l] = false;
     }
-}
-
-/// `a` where `mask` is all ones, `b` where it is zero (bit for bit).
-#[inline(always)]
-fn blend(mask: u64, a: f64, b: f64) -> f64 {
-    f64::from_bits((a.to_bits() & mask) | (b.to_bits() & !mask))
 }
 
 /// Safety factor of [`near_events`].

@@ -7,7 +7,7 @@
 //! [`SWITCH`]), so each law's copy of the loop carries only its own arithmetic.
 
 use crate::model::{event, idx, ContactMode, FrictionLaw, Slider};
-use crate::ode::lanes::{cross, exp_lanes, splat, LaneDense, LaneRhs, Lw, Vw};
+use crate::ode::lanes::{blend, cross, exp_lanes, splat, LaneDense, LaneRhs, Lw, Vw};
 
 /// The constant law.
 pub(super) const CONST: u8 = FrictionLaw::Constant as u8;
@@ -201,7 +201,8 @@ pub(super) fn rhs<const UNI: bool, const LAW: u8, const N: usize>(
         let (z, zd, ph) = (y[0][l], y[1][l], y[4][l]);
         let f = -c.ks[l] * z + c.ka[l] * z * z - c.c[l] * zd + c.kphi[l] * ph;
         fzl[l] = f;
-        fz[l] = if UNI && !m.contact[l] { -c.fst[l] } else { f };
+        // Masks, not `if`: with a branch per lane the loop stayed scalar.
+        fz[l] = if UNI { blend((m.contact[l] as u64).wrapping_neg(), f, -c.fst[l]) } else { f };
     }
     let mut fx = [0.0; N];
     if LAW == CONST {
@@ -239,13 +240,10 @@ pub(super) fn rhs<const UNI: bool, const LAW: u8, const N: usize>(
                 let slip = mu * normal * 1.0f64.copysign(vr[l]) - c.stat[l];
                 let st = stick_force(c, y, l);
                 let tr = c.mu_s[l] * normal * 1.0f64.copysign(st + c.stat[l]) - c.stat[l];
-                fx[l] = if m.stick[l] {
-                    st
-                } else if m.trans[l] {
-                    tr
-                } else {
-                    slip
-                };
+                // Selected by masks: written as `if stick {..} else if trans {..}`, LLVM kept a
+                // branch per lane and this whole loop scalar (a third of a switch-law step).
+                let (ms, mt) = ((m.stick[l] as u64).wrapping_neg(), (m.trans[l] as u64).wrapping_neg());
+                fx[l] = blend(ms, st, blend(mt, tr, slip));
             }
         }
     }
