@@ -226,9 +226,21 @@ pub(crate) struct Switched {
 /// point is where such an excursion peaks, to the model's accuracy (exact for a parabola).
 #[inline]
 pub(crate) fn turn_point(g0: f64, g1: f64, d0: f64, d1: f64, h: f64) -> Option<(f64, f64)> {
-    if !(g0 * g1 > 0.0 && g0 * d0 < 0.0 && g1 * d1 > 0.0) {
+    let x = turn_x(g0, g1, d0, d1, h);
+    if x.is_nan() {
         return None;
     }
+    let (m0, m1) = (h * d0, h * d1);
+    let x1 = 1.0 - x;
+    let p = g0 * (1.0 + 2.0 * x) * x1 * x1 + m0 * x * x1 * x1 + g1 * x * x * (3.0 - 2.0 * x) - m1 * x * x * x1;
+    Some((x, p))
+}
+
+/// The `x` of [`turn_point`], NaN where it gives `None`; branch-free (selects by bit masks), so
+/// that the lanes' loop over it vectorises with the scalar's bits.
+#[inline(always)]
+pub(crate) fn turn_x(g0: f64, g1: f64, d0: f64, d1: f64, h: f64) -> f64 {
+    let heads = (g0 * g1 > 0.0) & (g0 * d0 < 0.0) & (g1 * d1 > 0.0);
     let (m0, m1) = (h * d0, h * d1);
     // p'(x) = a x^2 + b x + c, with p'(0) = m0 and p'(1) = m1 of opposite signs: one root in (0, 1).
     let a = 6.0 * (g0 - g1) + 3.0 * (m0 + m1);
@@ -236,23 +248,19 @@ pub(crate) fn turn_point(g0: f64, g1: f64, d0: f64, d1: f64, h: f64) -> Option<(
     let c = m0;
     // The root in [0, 1] by the cancellation-free quadratic formula (a linear p' when a is
     // negligible); the sign change makes the discriminant non-negative up to rounding.
-    let x = if a.abs() <= 1e-12 * (b.abs() + c.abs()) {
-        -c / b
-    } else {
-        let q = -0.5 * (b + b.signum() * (b * b - 4.0 * a * c).max(0.0).sqrt());
-        let (r1, r2) = (q / a, c / q);
-        if (0.0..=1.0).contains(&r1) {
-            r1
-        } else {
-            r2
-        }
-    };
-    if !(x > 0.0 && x < 1.0) {
-        return None;
-    }
-    let x1 = 1.0 - x;
-    let p = g0 * (1.0 + 2.0 * x) * x1 * x1 + m0 * x * x1 * x1 + g1 * x * x * (3.0 - 2.0 * x) - m1 * x * x * x1;
-    Some((x, p))
+    let lin = -c / b;
+    let q = -0.5 * (b + b.signum() * (b * b - 4.0 * a * c).max(0.0).sqrt());
+    let (r1, r2) = (q / a, c / q);
+    let quad = sel((r1 >= 0.0) & (r1 <= 1.0), r1, r2);
+    let x = sel(a.abs() <= 1e-12 * (b.abs() + c.abs()), lin, quad);
+    sel(heads & (x > 0.0) & (x < 1.0), x, f64::NAN)
+}
+
+/// `a` if `c`, else `b`, by bit masks (no branch).
+#[inline(always)]
+fn sel(c: bool, a: f64, b: f64) -> f64 {
+    let m = (c as u64).wrapping_neg();
+    f64::from_bits((a.to_bits() & m) | (b.to_bits() & !m))
 }
 
 /// A crossing and its return hidden inside a step: the earliest of the interior points (of

@@ -361,15 +361,17 @@ pub(super) fn event_rates_lanes<const LAW: u8, const N: usize>(
         d[event::ESCAPE][l] = -z.signum() * zd;
         if LAW == SWITCH {
             let (band, bound) = m.live(l);
+            let (band, bound) = ((band as u64).wrapping_neg(), (bound as u64).wrapping_neg());
             // d/dt of the stick force (linear in the state) and of the margin mu_s N - |F_req|.
             let dst = c.meff[l]
                 * (c.wx2[l] * f[idx::X][l]
                     + c.dx[l] * f[idx::XD][l]
                     + c.sl[l] * (c.wt2[l] * f[idx::PHI][l] + c.dt[l] * f[idx::PHID][l]));
             let req = stick_force(c, y, l) + c.stat[l];
-            d[event::BAND_HI][l] = if band { dv } else { 0.0 };
-            d[event::BAND_LO][l] = if band { dv } else { 0.0 };
-            d[event::STICK][l] = if bound { c.mu_s[l] * dn - 1.0f64.copysign(req) * dst } else { 0.0 };
+            // Masks, not `if`s (as in `rhs`): this loop stayed scalar.
+            d[event::BAND_HI][l] = blend(band, dv, 0.0);
+            d[event::BAND_LO][l] = blend(band, dv, 0.0);
+            d[event::STICK][l] = blend(bound, c.mu_s[l] * dn - 1.0f64.copysign(req) * dst, 0.0);
         }
     }
 }
