@@ -251,7 +251,7 @@ pub(crate) fn turn_x(g0: f64, g1: f64, d0: f64, d1: f64, h: f64) -> f64 {
     let lin = -c / b;
     let q = -0.5 * (b + b.signum() * (b * b - 4.0 * a * c).max(0.0).sqrt());
     let (r1, r2) = (q / a, c / q);
-    let quad = sel((r1 >= 0.0) & (r1 <= 1.0), r1, r2);
+    let quad = sel((0.0..=1.0).contains(&r1), r1, r2);
     let x = sel(a.abs() <= 1e-12 * (b.abs() + c.abs()), lin, quad);
     sel(heads & (x > 0.0) & (x < 1.0), x, f64::NAN)
 }

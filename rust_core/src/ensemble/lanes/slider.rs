@@ -7,7 +7,7 @@
 //! [`SWITCH`]), so each law's copy of the loop carries only its own arithmetic.
 
 use crate::model::{event, idx, ContactMode, FrictionLaw, Slider};
-use crate::ode::lanes::{blend, cross, exp_lanes, splat, LaneDense, LaneRhs, Lw, Vw};
+use crate::ode::lanes::{blend, cross, exp_lanes_by, splat, LaneDense, LaneRhs, Lw, Vw};
 
 /// The constant law.
 pub(super) const CONST: u8 = FrictionLaw::Constant as u8;
@@ -217,13 +217,13 @@ pub(super) fn rhs<const UNI: bool, const LAW: u8, const N: usize>(
             vr[l] = v;
             a[l] = -v.abs() * c.inv_vs[l];
         }
-        let ea = exp_lanes(&a);
+        let ea = exp_lanes_by::<true, N>(&a);
         if LAW == TANH {
             let mut b = [0.0; N];
             for l in 0..N {
                 b[l] = -2.0 * (vr[l] * c.inv_eps[l]).abs();
             }
-            let eb = exp_lanes(&b);
+            let eb = exp_lanes_by::<true, N>(&b);
             for l in 0..N {
                 let mu = c.mu_k[l] + c.dmu[l] * ea[l];
                 // tanh(v/eps) = sign(v) (1 - e^{-2|v|/eps}) / (1 + e^{-2|v|/eps}).
