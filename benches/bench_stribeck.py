@@ -5,7 +5,11 @@
 the same process. Prints points/s, right-hand sides per point, where the points go, and the
 regimes the two laws give at each point.
 
-    python benches/bench_stribeck.py [--threads 2] [--repeat 2]
+    python benches/bench_stribeck.py [--threads 2] [--repeat 2] [--stages]
+
+``--stages`` also prints, for the last run of each law, the wall time of its batched core calls by
+kind (``steady``: the transients; ``sampled``: the irregular points' measurement windows;
+``final``: their Lyapunov-exponent segments), with their right-hand sides and accepted steps.
 """
 
 from __future__ import annotations
@@ -17,6 +21,7 @@ import time
 import numpy as np
 
 import tribosweep as ts
+from tribosweep import _core
 
 AXES = dict(normal_load=np.linspace(10, 150, 10), arm_length=np.linspace(0.05, 0.127, 4),
             sliding_speed=np.linspace(0.2, 1.0, 5))  # fmt: skip
@@ -29,17 +34,56 @@ def run(law: str, threads: int) -> tuple[float, object]:
     return time.perf_counter() - t0, ds
 
 
+class StageClock:
+    """Wraps ``_core.ensemble`` while active: wall time, calls, right-hand sides and accepted steps by kind."""
+
+    def __init__(self):
+        self.rows: dict[str, list[float]] = {}
+        self._orig = None
+
+    def __enter__(self):
+        self._orig = orig = _core.ensemble
+
+        def timed(*args, **kwargs):
+            t0 = time.perf_counter()
+            res = orig(*args, **kwargs)
+            row = self.rows.setdefault(kwargs.get("kind", "final"), [0.0, 0, 0, 0])
+            row[0] += time.perf_counter() - t0
+            row[1] += 1
+            row[2] += int(np.asarray(res["n_rhs"]).sum())
+            row[3] += int(np.asarray(res["n_accept"]).sum())
+            return res
+
+        _core.ensemble = timed
+        return self
+
+    def __exit__(self, *exc):
+        _core.ensemble = self._orig
+
+    def report(self, total: float) -> str:
+        parts = [f"{k} {v[0]:.3f} s ({v[1]} calls, {v[2] / 1e6:.1f}M rhs, {v[3] / 1e6:.2f}M steps)"
+                 for k, v in sorted(self.rows.items(), key=lambda kv: -kv[1][0])]  # fmt: skip
+        rest = total - sum(v[0] for v in self.rows.values())
+        return "  stages: " + "; ".join(parts) + f"; outside the core calls {rest:.3f} s"
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--repeat", type=int, default=2, help="best of this many runs of each law")
+    ap.add_argument("--stages", action="store_true", help="time the core calls of each law's last run by kind")
     a = ap.parse_args(argv)
     print(f"cores {os.cpu_count()}, load average {os.getloadavg()[0]:.2f}, threads {a.threads}")
     out = {}
     for law in ("coulomb", "switch"):
         walls, ds = [], None
-        for _ in range(a.repeat):
-            w, ds = run(law, a.threads)
+        for k in range(a.repeat):
+            clock = StageClock()
+            if a.stages and k == a.repeat - 1:
+                with clock:
+                    w, ds = run(law, a.threads)
+            else:
+                w, ds = run(law, a.threads)
             walls.append(w)
         out[law] = (min(walls), ds)
         n = int(ds.regime.size)
@@ -49,6 +93,8 @@ def main(argv=None) -> int:
         rhs = ds.n_rhs.values.ravel()
         print(f"{law:8} {n} points: {min(walls):6.2f} s ({n / min(walls):6.1f} points/s; runs {np.round(walls, 2)}), "
               f"rhs per point mean {rhs.mean():,.0f} median {np.median(rhs):,.0f}; {counts}")  # fmt: skip
+        if a.stages:
+            print(clock.report(walls[-1]))
     (wc, dc), (ws, dsw) = out["coulomb"], out["switch"]
     same = dc.regime.values == dsw.regime.values
     print(f"switch against tanh: {wc / ws:.2f}x the points/s, {dc.n_rhs.values.sum() / dsw.n_rhs.values.sum():.2f}x "
