@@ -1,8 +1,8 @@
 use super::*;
 use crate::model::Params;
+use crate::ode::lanes::exp_lanes_by;
 use crate::ode::Method;
 use crate::steady::run;
-use crate::ode::lanes::exp_lanes_by;
 
 /// The benchmark ensemble of issue 2 (seed configuration, `mu` in [0.15, 0.30], load in
 /// [17, 152] N, z0 = 1 um), from a fixed linear congruential generator.
