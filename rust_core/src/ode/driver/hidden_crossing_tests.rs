@@ -124,3 +124,30 @@ fn turning_point_of_a_parabola_is_its_vertex() {
     assert!(super::super::events::turn_point(-0.5, -0.1, -1.0, -0.6, 1.0).is_none());
     assert!(super::super::events::turn_point(-0.5, 0.1, 1.4, 0.6, 1.0).is_none());
 }
+
+#[test]
+fn turning_point_of_a_cubic_is_the_root_of_its_slope() {
+    use super::super::events::{turn_point, turn_x};
+    // p(x) = -0.5 x^3 - 0.6 x^2 + x - 0.5 on a step of 1 s: heads up towards zero at the start
+    // (p'(0) = 1), away from it at the end (p(1) = -0.6, p'(1) = -1.7), and turns below zero where
+    // p'(x) = -1.5 x^2 - 1.2 x + 1 = 0 (the quadratic branch: a is not negligible).
+    let want = (-1.2 + 7.44f64.sqrt()) / 3.0;
+    let p = |x: f64| ((-0.5 * x - 0.6) * x + 1.0) * x - 0.5;
+    let (x, px) = turn_point(-0.5, -0.6, 1.0, -1.7, 1.0).unwrap();
+    assert!((x - want).abs() < 1e-14, "{x} against {want}");
+    assert!((px - p(want)).abs() < 1e-14 && px < 0.0, "{px}");
+    // The same on a step of 0.25 s (rates 4x): x is the fraction of the step.
+    let (x, _) = turn_point(-0.5, -0.6, 4.0, -6.8, 0.25).unwrap();
+    assert!((x - want).abs() < 1e-14, "{x}");
+    // The branch-free x is NaN exactly where turn_point gives none: heading away at the start, a
+    // sign change, a non-finite input.
+    for (g0, g1, d0, d1) in
+        [(-0.5, -0.6, -1.0, -1.7), (-0.5, 0.6, 1.0, 1.7), (f64::NAN, -0.6, 1.0, -1.7), (-0.5, -0.6, 1.0, f64::NAN)]
+    {
+        assert!(turn_x(g0, g1, d0, d1, 1.0).is_nan() && turn_point(g0, g1, d0, d1, 1.0).is_none());
+    }
+    assert_eq!(
+        turn_x(-0.5, -0.6, 1.0, -1.7, 1.0).to_bits(),
+        turn_point(-0.5, -0.6, 1.0, -1.7, 1.0).unwrap().0.to_bits()
+    );
+}
