@@ -259,8 +259,7 @@ pub(crate) fn turn_x(g0: f64, g1: f64, d0: f64, d1: f64, h: f64) -> f64 {
 /// `a` if `c`, else `b`, by bit masks (no branch).
 #[inline(always)]
 fn sel(c: bool, a: f64, b: f64) -> f64 {
-    let m = (c as u64).wrapping_neg();
-    f64::from_bits((a.to_bits() & m) | (b.to_bits() & !m))
+    super::lanes::blend((c as u64).wrapping_neg(), a, b)
 }
 
 /// A crossing and its return hidden inside a step: the earliest of the interior points (of
