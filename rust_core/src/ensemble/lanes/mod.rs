@@ -81,8 +81,9 @@ pub fn supports_method(m: Method) -> bool {
 }
 
 /// Integrate each `sliders[i]` from `y0s[i]` at `t = 0` with `method` (Dormand–Prince 5(4) or
-/// DOP853), 8 (end states and samples on AVX-512: [`W_FINAL_AVX512`]) trajectories at a
-/// time on this thread, and compute `task` for each; results in input order.
+/// DOP853), 8 (end states and samples on AVX-512: [`W_FINAL_AVX512`]; fewer trajectories than
+/// that: [`W_NARROW`]) trajectories at a time on this thread, and compute `task` for each;
+/// results in input order.
 ///
 /// Precondition (the caller checks): all sliders share one contact model and one friction law,
 /// which [`supports`] accepts; [`supports_method`] accepts `method`; `sliders.len() ==
@@ -98,7 +99,8 @@ pub fn run_lanes(
     check(sliders, y0s, method, &task);
     let feed = Feed::new(None);
     // Only a cancelled call leaves trajectories without a result.
-    let done = dispatch(sliders, y0s, t_end, method, tol, task, &feed);
+    let narrow = lane_width(sliders.len(), 1, &task) == W_NARROW;
+    let done = dispatch(sliders, y0s, t_end, method, tol, task, &feed, narrow);
     crate::parallel::scatter(sliders.len(), done, |_| TrajectoryResult::not_started())
 }
 
@@ -166,12 +168,14 @@ fn run_lanes_fed(
 ) -> Vec<Result<TrajectoryResult, String>> {
     check(sliders, y0s, method, &task);
     let n = sliders.len();
-    let nthreads = threads.unwrap_or_else(crate::parallel::default_threads).max(1).min(n.div_ceil(W).max(1));
+    let threads = threads.unwrap_or_else(crate::parallel::default_threads).max(1);
+    let width = lane_width(n, threads, &task);
+    let nthreads = threads.min(n.div_ceil(width).max(1));
     let workers: Vec<usize> = (0..nthreads).collect();
     let parts = crate::parallel::par_map_or(
         &workers,
         Some(nthreads),
-        |_| Ok(dispatch(sliders, y0s, t_end, method, tol, task, &feed)),
+        |_| Ok(dispatch(sliders, y0s, t_end, method, tol, task, &feed, width == W_NARROW)),
         Err,
         || Ok(Vec::new()),
     );
@@ -207,7 +211,44 @@ fn check(sliders: &[Slider], y0s: &[State], method: Method, task: &Task<'_>) {
     task.check_overrides(sliders.len(), "run_lanes");
 }
 
-/// The monomorphised, CPU-dispatched lane driver for the sliders' model and `method`.
+/// Lanes of a worker in a call too small for every thread to fill a full set of lanes
+/// ([`lane_width`]): one AVX2 register, half an AVX-512 one.
+///
+/// A full set steps all its lanes whether they run or not: one trajectory alone on the AVX-512
+/// copy's 16 end-state lanes took 1.9 us a step, on 4 lanes 1.0 us, on 8 lanes in a run to a
+/// steady state 1.25 us (Zen 5, a bouncing Stribeck-sweep point under the switch law). And a call
+/// of fewer trajectories than threads times lanes left threads idle: the Lyapunov segments of the
+/// issue-10 Stribeck sweep, 8-32 trajectories a call, ran on one or two of 16 threads.
+/// On the 16-core device machine (Xeon, 16 threads), that sweep went from 321-325 to 414
+/// points/s with 4 lanes for every call; its Lyapunov segments from 0.16 to 0.08 s.
+pub const W_NARROW: usize = 4;
+
+/// The widest lane set of this CPU for `task`: [`W_FINAL_AVX512`] for end states and samples on
+/// AVX-512, else [`W`].
+fn full_width(task: &Task<'_>) -> usize {
+    #[cfg(target_arch = "x86_64")]
+    if matches!(task, Task::Final | Task::Sampled(_)) && std::is_x86_feature_detected!("avx512f") {
+        return W_FINAL_AVX512;
+    }
+    W
+}
+
+/// Lanes per worker for `n` trajectories on `threads` threads: the full set where every thread
+/// gets one, else [`W_NARROW`], so that a small call spreads over more threads and a
+/// trajectory's step is not the cost of a wide, mostly idle set. A lane's bits do not depend on
+/// the lane count, so neither do the results.
+pub(crate) fn lane_width(n: usize, threads: usize, task: &Task<'_>) -> usize {
+    let full = full_width(task);
+    if n >= threads.max(1) * full {
+        full
+    } else {
+        W_NARROW
+    }
+}
+
+/// The monomorphised, CPU-dispatched lane driver for the sliders' model and `method`, on
+/// [`W_NARROW`] lanes where `narrow`, else on the CPU's full set.
+#[allow(clippy::too_many_arguments)]
 fn dispatch(
     sliders: &[Slider],
     y0s: &[State],
@@ -216,13 +257,14 @@ fn dispatch(
     tol: &Tolerances,
     task: Task<'_>,
     feed: &Feed<'_>,
+    narrow: bool,
 ) -> Vec<(usize, TrajectoryResult)> {
     let Some(first) = sliders.first() else { return Vec::new() };
     let uni = first.p.contact == ContactModel::Unilateral;
     let m8 = method == Method::Dop853;
     macro_rules! go {
         ($u:literal, $c:expr, $m:literal) => {
-            dispatch_cpu::<$u, { $c as u8 }, $m>(sliders, y0s, t_end, tol, task, feed)
+            dispatch_cpu::<$u, { $c as u8 }, $m>(sliders, y0s, t_end, tol, task, feed, narrow)
         };
     }
     use FrictionLaw::{Constant as C, Coulomb as T, Switch as S};
@@ -252,13 +294,16 @@ fn dispatch_cpu<const UNI: bool, const LAW: u8, const M8: bool>(
     tol: &Tolerances,
     task: Task<'_>,
     feed: &Feed<'_>,
+    narrow: bool,
 ) -> Vec<(usize, TrajectoryResult)> {
     #[cfg(target_arch = "x86_64")]
     {
         if std::is_x86_feature_detected!("avx512f") {
             // SAFETY: the CPU supports the features the function is compiled for.
             return unsafe {
-                if matches!(task, Task::Final | Task::Sampled(_)) {
+                if narrow {
+                    run_avx512::<UNI, LAW, M8, W_NARROW>(sliders, y0s, t_end, tol, task, feed)
+                } else if matches!(task, Task::Final | Task::Sampled(_)) {
                     run_avx512::<UNI, LAW, M8, W_FINAL_AVX512>(sliders, y0s, t_end, tol, task, feed)
                 } else {
                     run_avx512::<UNI, LAW, M8, W>(sliders, y0s, t_end, tol, task, feed)
@@ -267,10 +312,20 @@ fn dispatch_cpu<const UNI: bool, const LAW: u8, const M8: bool>(
         }
         if std::is_x86_feature_detected!("avx2") {
             // SAFETY: as above.
-            return unsafe { run_avx2::<UNI, LAW, M8>(sliders, y0s, t_end, tol, task, feed) };
+            return unsafe {
+                if narrow {
+                    run_avx2::<UNI, LAW, M8, W_NARROW>(sliders, y0s, t_end, tol, task, feed)
+                } else {
+                    run_avx2::<UNI, LAW, M8, W>(sliders, y0s, t_end, tol, task, feed)
+                }
+            };
         }
     }
-    run_portable::<UNI, LAW, M8, W>(sliders, y0s, t_end, tol, task, feed)
+    if narrow {
+        run_portable::<UNI, LAW, M8, W_NARROW>(sliders, y0s, t_end, tol, task, feed)
+    } else {
+        run_portable::<UNI, LAW, M8, W>(sliders, y0s, t_end, tol, task, feed)
+    }
 }
 
 /// The portable copy (no CPU features beyond the target's baseline).
@@ -318,7 +373,7 @@ unsafe fn run_avx512<const UNI: bool, const LAW: u8, const M8: bool, const N: us
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn run_avx2<const UNI: bool, const LAW: u8, const M8: bool>(
+unsafe fn run_avx2<const UNI: bool, const LAW: u8, const M8: bool, const N: usize>(
     sliders: &[Slider],
     y0s: &[State],
     t_end: f64,
@@ -326,7 +381,7 @@ unsafe fn run_avx2<const UNI: bool, const LAW: u8, const M8: bool>(
     task: Task<'_>,
     feed: &Feed<'_>,
 ) -> Vec<(usize, TrajectoryResult)> {
-    run_impl::<UNI, LAW, M8, W>(sliders, y0s, t_end, tol, task, feed)
+    run_impl::<UNI, LAW, M8, N>(sliders, y0s, t_end, tol, task, feed)
 }
 
 #[cfg(test)]

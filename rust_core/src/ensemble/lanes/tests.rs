@@ -394,7 +394,9 @@ fn results_do_not_depend_on_the_batch() {
                 assert_eq!(bits(&rp[j]), bits(&all[k]), "{name} permuted #{k}");
             }
             // The portable code, at 8 lanes and at the AVX-512 end-state copy's 16, for every law and
-            // task: a lane's arithmetic does not depend on the lane count. Each copy is its own
+            // task: a lane's arithmetic does not depend on the lane count. `run_lanes` itself ran
+            // the trajectories alone, and the 13 of end states and samples under AVX-512, on
+            // `W_NARROW` lanes (`lane_width`), so the narrow copy is compared too. Each copy is its own
             // out-of-line function (`run_portable`): inlined into this test, the copies made one
             // function whose optimisation took most of the test binary's 19-minute build.
             // A fresh feed per call: a feed hands out each trajectory once.
