@@ -99,6 +99,11 @@ def test_model_is_frozen_and_replace_revalidates():
         m.replace(mu=-1.0)
     # mu_static follows mu unless given.
     assert m.replace(mu=0.3).values()["mu_static"] == 0.3
+    # A field the model does not have: named, with the fields it has; the arm length is a hint.
+    with pytest.raises(TypeError, match=r"no field 'mus' = 0.3; the fields are mass, .*stick_band"):
+        m.replace(mus=0.3)
+    with pytest.raises(TypeError, match=r"no field 'arm_length' = 0.11 \(.*apparatus_model"):
+        m.replace(arm_length=0.11)
 
 
 @pytest.mark.parametrize(

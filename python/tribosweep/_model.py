@@ -187,7 +187,19 @@ class SliderModel:
         return out
 
     def replace(self, **changes) -> SliderModel:
-        """A copy with some fields changed (validated)."""
+        """A copy with some fields changed (validated).
+
+        Raises ``TypeError`` naming a field the model does not have, with the fields it has; the
+        apparatus's arm length is not a field but sets the natural frequencies:
+        :func:`tribosweep.apparatus_model` builds the model at a load, arm length and speed.
+        """
+        fields = [f.name for f in dataclasses.fields(self)]
+        unknown = [k for k in changes if k not in fields]
+        if unknown:
+            hint = (" (the arm length sets the natural frequencies: use tribosweep.apparatus_model("
+                    "normal_load, arm_length, sliding_speed, base=model))") if "arm_length" in unknown else ""
+            raise TypeError(f"SliderModel.replace: no field {unknown[0]!r} = {changes[unknown[0]]!r}{hint}; "
+                            f"the fields are {', '.join(fields)}")
         return dataclasses.replace(self, **changes)
 
     def static_point(self) -> tuple[float, float]:
