@@ -21,6 +21,7 @@ import numpy as np
 
 import tribosweep as ts
 from tribosweep._settings import DEFAULTS
+from tribosweep.bench.workprecision import machine_line
 
 
 def one_point(k: int, threads: int | None) -> None:
@@ -209,7 +210,7 @@ def main() -> None:
     ap.add_argument("--recurrence", action="store_true",
                     help="recurrence on the pilots' attractors against each sample's own blocks (K = --samples)")  # fmt: skip
     a = ap.parse_args()
-    print(f"cores {os.cpu_count()}, load average {os.getloadavg()[0]:.2f}")
+    print(machine_line())
     one_point(a.samples_one, a.threads)
     if a.scipy:
         scipy_agreement(a.scipy)

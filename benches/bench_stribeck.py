@@ -15,13 +15,13 @@ kind (``steady``: the transients; ``sampled``: the irregular points' measurement
 from __future__ import annotations
 
 import argparse
-import os
 import time
 
 import numpy as np
 
 import tribosweep as ts
 from tribosweep import _core
+from tribosweep.bench.workprecision import machine_line
 
 AXES = dict(normal_load=np.linspace(10, 150, 10), arm_length=np.linspace(0.05, 0.127, 4),
             sliding_speed=np.linspace(0.2, 1.0, 5))  # fmt: skip
@@ -73,7 +73,7 @@ def main(argv=None) -> int:
     ap.add_argument("--repeat", type=int, default=2, help="best of this many runs of each law")
     ap.add_argument("--stages", action="store_true", help="time the core calls of each law's last run by kind")
     a = ap.parse_args(argv)
-    print(f"cores {os.cpu_count()}, load average {os.getloadavg()[0]:.2f}, threads {a.threads}")
+    print(f"{machine_line()}; threads {a.threads}")
     out = {}
     for law in ("coulomb", "switch"):
         walls, ds = [], None

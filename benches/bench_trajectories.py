@@ -28,6 +28,7 @@ import numpy as np
 
 import tribosweep as ts  # noqa
 from tribosweep.bench import baselines  # noqa: E402
+from tribosweep.bench.workprecision import machine_line  # noqa: E402
 
 
 def best_of(f, repeat=3):
@@ -51,6 +52,8 @@ def main(argv=None) -> int:
     ap.add_argument("--scaling-only", action="store_true", help="only the scaling table")
     ap.add_argument("--child", nargs=3, metavar=("N", "CONTACT", "START"), help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
+    if not args.child:
+        print(machine_line())
     if args.child:
         n, contact, start = args.child
         print(child_rate(int(n), contact, float(start)))

@@ -324,6 +324,23 @@ def _cpu_name() -> str:
     return platform.processor() or platform.machine()
 
 
+def _simd() -> str:
+    """The lane copies the core picks on this CPU, as it detects them (x86-64: AVX-512F, else AVX2)."""
+    try:
+        with open("/proc/cpuinfo") as f:
+            flags = next((line.split(":", 1)[1].split() for line in f if line.startswith("flags")), [])
+    except OSError:
+        return "unknown SIMD"
+    return "AVX-512 lanes" if "avx512f" in flags else "AVX2 lanes" if "avx2" in flags else "portable lanes"
+
+
+def machine_line() -> str:
+    """One line for a bench's output: CPU model, cores, the lane copies in use, 1-minute load average."""
+    load = _loadavg()
+    return (f"{_cpu_name()}, {os.cpu_count()} cores, {_simd()}, load average "
+            f"{'unknown' if load is None else f'{load:.2f}'}")  # fmt: skip
+
+
 def _versions() -> dict:
     from .. import __version__
 
