@@ -81,9 +81,8 @@ pub fn supports_method(m: Method) -> bool {
 }
 
 /// Integrate each `sliders[i]` from `y0s[i]` at `t = 0` with `method` (Dormand–Prince 5(4) or
-/// DOP853), 8 (end states and samples on AVX-512: [`W_FINAL_AVX512`]; fewer trajectories than
-/// that: [`W_NARROW`]) trajectories at a time on this thread, and compute `task` for each;
-/// results in input order.
+/// DOP853), up to 8 (end states and samples on AVX-512: [`W_FINAL_AVX512`]; see [`lane_width`])
+/// trajectories at a time on this thread, and compute `task` for each; results in input order.
 ///
 /// Precondition (the caller checks): all sliders share one contact model and one friction law,
 /// which [`supports`] accepts; [`supports_method`] accepts `method`; `sliders.len() ==
@@ -99,8 +98,8 @@ pub fn run_lanes(
     check(sliders, y0s, method, &task);
     let feed = Feed::new(None);
     // Only a cancelled call leaves trajectories without a result.
-    let narrow = lane_width(sliders.len(), 1, &task) == W_NARROW;
-    let done = dispatch(sliders, y0s, t_end, method, tol, task, &feed, narrow);
+    let width = lane_width(sliders.len(), 1, &task);
+    let done = dispatch(sliders, y0s, t_end, method, tol, task, &feed, width);
     crate::parallel::scatter(sliders.len(), done, |_| TrajectoryResult::not_started())
 }
 
@@ -175,7 +174,7 @@ fn run_lanes_fed(
     let parts = crate::parallel::par_map_or(
         &workers,
         Some(nthreads),
-        |_| Ok(dispatch(sliders, y0s, t_end, method, tol, task, &feed, width == W_NARROW)),
+        |_| Ok(dispatch(sliders, y0s, t_end, method, tol, task, &feed, width)),
         Err,
         || Ok(Vec::new()),
     );
@@ -211,16 +210,7 @@ fn check(sliders: &[Slider], y0s: &[State], method: Method, task: &Task<'_>) {
     task.check_overrides(sliders.len(), "run_lanes");
 }
 
-/// Lanes of a worker in a call too small for every thread to fill a full set of lanes
-/// ([`lane_width`]): one AVX2 register, half an AVX-512 one.
-///
-/// A full set steps all its lanes whether they run or not: one trajectory alone on the AVX-512
-/// copy's 16 end-state lanes took 1.9 us a step, on 4 lanes 1.0 us, on 8 lanes in a run to a
-/// steady state 1.25 us (Zen 5, a bouncing Stribeck-sweep point under the switch law). And a call
-/// of fewer trajectories than threads times lanes left threads idle: the Lyapunov segments of the
-/// issue-10 Stribeck sweep, 8-32 trajectories a call, ran on one or two of 16 threads.
-/// On the 16-core device machine (Xeon, 16 threads), that sweep went from 321-325 to 414
-/// points/s with 4 lanes for every call; its Lyapunov segments from 0.16 to 0.08 s.
+/// The narrowest lane set: one AVX2 register, half an AVX-512 one (see [`lane_width`]).
 pub const W_NARROW: usize = 4;
 
 /// The widest lane set of this CPU for `task`: [`W_FINAL_AVX512`] for end states and samples on
@@ -233,21 +223,45 @@ fn full_width(task: &Task<'_>) -> usize {
     W
 }
 
-/// Lanes per worker for `n` trajectories on `threads` threads: the full set where every thread
-/// gets one, else [`W_NARROW`], so that a small call spreads over more threads and a
-/// trajectory's step is not the cost of a wide, mostly idle set. A lane's bits do not depend on
-/// the lane count, so neither do the results.
-pub(crate) fn lane_width(n: usize, threads: usize, task: &Task<'_>) -> usize {
-    let full = full_width(task);
-    if n >= threads.max(1) * full {
-        full
-    } else {
-        W_NARROW
+/// The cost of one step of a set of `w` lanes, all running, relative to 16: the unilateral
+/// issue-2 ensemble's DOP853 end state at rtol 1e-6, one thread, 1,000 trajectories, 70.0-71.0k
+/// trajectories/s on 16 lanes, 48.9-49.0k on 8, 27.7-28.0k on 4 (Zen 5, AVX-512; DP5 and 501
+/// samples in the same ratio or nearer 1). A run to a steady state alone on its lanes: 1.25 us a
+/// step on 8, 1.11 on 4 (0.88, as 0.63 / 0.71).
+fn step_cost(w: usize) -> f64 {
+    match w {
+        16 => 1.0,
+        8 => 0.71,
+        _ => 0.63,
     }
 }
 
-/// The monomorphised, CPU-dispatched lane driver for the sliders' model and `method`, on
-/// [`W_NARROW`] lanes where `narrow`, else on the CPU's full set.
+/// Lanes per worker for `n` trajectories on `threads` threads: of the widths up to the CPU's full
+/// set (16, 8, [`W_NARROW`]), the one whose call takes the least time by [`step_cost`], the
+/// workers being `min(threads, ceil(n / w))`, each running `ceil(n / (workers w))` rounds of
+/// its set (runs of equal length); the wider on a tie. A wide set steps all its lanes whether
+/// they run or not, and a call of fewer trajectories than threads times lanes left threads idle:
+/// on 16 threads the 14 Lyapunov segments of a call of the Stribeck sweep took one worker of 16
+/// lanes (now 4 of 4). On 2 threads 30 trajectories keep 2 workers of 16 (4 lanes would take 4
+/// rounds at 0.63: 2.5x as long). A lane's bits do not depend on the lane count, so neither do
+/// the results.
+pub(crate) fn lane_width(n: usize, threads: usize, task: &Task<'_>) -> usize {
+    let full = full_width(task);
+    let wall = |w: usize| {
+        let workers = threads.max(1).min(n.div_ceil(w)).max(1);
+        n.div_ceil(workers * w).max(1) as f64 * step_cost(w)
+    };
+    let mut best = full;
+    for w in [W_FINAL_AVX512, W, W_NARROW] {
+        if w < full && wall(w) < wall(best) {
+            best = w;
+        }
+    }
+    best
+}
+
+/// The monomorphised, CPU-dispatched lane driver for the sliders' model and `method`, on `width`
+/// lanes ([`lane_width`]: 16 only where the CPU's full set is 16).
 #[allow(clippy::too_many_arguments)]
 fn dispatch(
     sliders: &[Slider],
@@ -257,14 +271,14 @@ fn dispatch(
     tol: &Tolerances,
     task: Task<'_>,
     feed: &Feed<'_>,
-    narrow: bool,
+    width: usize,
 ) -> Vec<(usize, TrajectoryResult)> {
     let Some(first) = sliders.first() else { return Vec::new() };
     let uni = first.p.contact == ContactModel::Unilateral;
     let m8 = method == Method::Dop853;
     macro_rules! go {
         ($u:literal, $c:expr, $m:literal) => {
-            dispatch_cpu::<$u, { $c as u8 }, $m>(sliders, y0s, t_end, tol, task, feed, narrow)
+            dispatch_cpu::<$u, { $c as u8 }, $m>(sliders, y0s, t_end, tol, task, feed, width)
         };
     }
     use FrictionLaw::{Constant as C, Coulomb as T, Switch as S};
@@ -294,26 +308,24 @@ fn dispatch_cpu<const UNI: bool, const LAW: u8, const M8: bool>(
     tol: &Tolerances,
     task: Task<'_>,
     feed: &Feed<'_>,
-    narrow: bool,
+    width: usize,
 ) -> Vec<(usize, TrajectoryResult)> {
     #[cfg(target_arch = "x86_64")]
     {
         if std::is_x86_feature_detected!("avx512f") {
             // SAFETY: the CPU supports the features the function is compiled for.
             return unsafe {
-                if narrow {
-                    run_avx512::<UNI, LAW, M8, W_NARROW>(sliders, y0s, t_end, tol, task, feed)
-                } else if matches!(task, Task::Final | Task::Sampled(_)) {
-                    run_avx512::<UNI, LAW, M8, W_FINAL_AVX512>(sliders, y0s, t_end, tol, task, feed)
-                } else {
-                    run_avx512::<UNI, LAW, M8, W>(sliders, y0s, t_end, tol, task, feed)
+                match width {
+                    W_FINAL_AVX512 => run_avx512::<UNI, LAW, M8, W_FINAL_AVX512>(sliders, y0s, t_end, tol, task, feed),
+                    W => run_avx512::<UNI, LAW, M8, W>(sliders, y0s, t_end, tol, task, feed),
+                    _ => run_avx512::<UNI, LAW, M8, W_NARROW>(sliders, y0s, t_end, tol, task, feed),
                 }
             };
         }
         if std::is_x86_feature_detected!("avx2") {
             // SAFETY: as above.
             return unsafe {
-                if narrow {
+                if width == W_NARROW {
                     run_avx2::<UNI, LAW, M8, W_NARROW>(sliders, y0s, t_end, tol, task, feed)
                 } else {
                     run_avx2::<UNI, LAW, M8, W>(sliders, y0s, t_end, tol, task, feed)
@@ -321,7 +333,7 @@ fn dispatch_cpu<const UNI: bool, const LAW: u8, const M8: bool>(
             };
         }
     }
-    if narrow {
+    if width == W_NARROW {
         run_portable::<UNI, LAW, M8, W_NARROW>(sliders, y0s, t_end, tol, task, feed)
     } else {
         run_portable::<UNI, LAW, M8, W>(sliders, y0s, t_end, tol, task, feed)

@@ -395,8 +395,8 @@ fn results_do_not_depend_on_the_batch() {
             }
             // The portable code, at 8 lanes and at the AVX-512 end-state copy's 16, for every law and
             // task: a lane's arithmetic does not depend on the lane count. `run_lanes` itself ran
-            // the trajectories alone, and the 13 of end states and samples under AVX-512, on
-            // `W_NARROW` lanes (`lane_width`), so the narrow copy is compared too. Each copy is its own
+            // each trajectory alone on `W_NARROW` lanes, and on 2 and 3 threads below the 13
+            // take 8 lanes (`lane_width`), so every width the dispatch picks is compared too. Each copy is its own
             // out-of-line function (`run_portable`): inlined into this test, the copies made one
             // function whose optimisation took most of the test binary's 19-minute build.
             // A fresh feed per call: a feed hands out each trajectory once.
@@ -783,5 +783,37 @@ fn switch_scenes_stick_and_bounce() {
                 assert!(count[event::GAP] + count[event::NORMAL] >= 4, "{name} #{i}: {count:?}");
             }
         }
+    }
+}
+
+/// The lane width of a call (`lane_width`) by its cost model: 1-4 trajectories on one thread or
+/// a call much smaller than threads times lanes take 4 lanes; a call that fills every thread's
+/// full set keeps it; in between the cheaper of the two by rounds times step cost.
+#[test]
+fn lane_width_by_rounds_and_step_cost() {
+    let opts = SteadyOptions::default();
+    let steady = Task::Steady { opts: &opts, decay: None, known: None };
+    for task in [Task::Final, steady] {
+        let full = full_width(&task);
+        assert!(full == W || full == W_FINAL_AVX512);
+        assert_eq!(lane_width(1, 1, &task), W_NARROW);
+        assert_eq!(lane_width(3, 1, &task), W_NARROW);
+        // 14 runs on 16 threads: 4 workers of 4 lanes (0.63) against 1 or 2 of 8 or 16.
+        assert_eq!(lane_width(14, 16, &task), W_NARROW);
+        // 5-8 runs on one thread: one round of 8 (0.71) against two of 4 (1.26).
+        assert_eq!(lane_width(6, 1, &task), W);
+        // Every thread's full set filled: the full set.
+        assert_eq!(lane_width(2 * full, 2, &task), full);
+        assert_eq!(lane_width(100_000, 16, &task), full);
+        // The Stribeck sweep's 95 transients on 2 and 16 threads keep 8 lanes.
+        assert_eq!(lane_width(95, 2, &steady), W);
+        assert_eq!(lane_width(95, 16, &steady), W);
+    }
+    if full_width(&Task::Final) == W_FINAL_AVX512 {
+        // On AVX-512: 30 end states on 2 threads, one round of 16 each (1.0) against 2 rounds of 8
+        // (1.42) or 4 of 4 (2.52); 14 on 2 threads, one round of 8 each (0.71).
+        assert_eq!(lane_width(30, 2, &Task::Final), W_FINAL_AVX512);
+        assert_eq!(lane_width(14, 2, &Task::Final), W);
+        assert_eq!(lane_width(12, 1, &Task::Final), W_FINAL_AVX512);
     }
 }
