@@ -4,8 +4,9 @@
 //!
 //! [`run_lanes`] integrates many trajectories [`W`] = 8 at a time in structure-of-arrays form (the
 //! generic lane kit `ode::lanes`; end states and samples 16 at a time in the AVX-512 copy,
-//! [`W_FINAL_AVX512`]), as [`super::batch`] does for the bilateral constant-`mu` end state, and
-//! refills a lane as soon as its trajectory ends. What it adds is everything the scalar driver
+//! [`W_FINAL_AVX512`]; calls too small to fill every thread's set on fewer, [`lane_width`]), as
+//! [`super::batch`] does for the bilateral constant-`mu` end state, and refills a lane as soon as
+//! its trajectory ends. What it adds is everything the scalar driver
 //! does around the step:
 //!
 //! - **Modes per lane.** Each lane knows whether its pin is on or off the disk and, under the
@@ -81,8 +82,8 @@ pub fn supports_method(m: Method) -> bool {
 }
 
 /// Integrate each `sliders[i]` from `y0s[i]` at `t = 0` with `method` (Dormand–Prince 5(4) or
-/// DOP853), up to 8 (end states and samples on AVX-512: [`W_FINAL_AVX512`]; see [`lane_width`])
-/// trajectories at a time on this thread, and compute `task` for each; results in input order.
+/// DOP853), 4, 8 or (end states and samples on AVX-512) 16 trajectories at a time on this
+/// thread ([`lane_width`]), and compute `task` for each; results in input order.
 ///
 /// Precondition (the caller checks): all sliders share one contact model and one friction law,
 /// which [`supports`] accepts; [`supports_method`] accepts `method`; `sliders.len() ==
@@ -97,8 +98,8 @@ pub fn run_lanes(
 ) -> Vec<TrajectoryResult> {
     check(sliders, y0s, method, &task);
     let feed = Feed::new(None);
-    // Only a cancelled call leaves trajectories without a result.
     let width = lane_width(sliders.len(), 1, &task);
+    // Only a cancelled call leaves trajectories without a result.
     let done = dispatch(sliders, y0s, t_end, method, tol, task, &feed, width);
     crate::parallel::scatter(sliders.len(), done, |_| TrajectoryResult::not_started())
 }
