@@ -52,12 +52,11 @@ def main(argv=None) -> int:
     ap.add_argument("--scaling-only", action="store_true", help="only the scaling table")
     ap.add_argument("--child", nargs=3, metavar=("N", "CONTACT", "START"), help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
-    if not args.child:
-        print(machine_line())
     if args.child:
         n, contact, start = args.child
         print(child_rate(int(n), contact, float(start)))
         return 0
+    print(machine_line())
     if args.scaling_only:
         if not args.threads:
             ap.error("--scaling-only needs --threads")
