@@ -208,6 +208,15 @@ struct Job<'a> {
     counts: &'a mut [usize],
 }
 
+/// The lanes of the copy [`dispatch`] picks on this CPU: [`W_AVX512`] with AVX-512, else [`W`].
+pub fn lane_count() -> usize {
+    #[cfg(target_arch = "x86_64")]
+    if std::is_x86_feature_detected!("avx512f") {
+        return W_AVX512;
+    }
+    W
+}
+
 fn dispatch<const M8: bool>(job: Job<'_>) -> Vec<RunResult> {
     #[cfg(target_arch = "x86_64")]
     {

@@ -108,9 +108,14 @@ fn batch_groups_keep_the_threads_and_the_lanes_busy() {
     // About four groups per thread...
     assert_eq!(group_size(1000, Some(2)), 125);
     assert_eq!(group_size(1001, Some(2)), 126);
-    // ...but never less than one set of 8 lanes, never more than 1024 trajectories.
-    assert_eq!(group_size(10, Some(4)), 8);
-    assert_eq!(group_size(0, Some(4)), 8);
+    // ...but never less than one set of the batch's lanes (16 with AVX-512, else 8), never more
+    // than 1024 trajectories.
+    let lanes = batch::lane_count();
+    assert!(lanes == crate::ode::lanes::W || lanes == batch::W_AVX512);
+    assert_eq!(group_size(10, Some(4)), lanes);
+    assert_eq!(group_size(0, Some(4)), lanes);
+    assert_eq!(group_size(16, Some(1)), lanes);
+    assert_eq!(group_size(100, Some(2)), 13.max(lanes));
     assert_eq!(group_size(10_000_000, Some(1)), 1024);
     // Zero threads means one.
     assert_eq!(group_size(100, Some(0)), group_size(100, Some(1)));
