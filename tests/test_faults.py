@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import collections
 import concurrent.futures
+import concurrent.futures.process
 import json
 import multiprocessing
 import os
@@ -92,9 +93,12 @@ def test_a_dead_pool_worker_costs_only_its_own_chunk(tmp_path, monkeypatch):
     counts = collections.Counter(float(line.split()[0]) for line in calls.read_text().splitlines())
     assert set(counts) == set(np.linspace(10.0, 160.0, 16)[::2])  # every chunk ran
     assert counts[70.0] == 2  # the chunk that died, run again alone
-    # Besides it, only the chunk that was in flight on the other worker (2 workers) may run twice:
-    # the finished chunks and those queued behind were kept.
-    assert sum(counts.values()) - len(counts) <= 2
+    # Besides it, only chunks the pool had already handed to its processes may run twice: the
+    # other worker's and those in the pool's call queue (CPython keeps workers + EXTRA_QUEUED_CALLS
+    # items there; one that the surviving worker finished before the pool noticed the death fails
+    # with the pool). The chunks collected before, and those queued behind in the sweep, were kept.
+    handed = 2 + concurrent.futures.process.EXTRA_QUEUED_CALLS  # 70's chunk among them
+    assert sum(counts.values()) - len(counts) <= handed
     xr.testing.assert_identical(strip(ds), reference)
     ds.close()
 
