@@ -6,10 +6,15 @@ the same process. Prints points/s, right-hand sides per point, where the points 
 regimes the two laws give at each point.
 
     python benches/bench_stribeck.py [--threads 2] [--repeat 2] [--stages]
+    python benches/bench_stribeck.py --settings [--law switch] [--out bench_out]
 
 ``--stages`` also prints, for the last run of each law, the wall time of its batched core calls by
 kind (``steady``: the transients; ``sampled``: the irregular points' measurement windows;
 ``final``: their Lyapunov-exponent segments), with their right-hand sides and accepted steps.
+
+``--settings`` instead runs one law's sweep over the transients' ``rtol`` x ``irregular_block``
+against a reference run to ``t_max`` at rtol 1e-10 (:mod:`tribosweep.bench.sweep_settings`), prints
+its table and writes ``sweep_settings.png`` into ``--out``.
 """
 
 from __future__ import annotations
@@ -72,8 +77,18 @@ def main(argv=None) -> int:
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--repeat", type=int, default=2, help="best of this many runs of each law")
     ap.add_argument("--stages", action="store_true", help="time the core calls of each law's last run by kind")
+    ap.add_argument("--settings", action="store_true", help="speed against agreement over rtol x irregular_block")
+    ap.add_argument("--law", default="switch", choices=("switch", "coulomb"), help="the law of --settings")
+    ap.add_argument("--out", default="bench_out", help="where --settings writes its chart")
     a = ap.parse_args(argv)
     print(f"{machine_line()}; threads {a.threads}")
+    if a.settings:
+        from tribosweep.bench.sweep_settings import sweep_settings
+
+        res = sweep_settings(a.out, quick=a.repeat < 2, threads=a.threads, law=a.law)
+        print(res["markdown"])
+        print(f"chart: {res['files']['sweep_settings']}")
+        return 0
     out = {}
     for law in ("coulomb", "switch"):
         walls, ds = [], None

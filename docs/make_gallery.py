@@ -9,7 +9,9 @@ Every chart comes from the public API, on grids small enough to run in a minute 
 - ``bifurcation.png``: the seed's unilateral cycles against the load (``ts.branch`` from the bouncing
   cycle both ways and from the Hopf point, drawn by ``ts.bifurcation_diagram``);
 - ``work_precision.png``: error against wall time per trajectory of the three Rust integrators and
-  scipy on the report's seed scene (``tribosweep.bench``; timings are this machine's).
+  scipy on the report's seed scene (``tribosweep.bench``; timings are this machine's);
+- ``sweep_settings.png``: the issue-10 Stribeck sweep's points/s against its agreement with a
+  reference, over the transients' rtol x ``irregular_block`` (``tribosweep.bench.sweep_settings``).
 
 Options: ``--out DIR`` (default: docs/gallery next to this script), ``--skip-bench`` (no work-precision
 chart), ``--dpi N`` (default 100: the size a README shows without scaling).
@@ -133,6 +135,16 @@ def main(argv=None) -> int:
         save(work_precision(), "work_precision.png",
              "Work-precision of the Rust integrators and scipy on the report's seed scene (bilateral, 0.5 s from "
              f"1 um; one thread of a {platform.machine()} machine, labels: rtol)")
+        from tribosweep.bench.sweep_settings import sweep_settings
+
+        ss = sweep_settings(out, quick=True)
+        made["sweep_settings.png"] = (
+            "The Stribeck sweep (switch law, 200 points, t_max 20 s, 2 threads of a "
+            f"{platform.machine()} machine) over the transients' rtol x irregular_block: points/s against the regimes "
+            "that differ from a reference run to t_max at rtol 1e-10 (grey: the reference itself at rtol +-1 %) and "
+            "against the cycles' amplitude error"
+        )
+        print(f"{ss['files']['sweep_settings']}: {made['sweep_settings.png']}")
     lines = ["# Gallery", "", "Regenerate with `python docs/make_gallery.py` (the sweeps took "
              f"{t_sweeps:.0f} s on the machine that drew these). Each chart is described in "
              "[the guide](../guide.md).", ""]

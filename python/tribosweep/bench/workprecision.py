@@ -454,6 +454,13 @@ def run_work_precision(out_dir: os.PathLike, config: BenchConfig | None = None, 
         payload["model_cost"] = mc["numbers"]
         files.update(mc["files"])
         extra = (extra + "\n\n" + mc["markdown"]).strip()
+        from .sweep_settings import sweep_settings
+
+        _log("the Stribeck sweep's settings (transient rtol x irregular_block)", progress)
+        ss = sweep_settings(out, quick=payload["meta"]["quick"])
+        payload["sweep_settings"] = ss["numbers"]
+        files.update(ss["files"])
+        extra = (extra + "\n\n" + ss["markdown"]).strip()
     payload["files"] = {k: str(v) for k, v in files.items()}
     payload["command"] = command
     with open(files["json"], "w") as f:
