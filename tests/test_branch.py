@@ -273,3 +273,58 @@ def test_the_bouncing_cycles_fold_over_the_arm_length_matches_fresh_branches_and
     last0, first1 = arms[seg == 0].max(), arms[seg == 1].min()
     assert 0.0710 < last0 < first1 < 0.0715 and first1 - last0 <= 1e-3 / 16 + 1e-12
     assert loads[seg == 0].max() < 110.0 and loads[seg == 1].min() > 135.0
+
+
+def test_arm_slices_in_order_with_wrong_guesses_are_those_of_a_loop_in_order():
+    """``_slices_in_order`` guesses each slice's Hopf point as if every slice before it found its point,
+    runs all guesses at once and corrects them in order: the slices of a plain loop, whatever the
+    threads. Fakes: two Hopf points per slice, a branch that finds its point except from 22 N at
+    0.07 m, so that the next slice's guess (nearest 22 N) is wrong: it must start nearest 20 N."""
+    from tribosweep._curves import _slices_in_order
+
+    ys = [0.05, 0.06, 0.07, 0.08, 0.09]
+    values = [[20.0, 20.9], [], [22.0, 23.5], [19.5, 22.5], [24.0, 26.0]]
+    hopfs = [(np.array(v), 600.0 + np.arange(len(v))) for v in values]
+    calls = []
+
+    def run(y, h, omega):
+        calls.append((y, h))
+        return (y, h, omega)
+
+    def take(y, h, out):
+        assert out[:2] == (y, h)
+        return (None, "missed") if (y, h) == (0.07, 22.0) else ({"y": y, "hopf": h, "omega": out[2]}, "")
+
+    def in_order(target):
+        out = []
+        for y, (v, omegas) in zip(ys, hopfs):
+            if not v.size:
+                out.append((y, None, "no Hopf point"))
+                continue
+            i = int(np.argmin(np.abs(v - target)))
+            pt, why = take(y, float(v[i]), (y, float(v[i]), float(omegas[i])))
+            target = pt["hopf"] if pt is not None else target
+            out.append((y, pt, why))
+        return out
+
+    want = in_order(19.0)
+    assert [pt["hopf"] if pt else why for _, pt, why in want] == [20.0, "no Hopf point", "missed", 19.5, 24.0]
+    for workers in (1, 2, 5):
+        calls.clear()
+        assert _slices_in_order(ys, hopfs, 19.0, run, take, workers) == want
+        # Every guess ran once; the wrong one (22.5 N at 0.08 m) was run again from 19.5 N.
+        assert sorted(calls) == [(0.05, 20.0), (0.07, 22.0), (0.08, 19.5), (0.08, 22.5), (0.09, 24.0)]
+
+
+def test_boundary_curves_are_the_same_bits_on_any_number_of_threads():
+    """The fold and grazing curves' slices and kinds run in parallel; the dataset does not change."""
+    one = ts.boundary_curves(SEED_U, curves=("hopf", "fold", "grazing"), slices=4, threads=1)
+    three = ts.boundary_curves(SEED_U, curves=("hopf", "fold", "grazing"), slices=4, threads=3)
+    assert one.sizes["fold_point"] > 0 and one.sizes["grazing_point"] > 0
+    xr.testing.assert_identical(one, three)
+    for k in one.data_vars:
+        assert np.array_equal(one[k].values, three[k].values, equal_nan=one[k].dtype.kind == "f"), k
+    with pytest.raises(ValueError, match=r"threads = 0 is out of range: must be an integer in \[1, 1024\]"):
+        ts.boundary_curves(SEED_U, threads=0)
+    with pytest.raises(ValueError, match=r"threads = 2.5 is out of range"):
+        ts.fold_curve(SEED_U, x=("normal_load", 10, 150), y=("arm_length", 0.05, 0.1), from_hopf=True, threads=2.5)

@@ -17,11 +17,21 @@ def test_a_log_gets_plain_lines_with_rate_and_eta_and_a_summary(monkeypatch):
     text = stream.getvalue()
     assert "\r" not in text
     lines = text.splitlines()
-    # One meter line per chunk (3 chunks of 2 points), then the summary.
+    # The load x arm box's boundary curves first (computed before any point, so the wait is named),
+    # then one meter line per chunk (3 chunks of 2 points), then the summary.
+    assert re.fullmatch(r"sweep: stability boundary curves of the load x arm box in \d+\.\d s "
+                        r"\(boundaries=False, --no-boundaries: none\)", lines[0])  # fmt: skip
+    lines = lines[1:]
     assert [re.search(r"(\d+)%", line).group(1) for line in lines[:3]] == ["33", "67", "100"]
     assert "2/6" in lines[0] and "6/6" in lines[2] and "pt/s" in lines[2]
     assert lines[3].startswith("sweep: 6 points in ") and lines[3].endswith("points/s")
     assert len(lines) == 4
+    # Without the curves, no such line.
+    stream.truncate(0)
+    stream.seek(0)
+    ts.sweep(normal_load=[10.0, 30.0, 60.0], arm_length=[0.05, 0.1], strategy="linear", chunk_size=2, progress=True,
+             boundaries=False)  # fmt: skip
+    assert not stream.getvalue().startswith("sweep: stability") and len(stream.getvalue().splitlines()) == 4
 
 
 def test_a_resumed_sweep_counts_only_this_runs_points_in_its_rate():

@@ -18,12 +18,13 @@ leaves the load window between two slices ends at the last slice inside.
 
 from __future__ import annotations
 
+import concurrent.futures
 import math
 
 import numpy as np
 import xarray as xr
 
-from . import _curves, _hopf
+from . import _checks, _curves, _hopf
 from ._model import SliderModel
 
 #: Variables of a Hopf curve stored on ``hopf_point``: :func:`hopf_curve`'s name -> the stored name.
@@ -108,6 +109,7 @@ def boundary_curves(
     *,
     curves=CURVE_KINDS,
     slices: int = 12,
+    threads: int | None = None,
 ) -> xr.Dataset:
     """The Hopf, fold-of-cycles and grazing curves crossing a normal load x arm length box.
 
@@ -126,6 +128,10 @@ def boundary_curves(
     slices : int
         Arm lengths per Hopf curve at which the fold and grazing points are located (>= 2), evenly
         over the arm lengths the Hopf curve spans in the box.
+    threads : int or None
+        Threads for the continuations (None: one per core). The fold and grazing curves run at
+        once on half each, and each curve's slices in parallel; the curves are the same bit for
+        bit whatever the count.
 
     Returns
     -------
@@ -156,6 +162,7 @@ def boundary_curves(
     kinds = _curve_kinds(curves)
     if isinstance(slices, bool) or not isinstance(slices, (int, np.integer)) or not 2 <= slices <= 1000:
         raise ValueError(f"slices = {slices!r} is out of range: must be an integer in [2, 1000]")
+    threads = _checks.threads(threads)
     hopf = _hopf.hopf_curve(model, x=("normal_load", x_lo, x_hi), y=("arm_length", y_lo, y_hi))
     out = xr.Dataset()
     if "hopf" in kinds:
@@ -166,30 +173,18 @@ def boundary_curves(
                                 "(tribosweep.hopf_curve): steady sliding gains or loses stability across them")  # fmt: skip
     for k in ("continuation_tolerance", "polyline_tolerance", "continuation_step_min", "continuation_step_max"):
         out.attrs[f"hopf_curve_{k}"] = hopf.attrs[k]
-    for kind in kinds[1:] if kinds[0] == "hopf" else kinds:
-        parts, notes, calls = [], [], []
-        func = _curves.fold_curve if kind == "fold" else _curves.grazing_curve
-        for c in range(n_curves):
-            on = hopf.curve.values == c
-            arms, loads = hopf.arm_length.values[on], hopf.normal_load.values[on]
-            a, b = float(arms.min()), float(arms.max())
-            if not b - a > 1e-9 * (y_hi - y_lo):
-                notes.append(f"Hopf curve {c}: spans no arm lengths")
-                continue
-            a, b = _inside_ends(arms, loads, x_lo, x_hi)
-            start = float(loads[np.argmin(arms)])
-            calls.append(f"tribosweep.{func.__name__}(model, x=('normal_load', {x_lo!r}, {x_hi!r}), "
-                         f"y=('arm_length', {a!r}, {b!r}), n={int(slices)}, from_hopf={start!r})")  # fmt: skip
-            ds = func(model, x=("normal_load", x_lo, x_hi), y=("arm_length", a, b), n=int(slices), from_hopf=start)
-            notes.append(f"from Hopf curve {c}: {ds.attrs['reason']}")
-            sub = xr.Dataset({f"{kind}_{v}": _stored(ds, v, f"{kind}_point", f"{kind} curve") for v in CURVE_VARS})
-            sub[f"{kind}_curve_index"] = xr.DataArray(
-                np.full(ds.sizes["curve_point"], c, dtype=np.int32), dims=(f"{kind}_point",),
-                attrs={"long_name": f"{kind} curve: index of the Hopf curve it starts from"})  # fmt: skip
-            parts.append(sub)
-            out.attrs[f"{kind}_curve_contact"] = ds.attrs["contact"]
-            for key in ("continuation_tol", "continuation_locate_tol", "continuation_rtol"):
-                out.attrs[f"{kind}_curve_{key}"] = ds.attrs[key]
+    todo = [k for k in kinds if k != "hopf"]
+    workers = _curves._workers(threads)
+    if workers >= 2 and len(todo) == 2:
+        # The two kinds at once, each on half the threads: independent, so the same bits.
+        with concurrent.futures.ThreadPoolExecutor(max_workers=2) as pool:
+            runs = [pool.submit(_kind_curves, k, model, hopf, (x_lo, x_hi), (y_lo, y_hi), slices, workers // 2)
+                    for k in todo]  # fmt: skip
+            done = [r.result() for r in runs]
+    else:
+        done = [_kind_curves(k, model, hopf, (x_lo, x_hi), (y_lo, y_hi), slices, workers) for k in todo]
+    for kind, (parts, notes, calls, attrs) in zip(todo, done):
+        out.attrs |= attrs
         n_pts = sum(p.sizes[f"{kind}_point"] for p in parts)
         if n_pts:
             out = xr.merge([out, xr.concat([p for p in parts if p.sizes[f"{kind}_point"]], dim=f"{kind}_point")],
@@ -201,3 +196,33 @@ def boundary_curves(
                   "boundary_arm_length_low": y_lo, "boundary_arm_length_high": y_hi,
                   "boundary_slices": int(slices), "boundary_contact": model.contact}  # fmt: skip
     return out
+
+
+def _kind_curves(kind: str, model, hopf, box_x, box_y, slices: int, threads: int):
+    """The ``kind`` curves from each Hopf curve of ``hopf``: (parts, notes, calls, attributes)."""
+    (x_lo, x_hi), (y_lo, y_hi) = box_x, box_y
+    parts, notes, calls, attrs = [], [], [], {}
+    func = _curves.fold_curve if kind == "fold" else _curves.grazing_curve
+    for c in range(int(hopf.sizes.get("hopf_curve", 0))):
+        on = hopf.curve.values == c
+        arms, loads = hopf.arm_length.values[on], hopf.normal_load.values[on]
+        a, b = float(arms.min()), float(arms.max())
+        if not b - a > 1e-9 * (y_hi - y_lo):
+            notes.append(f"Hopf curve {c}: spans no arm lengths")
+            continue
+        a, b = _inside_ends(arms, loads, x_lo, x_hi)
+        start = float(loads[np.argmin(arms)])
+        calls.append(f"tribosweep.{func.__name__}(model, x=('normal_load', {x_lo!r}, {x_hi!r}), "
+                     f"y=('arm_length', {a!r}, {b!r}), n={int(slices)}, from_hopf={start!r})")  # fmt: skip
+        ds = func(model, x=("normal_load", x_lo, x_hi), y=("arm_length", a, b), n=int(slices), from_hopf=start,
+                  threads=threads)  # fmt: skip
+        notes.append(f"from Hopf curve {c}: {ds.attrs['reason']}")
+        sub = xr.Dataset({f"{kind}_{v}": _stored(ds, v, f"{kind}_point", f"{kind} curve") for v in CURVE_VARS})
+        sub[f"{kind}_curve_index"] = xr.DataArray(
+            np.full(ds.sizes["curve_point"], c, dtype=np.int32), dims=(f"{kind}_point",),
+            attrs={"long_name": f"{kind} curve: index of the Hopf curve it starts from"})  # fmt: skip
+        parts.append(sub)
+        attrs[f"{kind}_curve_contact"] = ds.attrs["contact"]
+        for key in ("continuation_tol", "continuation_locate_tol", "continuation_rtol"):
+            attrs[f"{kind}_curve_{key}"] = ds.attrs[key]
+    return parts, notes, calls, attrs

@@ -8,12 +8,14 @@ three natural frequencies at once through the apparatus model, is sliced here.
 
 from __future__ import annotations
 
+import concurrent.futures
+import os
 from collections.abc import Mapping
 
 import numpy as np
 import xarray as xr
 
-from . import _core
+from . import _checks, _core
 from ._branch import (
     _INT_OPTIONS,
     BRANCH_FLAG_NAMES,
@@ -45,8 +47,16 @@ def _axis(model: SliderModel, axis, arg: str, arm: bool = False) -> tuple[str, f
     return name, lo, hi
 
 
-def _curve(kind: str, model, x, y, n, orbit, from_hopf, start, direction, options) -> xr.Dataset:
+def _workers(threads: int | None) -> int:
+    """Threads for independent continuations: ``threads``, or one per core the process may use."""
+    if threads is not None:
+        return threads
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+
+
+def _curve(kind: str, model, x, y, n, orbit, from_hopf, start, direction, options, threads=None) -> xr.Dataset:
     model = _model(model)
+    threads = _checks.threads(threads)
     (xn, x_lo, x_hi), (yn, y_lo, y_hi) = _axis(model, x, "x"), _axis(model, y, "y", arm=True)
     if xn == yn:
         raise ValueError(f"x and y are both {xn!r}: must be two different parameters")
@@ -58,7 +68,7 @@ def _curve(kind: str, model, x, y, n, orbit, from_hopf, start, direction, option
     if yn == "arm_length":
         if orbit is not None:
             return _arm_orbit_curve(kind, model, (xn, x_lo, x_hi), (y_lo, y_hi), n, orbit, start, direction, opts)
-        return _arm_curve(kind, model, (xn, x_lo, x_hi), (y_lo, y_hi), n, from_hopf, start, opts)
+        return _arm_curve(kind, model, (xn, x_lo, x_hi), (y_lo, y_hi), n, from_hopf, start, opts, threads)
     y_model = float(getattr(model, yn))
     if not y_lo <= y_model <= y_hi:
         raise ValueError(f"y = {y!r}: the model's {yn} = {y_model} (where the start orbit is) must lie within it")
@@ -117,7 +127,48 @@ _RAW_KEYS: dict[str, tuple[tuple[int, ...], str]] = {
 }  # fmt: skip
 
 
-def _arm_curve(kind: str, model: SliderModel, xspec, yspan, n: int, from_hopf, start, opts) -> xr.Dataset:
+def _nearest(hopfs: tuple[np.ndarray, np.ndarray], near: float) -> tuple[float, float]:
+    """The Hopf point of ``hopfs`` (values, frequencies) nearest ``near``: (value, frequency)."""
+    values, omegas = hopfs
+    i = int(np.argmin(np.abs(values - near)))
+    return float(values[i]), float(omegas[i])
+
+
+def _slices_in_order(ys, hopfs, target: float, run, take, workers: int) -> list[tuple[float, dict | None, str]]:
+    """:func:`_arm_curve`'s slices, each from the Hopf point nearest the last point found, with the
+    branches on ``workers`` threads: ``(y, point or None, why)`` per slice, as a loop in order gives.
+
+    ``hopfs[k]``: slice ``k``'s Hopf points (values, frequencies); ``run(y, h, omega)`` the branch
+    from one (the expensive part, on the threads); ``take(y, h, result)`` its point (a dict with
+    ``"hopf"``) or None, and why not. Each slice's Hopf point is first guessed as if every slice
+    before it found its point (the usual case) and all guesses run at once; then, in order, each
+    slice takes the point the slices before it really lead to, and a guess that proves wrong runs
+    again with it. So the result does not depend on ``workers``.
+    """
+    guess, near = [], target
+    for hp in hopfs:
+        guess.append(_nearest(hp, near) if hp[0].size else None)
+        near = guess[-1][0] if guess[-1] else near
+    pool = concurrent.futures.ThreadPoolExecutor(max_workers=workers)
+    try:
+        runs = [pool.submit(run, yv, *g) if g else None for yv, g in zip(ys, guess)]
+        slices: list[tuple[float, dict | None, str]] = []
+        for yv, hp, g, fut in zip(ys, hopfs, guess, runs):
+            if not hp[0].size:
+                slices.append((float(yv), None, "no Hopf point"))
+                continue
+            h, omega = _nearest(hp, target)
+            pt, why = take(yv, h, fut.result() if (h, omega) == g else run(yv, h, omega))
+            if pt is not None:
+                target = pt["hopf"]
+            slices.append((float(yv), pt, why))
+    finally:
+        # Guesses proved wrong may still be queued (or, on an exception or Ctrl-C, every slice).
+        pool.shutdown(wait=True, cancel_futures=True)
+    return slices
+
+
+def _arm_curve(kind: str, model: SliderModel, xspec, yspan, n: int, from_hopf, start, opts, threads=None) -> xr.Dataset:
     """:func:`fold_curve` / :func:`grazing_curve` over the arm length: each slice from its own Hopf point.
 
     The arm length moves the three natural frequencies at once (``arm_frequencies``, the model's
@@ -129,6 +180,11 @@ def _arm_curve(kind: str, model: SliderModel, xspec, yspan, n: int, from_hopf, s
     branch leaves the window first, has no point: the curve has left the box there, and between
     such a slice and its neighbour with a point the arm length is bisected ``_ARM_END_BISECTIONS``
     times, so that the curve reaches to 1/16 of a slice spacing from where it leaves the window.
+
+    The slices' branches run on ``threads`` threads (None: one per core) before their Hopf points
+    are known for certain: each slice's is guessed as if every earlier slice found its point, and a
+    slice whose guess proves wrong once the earlier results are in runs again with the right one. So
+    the curve is the one the slices give in order, bit for bit, whatever the thread count.
     """
     from ._hopf import sliding_branch
 
@@ -145,18 +201,19 @@ def _arm_curve(kind: str, model: SliderModel, xspec, yspan, n: int, from_hopf, s
     turns = 1 << BRANCH_FLAG_NAMES.index("parameter_turns")
     work = {"status": 0, "n_flows": 0, "n_rhs": 0}
 
-    def slice_at(yv: float, near: float) -> tuple[dict | None, str]:
-        """The ``kind`` point at arm length ``yv`` from the Hopf point nearest ``near``, or None and why not."""
-        m = at(yv)
-        sb = sliding_branch(m, (xn, x_lo, x_hi))
+    def hopf_points(yv: float) -> tuple[np.ndarray, np.ndarray]:
+        """The Hopf points of ``x`` in the window at arm length ``yv`` and their frequencies."""
+        sb = sliding_branch(at(yv), (xn, x_lo, x_hi))
         ok = (sb.is_hopf.values == 1) & (sb.hopf_status.values == 0)
-        values, omegas = sb[f"hopf_{xn}"].values[ok], sb.hopf_frequency.values[ok]
-        if values.size == 0:
-            return None, "no Hopf point"
-        i = int(np.argmin(np.abs(values - near)))
-        h = float(values[i])
-        out = _core.branch(m.replace(**{xn: h}).values(), contact, m.friction_law, xn, h, x_lo, x_hi,
-                           hopf_omega=float(omegas[i]), options=opts, stop_at=kind)  # fmt: skip
+        return sb[f"hopf_{xn}"].values[ok], sb.hopf_frequency.values[ok]
+
+    def branch_from(yv: float, h: float, omega: float) -> dict:
+        m = at(yv)
+        return _core.branch(m.replace(**{xn: h}).values(), contact, m.friction_law, xn, h, x_lo, x_hi,
+                            hopf_omega=omega, options=opts, stop_at=kind)  # fmt: skip
+
+    def take(yv: float, h: float, out: dict) -> tuple[dict | None, str]:
+        """A slice's branch result as its ``kind`` point, or None and why not; counts its work."""
         work["n_flows"] += int(out["n_flows"])
         work["n_rhs"] += int(out["n_rhs"])
         last = int(out["point_type"][-1]) if len(out["point_type"]) else -1
@@ -167,12 +224,15 @@ def _arm_curve(kind: str, model: SliderModel, xspec, yspan, n: int, from_hopf, s
             return None, str(out["reason"])
         return {k: out[k][-1] for k in _RAW_KEYS} | {"y": float(yv), "hopf": h}, ""
 
-    slices: list[tuple[float, dict | None, str]] = []
-    for yv in ys:
-        pt, why = slice_at(yv, target)
-        if pt is not None:
-            target = pt["hopf"]
-        slices.append((float(yv), pt, why))
+    def slice_at(yv: float, near: float) -> tuple[dict | None, str]:
+        """The ``kind`` point at arm length ``yv`` from the Hopf point nearest ``near``, or None and why not."""
+        hopfs = hopf_points(yv)
+        if hopfs[0].size == 0:
+            return None, "no Hopf point"
+        h, omega = _nearest(hopfs, near)
+        return take(yv, h, branch_from(yv, h, omega))
+
+    slices = _slices_in_order(ys, [hopf_points(yv) for yv in ys], target, branch_from, take, _workers(threads))
     # Where the curve leaves the window between two slices (a slice without a point next to one
     # with), bisect the arm length ENDS times: the curve reaches to 1/2^ENDS of a slice from its end.
     ends = []
@@ -407,7 +467,7 @@ def _arm_dataset(kind, model, xspec, ys, found, work, reason, method, contact, o
 
 
 def fold_curve(model: SliderModel, x, y, *, n: int = 11, orbit=None, from_hopf=None, start=None, direction=None,
-               **options) -> xr.Dataset:  # fmt: skip
+               threads: int | None = None, **options) -> xr.Dataset:  # fmt: skip
     """The curve of a fold of cycles in two parameters: the edge of a region where a family of cycles exists.
 
     Slice by slice: for each of ``n`` values of ``y`` the fold is located in ``x`` by the
@@ -437,6 +497,9 @@ def fold_curve(model: SliderModel, x, y, *, n: int = 11, orbit=None, from_hopf=N
         for the arm length).
     orbit, from_hopf, start, direction
         Where the first slice's branch starts, as in :func:`branch`.
+    threads : int or None
+        Threads for the slices' branches with ``from_hopf`` over the arm length (None: one per core;
+        the curve is the same bit for bit whatever the count). Carried orbits go slice by slice.
     **options
         Continuation settings of :func:`branch`.
 
@@ -447,13 +510,13 @@ def fold_curve(model: SliderModel, x, y, *, n: int = 11, orbit=None, from_hopf=N
         ``period``, ``A1``, multipliers, ``point_type``, ``flags``...; ``status`` and attribute
         ``reason`` (where and why the curve ended early).
     """
-    return _curve("fold", model, x, y, n, orbit, from_hopf, start, direction, options)
+    return _curve("fold", model, x, y, n, orbit, from_hopf, start, direction, options, threads)
 
 
 def grazing_curve(model: SliderModel, x, y, *, n: int = 11, orbit=None, from_hopf=None, start=None, direction=None,
-                  **options) -> xr.Dataset:  # fmt: skip
+                  threads: int | None = None, **options) -> xr.Dataset:  # fmt: skip
     """The curve of a grazing point in two parameters: where the orbit first touches contact loss.
 
     Slice by slice as :func:`fold_curve` (see there), stopping at the first grazing point in ``x``.
     """
-    return _curve("grazing", model, x, y, n, orbit, from_hopf, start, direction, options)
+    return _curve("grazing", model, x, y, n, orbit, from_hopf, start, direction, options, threads)

@@ -16,6 +16,7 @@ from __future__ import annotations
 import contextlib
 import os
 import sys
+import time
 import warnings
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -366,7 +367,12 @@ def sweep(
         plan = Plan(model, axes, strategy, settings, int(chunk_size), wear_reference, wear_calibration)
         if command is None:
             command = f"tribosweep.sweep(shape={plan.shape}, dims={plan.dims}, strategy={strategy!r})"
+        t_curves = time.perf_counter()
         curves, curve_attrs = schema.boundary_vars(plan) if boundaries else ({}, {})
+        if progress and curve_attrs:
+            # Before the first point, and silent till now: say what took the time.
+            sys.stderr.write(f"sweep: stability boundary curves of the load x arm box in "
+                             f"{time.perf_counter() - t_curves:.1f} s (boundaries=False, --no-boundaries: none)\n")  # fmt: skip
         layout = (
             schema.coords(plan),
             schema.static_vars(plan) | curves,

@@ -376,7 +376,7 @@ def boundary_vars(plan: Plan) -> tuple[dict, dict]:
     box = {"normal_load": (float(axes["normal_load"][0]), float(axes["normal_load"][-1])),
            "arm_length": (float(axes["arm_length"][0]), float(axes["arm_length"][-1]))}  # fmt: skip
     try:
-        ds = _boundary.boundary_curves(model, **box, curves=curves)
+        ds = _boundary.boundary_curves(model, **box, curves=curves, threads=plan.settings.threads)
     except Exception as e:  # noqa: BLE001 - a failed boundary must not stop the sweep
         return {}, {"hopf_curves": f"not stored: the continuation failed ({type(e).__name__}: {e})"}
     out = {name: (da.dims, da.values, dict(da.attrs)) for name, da in ds.data_vars.items()}
