@@ -100,6 +100,11 @@ SLOW_CALLS = {
                                            steady=True, periodic_tol=1e-15, threads=2),  # fmt: skip
     # A billion grid points of the describing function's scan.
     "describing_function": lambda: ts.describing_function(SEED, n_grid=10**9),
+    # The fold and grazing curves of a box at 60 slices (about 10 s), on pool threads, where no
+    # signal arrives: the main thread's stop event ends them at their next branch. On two threads
+    # the kinds run at once (each curve's slices on one), on one the slices run on one pool thread.
+    "boundary_curves, 2 threads": lambda: ts.boundary_curves(SEED, slices=60, threads=2),
+    "boundary_curves, 1 thread": lambda: ts.boundary_curves(SEED, slices=60, threads=1),
 }
 
 

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import concurrent.futures
 import math
+import threading
 
 import numpy as np
 import xarray as xr
@@ -177,10 +178,17 @@ def boundary_curves(
     workers = _curves._workers(threads)
     if workers >= 2 and len(todo) == 2:
         # The two kinds at once, each on half the threads: independent, so the same bits.
+        # Signals reach the main thread only: on Ctrl-C (or an error) here, the other kind's thread
+        # stops at its next branch instead of running its curve to the end.
+        stop = threading.Event()
         with concurrent.futures.ThreadPoolExecutor(max_workers=2) as pool:
-            runs = [pool.submit(_kind_curves, k, model, hopf, (x_lo, x_hi), (y_lo, y_hi), slices, workers // 2)
+            runs = [pool.submit(_kind_curves, k, model, hopf, (x_lo, x_hi), (y_lo, y_hi), slices, workers // 2, stop)
                     for k in todo]  # fmt: skip
-            done = [r.result() for r in runs]
+            try:
+                done = [r.result() for r in runs]
+            except BaseException:
+                stop.set()
+                raise
     else:
         done = [_kind_curves(k, model, hopf, (x_lo, x_hi), (y_lo, y_hi), slices, workers) for k in todo]
     for kind, (parts, notes, calls, attrs) in zip(todo, done):
@@ -198,8 +206,9 @@ def boundary_curves(
     return out
 
 
-def _kind_curves(kind: str, model, hopf, box_x, box_y, slices: int, threads: int):
-    """The ``kind`` curves from each Hopf curve of ``hopf``: (parts, notes, calls, attributes)."""
+def _kind_curves(kind: str, model, hopf, box_x, box_y, slices: int, threads: int, stop=None):
+    """The ``kind`` curves from each Hopf curve of ``hopf``: (parts, notes, calls, attributes).
+    ``stop`` set: ends at the next branch (``_curves.Stopped``)."""
     (x_lo, x_hi), (y_lo, y_hi) = box_x, box_y
     parts, notes, calls, attrs = [], [], [], {}
     func = _curves.fold_curve if kind == "fold" else _curves.grazing_curve
@@ -214,8 +223,9 @@ def _kind_curves(kind: str, model, hopf, box_x, box_y, slices: int, threads: int
         start = float(loads[np.argmin(arms)])
         calls.append(f"tribosweep.{func.__name__}(model, x=('normal_load', {x_lo!r}, {x_hi!r}), "
                      f"y=('arm_length', {a!r}, {b!r}), n={int(slices)}, from_hopf={start!r})")  # fmt: skip
-        ds = func(model, x=("normal_load", x_lo, x_hi), y=("arm_length", a, b), n=int(slices), from_hopf=start,
-                  threads=threads)  # fmt: skip
+        # func's own work (`fold_curve` or `grazing_curve`), with the stop event.
+        ds = _curves._curve(kind, model, ("normal_load", x_lo, x_hi), ("arm_length", a, b), int(slices), None, start,
+                            None, None, {}, threads, stop)  # fmt: skip
         notes.append(f"from Hopf curve {c}: {ds.attrs['reason']}")
         sub = xr.Dataset({f"{kind}_{v}": _stored(ds, v, f"{kind}_point", f"{kind} curve") for v in CURVE_VARS})
         sub[f"{kind}_curve_index"] = xr.DataArray(

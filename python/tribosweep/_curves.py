@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import concurrent.futures
 import os
+import threading
 from collections.abc import Mapping
 
 import numpy as np
@@ -47,6 +48,10 @@ def _axis(model: SliderModel, axis, arg: str, arm: bool = False) -> tuple[str, f
     return name, lo, hi
 
 
+class Stopped(Exception):
+    """A curve's computation was stopped by its caller's ``stop`` event (the caller raises its own error)."""
+
+
 def _workers(threads: int | None) -> int:
     """Threads for independent continuations: ``threads``, or one per core the process may use."""
     if threads is not None:
@@ -54,7 +59,8 @@ def _workers(threads: int | None) -> int:
     return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
 
 
-def _curve(kind: str, model, x, y, n, orbit, from_hopf, start, direction, options, threads=None) -> xr.Dataset:
+def _curve(kind: str, model, x, y, n, orbit, from_hopf, start, direction, options, threads=None,
+           stop: threading.Event | None = None) -> xr.Dataset:  # fmt: skip
     model = _model(model)
     threads = _checks.threads(threads)
     (xn, x_lo, x_hi), (yn, y_lo, y_hi) = _axis(model, x, "x"), _axis(model, y, "y", arm=True)
@@ -68,7 +74,7 @@ def _curve(kind: str, model, x, y, n, orbit, from_hopf, start, direction, option
     if yn == "arm_length":
         if orbit is not None:
             return _arm_orbit_curve(kind, model, (xn, x_lo, x_hi), (y_lo, y_hi), n, orbit, start, direction, opts)
-        return _arm_curve(kind, model, (xn, x_lo, x_hi), (y_lo, y_hi), n, from_hopf, start, opts, threads)
+        return _arm_curve(kind, model, (xn, x_lo, x_hi), (y_lo, y_hi), n, from_hopf, start, opts, threads, stop)
     y_model = float(getattr(model, yn))
     if not y_lo <= y_model <= y_hi:
         raise ValueError(f"y = {y!r}: the model's {yn} = {y_model} (where the start orbit is) must lie within it")
@@ -168,7 +174,8 @@ def _slices_in_order(ys, hopfs, target: float, run, take, workers: int) -> list[
     return slices
 
 
-def _arm_curve(kind: str, model: SliderModel, xspec, yspan, n: int, from_hopf, start, opts, threads=None) -> xr.Dataset:
+def _arm_curve(kind: str, model: SliderModel, xspec, yspan, n: int, from_hopf, start, opts, threads=None,
+               stop: threading.Event | None = None) -> xr.Dataset:  # fmt: skip
     """:func:`fold_curve` / :func:`grazing_curve` over the arm length: each slice from its own Hopf point.
 
     The arm length moves the three natural frequencies at once (``arm_frequencies``, the model's
@@ -184,7 +191,8 @@ def _arm_curve(kind: str, model: SliderModel, xspec, yspan, n: int, from_hopf, s
     The slices' branches run on ``threads`` threads (None: one per core) before their Hopf points
     are known for certain: each slice's is guessed as if every earlier slice found its point, and a
     slice whose guess proves wrong once the earlier results are in runs again with the right one. So
-    the curve is the one the slices give in order, bit for bit, whatever the thread count.
+    the curve is the one the slices give in order, bit for bit, whatever the thread count. ``stop``
+    set (by another thread) ends the curve at its next branch with :class:`Stopped`.
     """
     from ._hopf import sliding_branch
 
@@ -208,6 +216,8 @@ def _arm_curve(kind: str, model: SliderModel, xspec, yspan, n: int, from_hopf, s
         return sb[f"hopf_{xn}"].values[ok], sb.hopf_frequency.values[ok]
 
     def branch_from(yv: float, h: float, omega: float) -> dict:
+        if stop is not None and stop.is_set():
+            raise Stopped
         m = at(yv)
         return _core.branch(m.replace(**{xn: h}).values(), contact, m.friction_law, xn, h, x_lo, x_hi,
                             hopf_omega=omega, options=opts, stop_at=kind)  # fmt: skip
