@@ -65,9 +65,10 @@ def test_labels_agree_with_an_independent_scipy_classification(seed64, seed_cens
     """
     from concurrent.futures import ProcessPoolExecutor
 
+    from conftest import SEED_FATES
     from tribosweep.bench import census_check
 
-    k, horizon = 16, 1.2  # 1.2 s: a cycle sample is within 1 % of the cycle by about 0.6 s
+    k, horizon = SEED_FATES, 1.2  # 1.2 s: a cycle sample is within 1 % of the cycle by about 0.6 s
     params = {key: float(v) for key, v in SEED_U.values().items()}
     orbit, _ = ts.follow_cycle(SEED_U)
     half_range = census_check.cycle_half_range(params, orbit.state0.values)
@@ -78,14 +79,23 @@ def test_labels_agree_with_an_independent_scipy_classification(seed64, seed_cens
     ref, robust = seed_census_fates
     np.testing.assert_array_equal(ref, seed64.attractor_reached.values[:k])
     core = [ts.ATTRACTOR_NAMES[a] for a in ref]
-    both = [(a, b) for a, b, r in zip(core, labels, robust) if r and b != "unsettled" and a != "irregular"]
-    # Enough settle by the horizon for the comparison to mean something (11 of 16 when written;
-    # the bound leaves room for starts near the saddle to settle later on another machine), and
-    # both attractors are among them.
-    assert len(both) >= k // 2, list(zip(core, labels))
+    # Starts the core decided within QUICK: one that took longer spent that long near the saddle or
+    # on the edge of the cycle's basin, where the fate is a coin toss even when the perturbations of
+    # seed_census_fates happen to agree (with the model's inputs moved by 1-2 ulps, which draws
+    # other samples, the starts scipy called "cycle" and the core "sliding" had all taken 8-10 s).
+    quick = seed64.t_end.values[:k] <= QUICK
+    both = [(a, b) for a, b, r, q in zip(core, labels, robust, quick)
+            if r and q and b != "unsettled" and a != "irregular"]  # fmt: skip
+    # Enough settle by the horizon for the comparison to mean something (20 of 32 when written, all
+    # agreeing; 14-17, all agreeing, with the inputs moved by 1-2 ulps), and both attractors.
+    assert len(both) >= 8, list(zip(core, labels))
     assert {a for a, _ in both} == {"sliding", "cycle"}, both
     agree = sum(a == b for a, b in both)
     assert agree >= 0.95 * len(both), [(i, a, b) for i, (a, b) in enumerate(zip(core, labels)) if a != b]
+
+
+#: The census samples compared with scipy one by one are those decided within this time [s].
+QUICK: float = 3.0
 
 
 def _within_3_se(a, b, k):
@@ -113,7 +123,11 @@ def test_the_default_tolerance_is_converged_where_the_fractions_depend_on_it():
     assert a.attrs["rtol"] == 1e-6
     _within_3_se(a, b, k)
     for c in (a, b):
-        assert c.basin_fraction[0] > 0.5 and c.basin_fraction[1] > 0.1 and c.n_cycles >= 1
+        # Sliding is the majority and the cycle is present, each by 3 standard errors (the fractions
+        # were 0.69 +- 0.03 and 0.18 +- 0.02; with the inputs moved by an ulp, which draws other
+        # samples, 0.69-0.75 and 0.10-0.18: a fixed bound of 0.1 on the cycle was a coin toss).
+        p, se = c.basin_fraction.values, c.basin_fraction_se.values
+        assert p[0] - 3 * se[0] > 0.5 and p[1] - 3 * se[1] > 0 and c.n_cycles >= 1, (p, se)
         # The motion stays within a tenth of the escape limit: no sample escapes (was 14 of 256).
         assert float(c.basin_fraction[3]) * k < 2 and int(c.census_failed) == 0
 
@@ -193,10 +207,22 @@ def test_irregular_motion_stops_early_with_the_same_fractions():
     np.testing.assert_array_equal(on.t_end.values[settled], off.t_end.values[settled])
 
 
-def test_recurrence_on_a_pilots_attractor_stops_irregular_samples_early_with_the_same_fractions():
+@pytest.fixture
+def eight_pilots(monkeypatch):
+    """The census with 8 pilots instead of 2 (``PHASE_STARTS = (0, 8)``), for tests that need an
+    irregular pilot. Whether one pilot ends irregular is the fate of one chaotic transient, a coin
+    toss with the irregular fraction's odds (about 0.64 at 20.8 N, 11 cm): with 2 pilots none did
+    in 3 of 4 runs with the model's inputs moved by 1 or 2 ulps (which also moves every sample,
+    their Halton shift being a hash of the inputs). With 8, none does with odds of 0.36^8 = 3e-4."""
+    monkeypatch.setattr(_census, "PHASE_STARTS", (0, 8))
+    monkeypatch.setattr(_census, "PILOTS", 8)
+    return 8
+
+
+def test_recurrence_on_a_pilots_attractor_stops_irregular_samples_early_with_the_same_fractions(eight_pilots):
     """Samples after the pilots stop once they keep to a pilot's irregular attractor.
 
-    The same point as above: its second pilot ends stationary-irregular, so most later irregular
+    The same point as above: some of its pilots end stationary-irregular, so most later irregular
     samples stop once 32 sections in a row fall in its cells (at least 8 + 32 crossings: above
     0.13 s at under 300 per second) or a block of 256 matches its statistics, instead of after
     three blocks (at least 776 crossings). Against the same census deciding every sample by its own
@@ -207,7 +233,7 @@ def test_recurrence_on_a_pilots_attractor_stops_irregular_samples_early_with_the
     k = 64
     m = ts.apparatus_model(20.7692, 0.1099, 0.3, base=SEED_U)
     rec, own = ts.census(m, samples=k), ts.census(m, samples=k, recurrence=False)
-    assert rec.attrs["pilots"] == _census.PILOTS == 2
+    assert rec.attrs["pilots"] == _census.PILOTS == eight_pilots
     _within_3_se(rec, own, k)
     pil = slice(0, _census.PILOTS)
     assert (rec.attractor_reached.values[pil] == 2).any()  # a pilot established the attractor
@@ -245,7 +271,9 @@ def test_a_sweep_point_says_how_its_irregular_samples_were_decided():
     irr = alone.attractor_reached.values == 2
     late = int(np.sum(alone.t_end.values[irr] >= alone.attrs["t_max"]))
     known = int(alone.recurrence.values.sum())
-    assert irr.sum() >= 4 and known >= 1, (irr.sum(), known)
+    # Some irregular samples to count (how many stop by recurrence depends on whether one of the two
+    # pilots ends irregular: a coin toss, see eight_pilots; the reason must count them either way).
+    assert irr.sum() >= 4, (irr.sum(), known)
     text = f"irregular {irr.sum()}/16 ({irr.sum() - late - known} stationary, {known} by recurrence on a pilot's "
     assert text + f"attractor, {late} at the census t_max)" in str(ds.reason.item()), ds.reason.item()
 

@@ -111,30 +111,43 @@ def test_census_early_stop_point_returns_for_every_sample():
 
 def test_most_census_samples_compared_with_scipy_keep_their_fate(seed_census_fates):
     # test_census.py::test_labels_agree_with_an_independent_scipy_classification compares the fates
-    # of the seed census's first 16 samples one by one, the robust ones only (conftest's
-    # seed_census_fates: the same attractor with every start moved by +-1 and +-2 ulps and rtol by
-    # 1 %). About 8 % of the seed's starts are not robust (a chaotic bouncing transient decides
-    # them; that is why the census reports fractions): 1 of the first 16 when written. The
-    # comparison needs most of them, and at least one start of each attractor among them.
+    # of the seed census's first 32 samples one by one, the robust ones only (conftest's
+    # seed_census_fates: the same attractor with every start moved by +-1 and +-2 ulps, rtol 1e-8
+    # by 1 %, and at rtol 1e-7 and 1e-9). Some of the seed's starts are not robust (a chaotic
+    # bouncing transient decides them; that is why the census reports fractions): 2 of the first
+    # 32 (2026-11-27; 2-7 with the model's inputs moved by 1-2 ulps, which draws other samples).
+    # The comparison needs most of them, and at least one start of each attractor.
     ref, robust = seed_census_fates
-    assert robust.sum() >= 12, (ref, robust)
+    assert robust.sum() >= 0.75 * ref.size, (ref, robust)
     names = {ts.ATTRACTOR_NAMES[a] for a in ref[robust]}
     assert {"sliding", "cycle"} <= names, (ref, robust)
 
 
-def test_the_recurrence_tests_pilot_is_irregular_under_moved_inputs():
-    # test_census.py::test_recurrence_on_a_pilots_attractor_stops_irregular_samples_after_one_block_...
-    # asserts that a pilot at 20.8 N, 11 cm ends irregular (and so establishes the attractor the
-    # later samples stop on). Its starts moved by +-1 and +-2 ulps, and rtol by +-1 %: the pilots'
-    # fates stand, and so does the number of samples stopped by recurrence (39 of 64 measured).
+def test_the_recurrence_tests_pilots_find_the_irregular_attractor_under_moved_inputs(monkeypatch):
+    # test_census.py::test_recurrence_on_a_pilots_attractor_stops_irregular_samples_early_... needs
+    # a pilot at 20.8 N, 11 cm that ends irregular (and so establishes the attractor the later
+    # samples stop on). Each pilot does with the irregular fraction's odds (about 0.64): with the
+    # census's 2 pilots, none did in 3 of 4 runs with the model's inputs moved by 1 or 2 ulps
+    # (every sample moves then: their Halton shift is a hash of the inputs). The test runs 8 pilots
+    # (eight_pilots); here, with the pilots' starts moved by +-1 and +-2 ulps, rtol by +-1 %, and
+    # the model's inputs by +-1 and +-2 ulps, some pilot ends irregular and a quarter of the 64
+    # samples stop by recurrence (the test's bound).
+    import dataclasses
+
     from conftest import moved
     from tribosweep import _census
 
+    monkeypatch.setattr(_census, "PHASE_STARTS", (0, 8))
+    monkeypatch.setattr(_census, "PILOTS", 8)
     m = ts.apparatus_model(20.7692, 0.1099, 0.3, base=ts.SliderModel(contact="unilateral"))
-    ref = ts.census(m, samples=64)
-    pil = slice(0, _census.PILOTS)
-    assert (ref.attractor_reached.values[pil] == 2).any()
-    runs = [ts.census(m, samples=64, rtol=1e-6 * f) for f in RTOL_FACTORS]
+
+    def inputs_moved(u):
+        return m.replace(**{f.name: float(moved(getattr(m, f.name), u)) for f in dataclasses.fields(m)
+                            if isinstance(getattr(m, f.name), float) and getattr(m, f.name) != 0.0
+                            and f.name != "torsion_sign"})  # fmt: skip
+
+    runs = [ts.census(m, samples=64)] + [ts.census(m, samples=64, rtol=1e-6 * f) for f in RTOL_FACTORS]
+    runs += [ts.census(inputs_moved(u), samples=64) for u in ULPS]
     orig = _census.starts
     try:
         for u in ULPS:
@@ -143,7 +156,7 @@ def test_the_recurrence_tests_pilot_is_irregular_under_moved_inputs():
     finally:
         _census.starts = orig
     for d in runs:
-        np.testing.assert_array_equal(d.attractor_reached.values[pil], ref.attractor_reached.values[pil])
+        assert (d.attractor_reached.values[:8] == 2).any(), d.attractor_reached.values[:8]
         assert int(d.recurrence.sum()) >= 64 // 4, int(d.recurrence.sum())
 
 
