@@ -104,7 +104,7 @@ def test_branch_diagram_legend_shows_a_stable_branch_alone():
 
 def test_boundary_command_hopf_and_fold_curves(tmp_path, capsys, png_size, saved_figures):
     nc = tmp_path / "bd.nc"
-    code, out, err = run(["boundary", "--curves", "hopf,fold", "--slices", "3", "-o", nc], capsys)
+    code, out, err = run(["boundary", "--curves", "hopf,fold", "--slices", "3", "--threads", "2", "-o", nc], capsys)
     assert code == 0, err
     assert "1 Hopf curve(s) in the box" in out and "map: " in out
     with xr.open_dataset(nc) as ds:
@@ -263,6 +263,7 @@ def test_a_linear_sweep_stores_no_fold_or_grazing_curve_and_a_bilateral_one_no_f
         (["branch", "--config", "missing.toml"], "missing.toml"),
         (["boundary", "--curves", "hopf,bogus"], "must be a comma-separated subset of hopf,fold,grazing"),
         (["boundary", "--slices", "1"], "--slices = '1' is out of range: must be an integer in [2, 1000]"),
+        (["boundary", "--threads", "0"], "--threads = '0' is out of range: must be an integer in [1, 1024]"),
         (["boundary", "--normal-load", "0:150"], "--normal-load = 0:... is out of range: must be > 0"),
         (["boundary", "--arm-length", "0.1:0.1"], "must be LO:HI with finite LO < HI"),
         (["boundary", "--sliding-speed", "x"], "--sliding-speed = 'x' is not a number"),
@@ -287,6 +288,7 @@ def test_bad_input_exits_2_with_a_one_line_message(argv, message, tmp_path, monk
         ("branch", "range = 'x'\n", "config range"),
         ("boundary", "normal_load = 5\n", "config normal_load = 5"),
         ("boundary", "model = 1\n", "[model] must be a table"),
+        ("boundary", "threads = 0\n", "threads = 0 is out of range: must be an integer in [1, 1024]"),
         ("branch", b"mu = 0.3 # \xe9t\xe9\n", "not UTF-8 text"),
         ("boundary", "normal_load = \n", "not valid TOML"),
     ],

@@ -34,7 +34,7 @@ _OPERATING = ("normal_load", "arm_length", "sliding_speed", "mu")
 _BRANCH_KEYS = {"parameter", "range", "start", "stop_at", "amplitude", "contact", "output", "plot", "model",
                 "continuation", *_OPERATING}  # fmt: skip
 _BOUNDARY_KEYS = {"normal_load", "arm_length", "sliding_speed", "mu", "contact", "curves", "slices", "output", "plot",
-                  "model"}  # fmt: skip
+                  "threads", "model"}  # fmt: skip
 _MODE_FIELDS = ("omega_normal", "omega_friction", "omega_torsion")
 
 
@@ -314,12 +314,15 @@ def add_boundary_arguments(p: argparse.ArgumentParser) -> None:
                    help="which curves, comma-separated: hopf,fold,grazing (default all three)")  # fmt: skip
     p.add_argument("--slices", type=_slices_arg, metavar="N",
                    help="arm lengths per Hopf curve where the fold and grazing points are located (default 12)")
+    p.add_argument("--threads", type=_threads_arg, metavar="N",
+                   help="threads for the fold and grazing continuations (default: all cores; the curves are the "
+                   "same on any number)")  # fmt: skip
     p.add_argument("-o", "--output", metavar="FILE", help="netCDF output file (default boundary.nc)")
     p.add_argument("--plot", metavar="PNG", help="map of the curves (default: the output's name with .png)")
     p.add_argument("--config", metavar="FILE.toml",
                    help="TOML with keys normal_load, arm_length (ranges as strings, or a sweep's axes), "
-                   "sliding_speed, mu, contact, curves, slices, output, plot and table [model]; command-line "
-                   "options win")  # fmt: skip
+                   "sliding_speed, mu, contact, curves, slices, threads, output, plot and table [model]; "
+                   "command-line options win")  # fmt: skip
 
 
 def _curves_arg(text: str) -> list[str]:
@@ -331,6 +334,18 @@ def _curves_arg(text: str) -> list[str]:
         raise argparse.ArgumentTypeError(f"{text!r} is not valid: must be a comma-separated subset of "
                                          f"{','.join(CURVE_KINDS)}")  # fmt: skip
     return items
+
+
+def _threads_arg(text: str) -> int:
+    from ._checks import MAX_THREADS
+
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--threads = {text!r} is not an integer") from None
+    if not 1 <= v <= MAX_THREADS:
+        raise argparse.ArgumentTypeError(f"--threads = {text!r} is out of range: must be an integer in [1, {MAX_THREADS}]")
+    return v
 
 
 def _slices_arg(text: str) -> int:
@@ -392,7 +407,8 @@ def run_boundary(args: argparse.Namespace) -> int:
     model, _ = _model(args, cfg, ("sliding_speed", "mu"))
     output = _pick(args, cfg, "output", "boundary.nc")
     png = _png_path(output, _pick(args, cfg, "plot"))
-    ds = boundary_curves(model, loads, arms, curves=curves, slices=slices)
+    threads = args.threads if args.threads is not None else cfg.get("threads")
+    ds = boundary_curves(model, loads, arms, curves=curves, slices=slices, threads=threads)
     title = (f"stability boundaries ({model.contact} contact, mu = {model.mu:g}, V = {model.sliding_speed:g} m/s)")
     ds.attrs |= {f"model_{k}": v for k, v in model.values().items() if k not in ("normal_load", *_MODE_FIELDS)}
     ds.attrs |= {"model_contact": model.contact, "model_friction_law": model.friction_law,
