@@ -19,8 +19,8 @@ def test_a_log_gets_plain_lines_with_rate_and_eta_and_a_summary(monkeypatch):
     lines = text.splitlines()
     # The load x arm box's boundary curves first (computed before any point, so the wait is named),
     # then one meter line per chunk (3 chunks of 2 points), then the summary.
-    assert re.fullmatch(r"sweep: stability boundary curves of the load x arm box in \d+\.\d s "
-                        r"\(boundaries=False, --no-boundaries: none\)", lines[0])  # fmt: skip
+    assert re.fullmatch(r"sweep: stability boundary curves of the load x arm box \(boundaries=False, "
+                        r"--no-boundaries: none\) \.\.\. \d+\.\d s", lines[0])  # fmt: skip
     lines = lines[1:]
     assert [re.search(r"(\d+)%", line).group(1) for line in lines[:3]] == ["33", "67", "100"]
     assert "2/6" in lines[0] and "6/6" in lines[2] and "pt/s" in lines[2]
@@ -32,6 +32,12 @@ def test_a_log_gets_plain_lines_with_rate_and_eta_and_a_summary(monkeypatch):
     ts.sweep(normal_load=[10.0, 30.0, 60.0], arm_length=[0.05, 0.1], strategy="linear", chunk_size=2, progress=True,
              boundaries=False)  # fmt: skip
     assert not stream.getvalue().startswith("sweep: stability") and len(stream.getvalue().splitlines()) == 4
+    # Nor with a third axis swept (no curves then).
+    stream.truncate(0)
+    stream.seek(0)
+    ts.sweep(normal_load=[10.0, 30.0, 60.0], arm_length=[0.05, 0.1], sliding_speed=[0.3, 0.5], strategy="linear",
+             chunk_size=12, progress=True)  # fmt: skip
+    assert "boundary curves" not in stream.getvalue(), stream.getvalue()
 
 
 def test_a_resumed_sweep_counts_only_this_runs_points_in_its_rate():

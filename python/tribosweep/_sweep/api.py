@@ -367,12 +367,16 @@ def sweep(
         plan = Plan(model, axes, strategy, settings, int(chunk_size), wear_reference, wear_calibration)
         if command is None:
             command = f"tribosweep.sweep(shape={plan.shape}, dims={plan.dims}, strategy={strategy!r})"
+        # The curves come before the first point and take a second or more: say so as they start.
+        say = progress and boundaries and schema.boundary_box(plan)
+        if say:
+            sys.stderr.write("sweep: stability boundary curves of the load x arm box (boundaries=False, "
+                             "--no-boundaries: none) ... ")  # fmt: skip
+            sys.stderr.flush()
         t_curves = time.perf_counter()
         curves, curve_attrs = schema.boundary_vars(plan) if boundaries else ({}, {})
-        if progress and curve_attrs:
-            # Before the first point, and silent till now: say what took the time.
-            sys.stderr.write(f"sweep: stability boundary curves of the load x arm box in "
-                             f"{time.perf_counter() - t_curves:.1f} s (boundaries=False, --no-boundaries: none)\n")  # fmt: skip
+        if say:
+            sys.stderr.write(f"{time.perf_counter() - t_curves:.1f} s\n")
         layout = (
             schema.coords(plan),
             schema.static_vars(plan) | curves,

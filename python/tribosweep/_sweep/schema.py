@@ -337,6 +337,13 @@ def empty_result(n: int, *, wear_rate: bool = False) -> dict[str, np.ndarray]:
     return out
 
 
+def boundary_box(plan: Plan) -> bool:
+    """Whether :func:`boundary_vars` computes curves: normal load and arm length both swept, nothing else."""
+    axes = plan.axes
+    return (axes["normal_load"].size >= 2 and axes["arm_length"].size >= 2
+            and not any(a.size > 1 for d, a in axes.items() if d not in ("normal_load", "arm_length")))  # fmt: skip
+
+
 def boundary_vars(plan: Plan) -> tuple[dict, dict]:
     """The stability boundaries that cross a normal load x arm length sweep's box, as static variables.
 
@@ -354,7 +361,7 @@ def boundary_vars(plan: Plan) -> tuple[dict, dict]:
     axes = plan.axes
     if not (axes["normal_load"].size >= 2 and axes["arm_length"].size >= 2):
         return {}, {}
-    if any(a.size > 1 for d, a in axes.items() if d not in ("normal_load", "arm_length")):
+    if not boundary_box(plan):
         return {}, {"hopf_curves": "not stored: a third axis is swept (curves are drawn per normal load x arm length box)"}
     from .. import _boundary
 
