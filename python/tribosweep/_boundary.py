@@ -182,8 +182,9 @@ def boundary_curves(
         # stops at its next branch instead of running its curve to the end.
         stop = threading.Event()
         with concurrent.futures.ThreadPoolExecutor(max_workers=2) as pool:
-            runs = [pool.submit(_kind_curves, k, model, hopf, (x_lo, x_hi), (y_lo, y_hi), slices, workers // 2, stop)
-                    for k in todo]  # fmt: skip
+            share = (workers - workers // 2, workers // 2)  # an odd thread to the first kind
+            runs = [pool.submit(_kind_curves, k, model, hopf, (x_lo, x_hi), (y_lo, y_hi), slices, w, stop)
+                    for k, w in zip(todo, share)]  # fmt: skip
             try:
                 done = [r.result() for r in runs]
             except BaseException:
