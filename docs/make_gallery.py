@@ -120,8 +120,8 @@ def main(argv=None) -> int:
     t_sweeps = time.perf_counter() - t0
     save(regime_map(one), "regime_map.png",
          "Regime map: 15 loads x 5 arm lengths at the seed's 0.46 m/s, the attractor census at 16 disturbances per "
-         "point (hatched: another attractor coexists with stable sliding) and the Hopf curve the sweep stores "
-         "(sliding is unstable to its lower left)")
+         "point (hatched: another attractor coexists with stable sliding) and the curves the sweep stores: the Hopf "
+         "curve (sliding is unstable to its lower left) and the saddle cycle's grazing curve, here also its fold")
     save(regime_map(five), "facets.png", "Regime map over five sliding speeds with a Stribeck friction curve "
          "(mu_static 0.3, no census): one panel per speed, in rows of four")
     save(variable_map(one, "basin_fraction"), "basin_fraction.png",
