@@ -284,6 +284,21 @@ def test_classification_of_transient_summaries(summary, stable, regime, decided_
         assert summary["reason"][0] in reason[0]
 
 
+def test_a_diverged_run_says_where_and_when_it_left_the_models_validity():
+    # The steady-state core gives no reason for an escape; the sweep writes one from the run's summary.
+    fly = _summary("diverged") | {"max_abs_z": [1e-3], "max_gap": [0.994e-3]}
+    press = _summary("diverged") | {"max_abs_z": [1e-3], "max_gap": [-2e-5]}
+    (r1,), _, (why1,), _ = _stages.classify(fly, np.array([False]), 7.0)
+    (r2,), _, (why2,), _ = _stages.classify(press, np.array([False]), 7.0)
+    assert r1 == r2 == REGIME["diverged"]
+    assert why1 == ("|z| reached the escape limit (0.001 m) at t = 5.25 s: the motion left the model's validity; "
+                    "the pin flew 0.000994 m off the disk")  # fmt: skip
+    assert why2.endswith("; the pin was pressed into the disk past it") and "t = 5.25 s" in why2
+    # A reason the core gave is kept.
+    (_,), _, (why3,), _ = _stages.classify(_summary("diverged", reason="escape at t = 1 s"), np.array([False]), 7.0)
+    assert why3 == "escape at t = 1 s"
+
+
 def test_an_unsettled_run_with_a_non_finite_end_is_a_failure_not_irregular():
     s = _summary("unsettled", status="not_converged") | {"y_end": np.array([[np.nan, 0, 0, 0, 0, 0]])}
     r, status, reason, _ = _stages.classify(s, np.array([False]), 7.0)

@@ -283,6 +283,8 @@ def classify(summary: dict, stable: np.ndarray, t_max: float) -> tuple[np.ndarra
         finite = y_end is None or bool(np.all(np.isfinite(np.asarray(y_end)[i])))
         if name == "diverged" or st == "diverged":
             regime[i] = REGIME["diverged"]
+            if not reason[i]:
+                reason[i] = _escape_reason(summary, i)
         elif (name == "unsettled" and st == "not_converged" and finite) or (name == "irregular" and finite):
             regime[i] = REGIME["irregular"]
             status[i] = STATUS["success"]
@@ -311,6 +313,19 @@ def classify(summary: dict, stable: np.ndarray, t_max: float) -> tuple[np.ndarra
                 note = "sliding is linearly stable: this cycle, reached from the run's start, coexists with it"
                 reason[i] = f"{reason[i]}; {note}" if reason[i] else note
     return regime, status, reason.astype(str), decided
+
+
+def _escape_reason(summary: dict, i: int) -> str:
+    """Why run ``i`` of a steady-state summary is ``diverged``: where and when it left the model's validity."""
+    z, t_end = summary.get("max_abs_z"), summary.get("t_end")
+    if z is None or t_end is None:
+        return "|z| reached the escape limit: the motion left the model's validity"
+    z, gap = float(np.asarray(z)[i]), float(np.asarray(summary.get("max_gap", [np.nan] * (i + 1)))[i])
+    # Off the disk the gap is what grew; pressed into it, z went negative past the limit.
+    where = (f"; the pin flew {gap:.3g} m off the disk" if gap >= 0.5 * z else
+             "; the pin was pressed into the disk past it")  # fmt: skip
+    return (f"|z| reached the escape limit ({z:.3g} m) at t = {float(np.asarray(t_end)[i]):.3g} s: the motion left "
+            f"the model's validity{where}")  # fmt: skip
 
 
 def run_steady(p: Points, sel: np.ndarray, y0: np.ndarray, decay: np.ndarray | None = None) -> dict:
