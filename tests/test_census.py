@@ -207,18 +207,6 @@ def test_irregular_motion_stops_early_with_the_same_fractions():
     np.testing.assert_array_equal(on.t_end.values[settled], off.t_end.values[settled])
 
 
-@pytest.fixture
-def eight_pilots(monkeypatch):
-    """The census with 8 pilots instead of 2 (``PHASE_STARTS = (0, 8)``), for tests that need an
-    irregular pilot. Whether one pilot ends irregular is the fate of one chaotic transient, a coin
-    toss with the irregular fraction's odds (about 0.64 at 20.8 N, 11 cm): with 2 pilots none did
-    in 3 of 4 runs with the model's inputs moved by 1 or 2 ulps (which also moves every sample,
-    their Halton shift being a hash of the inputs). With 8, none does with odds of 0.36^8 = 3e-4."""
-    monkeypatch.setattr(_census, "PHASE_STARTS", (0, 8))
-    monkeypatch.setattr(_census, "PILOTS", 8)
-    return 8
-
-
 def test_recurrence_on_a_pilots_attractor_stops_irregular_samples_early_with_the_same_fractions(eight_pilots):
     """Samples after the pilots stop once they keep to a pilot's irregular attractor.
 

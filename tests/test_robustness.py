@@ -123,7 +123,7 @@ def test_most_census_samples_compared_with_scipy_keep_their_fate(seed_census_fat
     assert {"sliding", "cycle"} <= names, (ref, robust)
 
 
-def test_the_recurrence_tests_pilots_find_the_irregular_attractor_under_moved_inputs(monkeypatch):
+def test_the_recurrence_tests_pilots_find_the_irregular_attractor_under_moved_inputs(eight_pilots):
     # test_census.py::test_recurrence_on_a_pilots_attractor_stops_irregular_samples_early_... needs
     # a pilot at 20.8 N, 11 cm that ends irregular (and so establishes the attractor the later
     # samples stop on). Each pilot does with the irregular fraction's odds (about 0.64): with the
@@ -137,8 +137,6 @@ def test_the_recurrence_tests_pilots_find_the_irregular_attractor_under_moved_in
     from conftest import moved
     from tribosweep import _census
 
-    monkeypatch.setattr(_census, "PHASE_STARTS", (0, 8))
-    monkeypatch.setattr(_census, "PILOTS", 8)
     m = ts.apparatus_model(20.7692, 0.1099, 0.3, base=ts.SliderModel(contact="unilateral"))
 
     def inputs_moved(u):
@@ -156,7 +154,7 @@ def test_the_recurrence_tests_pilots_find_the_irregular_attractor_under_moved_in
     finally:
         _census.starts = orig
     for d in runs:
-        assert (d.attractor_reached.values[:8] == 2).any(), d.attractor_reached.values[:8]
+        assert (d.attractor_reached.values[:eight_pilots] == 2).any(), d.attractor_reached.values[:eight_pilots]
         assert int(d.recurrence.sum()) >= 64 // 4, int(d.recurrence.sum())
 
 

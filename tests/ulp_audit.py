@@ -27,27 +27,19 @@ from __future__ import annotations
 
 import os
 
-import numpy as np
-
 ULPS: int = int(os.environ.get("AUDIT_ULP", "0"))
-
-
-def _moved(v: float, k: int) -> float:
-    x = np.float64(v)
-    for _ in range(abs(k)):
-        x = np.nextafter(x, np.inf if k > 0 else -np.inf)
-    return float(x)
 
 
 def pytest_configure(config):
     if not ULPS:
         return
+    from conftest import moved
     from tribosweep import _model
 
     values = _model.SliderModel.values
 
     def moved_values(self):
-        return {k: (_moved(v, ULPS) if isinstance(v, float) and v != 0.0 and k != "torsion_sign" else v)
+        return {k: (float(moved(v, ULPS)) if isinstance(v, float) and v != 0.0 and k != "torsion_sign" else v)
                 for k, v in values(self).items()}  # fmt: skip
 
     _model.SliderModel.values = moved_values

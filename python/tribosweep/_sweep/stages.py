@@ -317,15 +317,13 @@ def classify(summary: dict, stable: np.ndarray, t_max: float) -> tuple[np.ndarra
 
 def _escape_reason(summary: dict, i: int) -> str:
     """Why run ``i`` of a steady-state summary is ``diverged``: where and when it left the model's validity."""
-    z, t_end = summary.get("max_abs_z"), summary.get("t_end")
-    if z is None or t_end is None:
+    if "max_abs_z" not in summary or "t_end" not in summary:
         return "|z| reached the escape limit: the motion left the model's validity"
-    z, gap = float(np.asarray(z)[i]), float(np.asarray(summary.get("max_gap", [np.nan] * (i + 1)))[i])
-    # Off the disk the gap is what grew; pressed into it, z went negative past the limit.
-    where = (f"; the pin flew {gap:.3g} m off the disk" if gap >= 0.5 * z else
-             "; the pin was pressed into the disk past it")  # fmt: skip
-    return (f"|z| reached the escape limit ({z:.3g} m) at t = {float(np.asarray(t_end)[i]):.3g} s: the motion left "
-            f"the model's validity{where}")  # fmt: skip
+    z, t = float(summary["max_abs_z"][i]), float(summary["t_end"][i])
+    # Off the disk the gap is what grew; pressed into it, z went negative past the limit (gap < 0).
+    gap = float(summary["max_gap"][i]) if "max_gap" in summary else float("nan")
+    where = f"; the pin flew {gap:.3g} m off the disk" if gap >= 0.5 * z else "; the pin was pressed into the disk past it"
+    return f"|z| reached the escape limit ({z:.3g} m) at t = {t:.3g} s: the motion left the model's validity{where}"
 
 
 def run_steady(p: Points, sel: np.ndarray, y0: np.ndarray, decay: np.ndarray | None = None) -> dict:

@@ -32,6 +32,7 @@ import time
 import numpy as np
 
 from .._codes import REGIME
+from .._settings import DEFAULTS
 from .._sweep import sweep
 
 #: The issue-10 sweep's axes.
@@ -126,6 +127,7 @@ def _chart(d: dict):
 
     fig = Figure(figsize=(10.5, 4.8), layout="constrained")
     ax_l, ax_a = fig.subplots(1, 2)
+    default = (DEFAULTS.integration.rtol, DEFAULTS.irregular.block)
     colors = dict(zip(RTOLS, ("tab:red", "tab:orange", "tab:green", "tab:blue")))
     markers = dict(zip(BLOCKS, ("v", "s", "o", "D")))
     lo = min(f["regimes_differ"] for f in d["floor"])
@@ -133,7 +135,7 @@ def _chart(d: dict):
     ax_l.axhspan(lo - 0.5, hi + 0.5, color="0.85", zorder=0)
     for r in d["rows"]:
         kw = dict(color=colors[r["rtol"]], marker=markers[r["block"]], ls="none", ms=7,
-                  mec="k" if (r["rtol"], r["block"]) == (1e-8, 256) else "none")  # fmt: skip
+                  mec="k" if (r["rtol"], r["block"]) == default else "none")  # fmt: skip
         ax_l.plot(r["points_per_s"], r["regimes_differ"], **kw)
         ax_a.plot(r["points_per_s"], r["a1_error_median"], **kw)
     for ax in (ax_l, ax_a):
@@ -161,7 +163,7 @@ def _chart(d: dict):
     handles = [Line2D([], [], color=colors[t], marker="o", ls="none", label=f"rtol {t:g}") for t in RTOLS]
     handles += [Line2D([], [], color="0.4", marker=markers[b], ls="none",
                        label=f"block {b}" if b else "no early stop") for b in BLOCKS]  # fmt: skip
-    handles.append(Line2D([], [], color="0.4", marker="o", mec="k", ls="none", label="default (1e-8, 256)"))
+    handles.append(Line2D([], [], color="0.4", marker="o", mec="k", ls="none", label=f"default ({default[0]:g}, {default[1]})"))
     fig.legend(handles=handles, fontsize=8, loc="outside lower center", ncol=len(handles))
     fig.suptitle(f"The Stribeck sweep ({d['law']} law, {d['points']} points, t_max 20 s): "
                  "transient rtol x irregular_block, against a reference run to t_max at rtol 1e-10", fontsize=10)  # fmt: skip
