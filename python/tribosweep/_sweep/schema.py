@@ -179,6 +179,8 @@ POINT_VARIABLES: dict[str, tuple[str, str | None, str]] = {
     "orbit_stable": ("i1", None, "stability of the shooting orbit (Floquet multipliers)"),
     "tidf_a1_error": ("f8", "1", "relative error of the describing function's A1 against the shooting orbit"),
     "newton_iterations": ("i8", "1", "Newton iterations of the TIDF and shooting stages (0: none run)"),
+    "cycle_verified": ("i1", None, "whether shooting converged the cycle the point's transient ended on to a stable "
+                                   "periodic orbit, on which the cycle variables were then measured"),
     **_irregular.IRREGULAR_VARIABLES,
 }
 #: Variables of the cycle a point's own run ended on (a transient that ended periodic, or the
@@ -205,6 +207,7 @@ FLAG_MEANINGS: dict[str, tuple[tuple[int, ...], tuple[str, ...]]] = {
     "wear_applicability": (tuple(range(len(WEAR_APPLICABILITY_NAMES))), WEAR_APPLICABILITY_NAMES),
     "tidf_contact_opens": ((-1, 0, 1), ("not_computed", "closed", "opens")),
     "orbit_stable": ((-1, 0, 1), ("not_computed", "unstable", "stable")),
+    "cycle_verified": ((-1, 0, 1), ("no_transient_cycle", "not_verified", "verified")),
 }
 
 
@@ -334,6 +337,7 @@ def empty_result(n: int, *, wear_rate: bool = False) -> dict[str, np.ndarray]:
     out["tidf_roots"][:] = -1
     out["tidf_contact_opens"][:] = -1
     out["orbit_stable"][:] = -1
+    out["cycle_verified"][:] = -1
     return out
 
 

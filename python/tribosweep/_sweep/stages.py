@@ -326,17 +326,202 @@ def _escape_reason(summary: dict, i: int) -> str:
     return f"|z| reached the escape limit ({z:.3g} m) at t = {t:.3g} s: the motion left the model's validity{where}"
 
 
-def run_steady(p: Points, sel: np.ndarray, y0: np.ndarray, decay: np.ndarray | None = None) -> dict:
-    """Runs to steady state of the points ``sel`` from ``y0`` (one row, or one per point), in the core."""
+def run_steady(p: Points, sel: np.ndarray, y0: np.ndarray, decay: np.ndarray | None = None,
+               t_max: float | None = None, periodic_tol: float | None = None) -> dict:  # fmt: skip
+    """Runs to steady state of the points ``sel`` from ``y0`` (one row, or one per point), in the core.
+
+    ``t_max``, ``periodic_tol``: the runs' longest simulated time and repetition tolerance
+    (default: the settings').
+    """
     it, st = p.settings.integration, p.settings.steady
     return _core.ensemble(
         p.base, p.contact, p.friction_law, p.names, np.ascontiguousarray(p.values[sel]),
-        np.ascontiguousarray(y0, dtype=np.float64), float(st.t_max), it.integrator, float(it.rtol),
+        np.ascontiguousarray(y0, dtype=np.float64), float(st.t_max if t_max is None else t_max), it.integrator,
+        float(it.rtol),
         atol=None if it.atol is None else np.asarray(it.atol, dtype=np.float64), threads=p.threads, kind="steady",
-        periodic_tol=float(st.periodic_tol), decay_amplitude=st.decay_amplitude, n_fourier=512,
-        decay_amplitudes=None if decay is None else np.ascontiguousarray(decay, dtype=np.float64),
+        periodic_tol=float(st.periodic_tol if periodic_tol is None else periodic_tol),
+        decay_amplitude=st.decay_amplitude, n_fourier=512, decay_amplitudes=None if decay is None else np.ascontiguousarray(decay, dtype=np.float64),
         irregular_block=int(p.settings.irregular.block),
     )  # fmt: skip
+
+
+#: Newton iterations of the shooting that checks a transient's cycle. From a section state that
+#: repeated to ``periodic_tol`` it converges in 2-4 (the Stribeck sweep of benches/bench_stribeck.py:
+#: 53 of 63 cycles in 2, 9 in 3, 1 in 4); the one that had not by 8 had not by 30 either.
+CHECK_MAX_ITER: int = 8
+
+#: Most shooting checks of one point's transient: each one after the first follows a stop near an
+#: unstable cycle (a laminar phase of intermittent motion comes back every few seconds).
+CHECK_ROUNDS: int = 8
+
+#: Leaving an unstable cycle, a run goes on without stopping until a deviation along the cycle's
+#: largest multiplier ``|mu|`` has grown by this factor: ``ceil(ln(LEAVE_GROWTH) / ln|mu|)``
+#: periods, from 4 to :data:`LEAVE_PERIODS_MAX`. Without it, the run would stop on the same cycle
+#: again a few periods later (it repeats as well as it did when the run first stopped).
+LEAVE_GROWTH: float = 1e3
+LEAVE_PERIODS_MAX: int = 1000
+
+#: Cycle quantities of a steady-state summary that the run measured on the converged orbit replaces.
+CYCLE_KEYS: tuple[str, ...] = (
+    "omega", "period", "multiplicity", "z0", "z1_amplitude", "z1_phase", "z2_amplitude", "z2_phase", "z3_amplitude",
+    "z3_phase", "phi1_amplitude", "phi1_phase", "x1_amplitude", "x1_phase", "min_normal_force", "fraction_off_disk",
+    "min_slip_velocity", "max_gap", "max_abs_z",
+)  # fmt: skip
+
+
+def _rows(summary: dict) -> dict:
+    """A steady-state summary as numpy arrays (copies), one row per run."""
+    return {k: np.array(v, dtype=object if k == "reason" else None) for k, v in summary.items()}
+
+
+def _reorder(v, idx: np.ndarray):
+    """``v`` (an array, or a list of one item per run) at ``idx``."""
+    return np.asarray(v)[idx] if isinstance(v, np.ndarray) else [v[i] for i in idx]
+
+
+def check_cycles(p: Points, sel: np.ndarray, summary: dict) -> tuple[dict, np.ndarray]:
+    """Stage 4a: the cycles that the transients of ``sel`` stopped on, checked and converged by shooting.
+
+    A transient stops on a cycle once its section state has repeated to ``periodic_tol``. Near a
+    slowly attracting cycle (a multiplier near 1) it is then still about ``residual / (1 - |mu|)``
+    away from it: the Stribeck sweep's transient amplitudes were up to 0.7 % off. In a laminar
+    phase of intermittent motion it repeats near an unstable cycle, which is not a steady state.
+    Shooting from the stop's state (Floquet multipliers, saltation at every switch) tells:
+
+    - **stable orbit**: a short run started on it measures it (every cycle quantity of the
+      summary, from the same Fourier integrals as the transient's, on the orbit itself);
+    - **unstable orbit**: the run goes on from where it stopped, first without stopping until a
+      deviation along the largest multiplier has grown :data:`LEAVE_GROWTH`-fold, then to a steady
+      state within what is left of ``t_max``; a cycle it stops on is checked again (at most
+      :data:`CHECK_ROUNDS` checks);
+    - **no convergence**: the transient's cycle stays, not verified, and the reason says so.
+
+    Returns the summary with those rows replaced (``t_end`` and ``n_rhs`` over all the runs of a
+    point, shooting included), and per run whether its cycle was verified (a stable orbit that
+    shooting converged and a run on it measured: True).
+    """
+    s = _rows(summary)
+    n = len(sel)
+    verified = np.zeros(n, dtype=bool)
+    notes: list[list[str]] = [[] for _ in range(n)]
+    periodic = OUTCOME_NAMES.index("periodic")
+    sh, t_max = p.settings.shooting, float(p.settings.steady.t_max)
+    # Ten times the transients' own tolerance (1e-9 by default): the orbit as accurate as the
+    # transient's integration, and its multipliers to spare. The stages' shooting_rtol (1e-10)
+    # is for the describing function's roots, whose A1 is compared to a few 1e-3.
+    rtol = max(0.1 * float(p.settings.integration.rtol), float(sh.rtol))
+    todo = np.flatnonzero(s["outcome"] == periodic)
+    for _ in range(CHECK_ROUNDS):
+        if not todo.size:
+            break
+        t1 = time.perf_counter()
+        orbs = _core.periodic_orbits(
+            p.base, p.contact, p.friction_law, p.names, np.ascontiguousarray(p.values[sel[todo]]),
+            y0=np.ascontiguousarray(s["y_end"][todo]), periods=np.ascontiguousarray(s["period"][todo]),
+            rtol=rtol, tol=sh.tol, max_iter=CHECK_MAX_ITER, threads=p.threads,
+        )  # fmt: skip
+        s["n_rhs"][todo] += np.asarray(orbs["n_rhs"]).astype(s["n_rhs"].dtype)
+        ok = np.asarray(orbs["status"]) == STATUS["success"]
+        stable = ok & np.asarray(orbs["stable"], dtype=bool)
+        for j in np.flatnonzero(~ok):
+            notes[todo[j]].append(f"the cycle is the transient's, not verified: shooting from it failed "
+                                  f"({orbs['reason'][j]})")  # fmt: skip
+        good = todo[stable]
+        if good.size:
+            verified[good] = _measure(p, sel, s, good, np.asarray(orbs["state0"])[stable])
+        p.charge(sel[todo], t1)
+        unstable = np.flatnonzero(ok & ~stable)
+        todo = _leave(p, sel, s, todo[unstable], np.asarray(orbs["moduli"])[unstable],
+                      np.asarray(orbs["period"])[unstable], t_max, notes)  # fmt: skip
+    for i in todo:  # still stopping near unstable cycles after CHECK_ROUNDS checks
+        s["outcome"][i] = OUTCOME_NAMES.index("unsettled")
+        s["status"][i] = STATUS["not_converged"]
+        notes[i].append(f"it stopped near an unstable cycle {CHECK_ROUNDS} times")
+    for i, parts in enumerate(notes):
+        if parts:
+            s["reason"][i] = "; ".join(([s["reason"][i]] if s["reason"][i] else []) + parts)
+    return s, verified
+
+
+def _measure(p: Points, sel: np.ndarray, s: dict, idx: np.ndarray, state0: np.ndarray) -> np.ndarray:
+    """The cycle quantities of ``s`` at rows ``idx``, measured by runs started on their converged orbits.
+
+    Such a run stops once its section state repeats, two periods in. Its limit is ``t_max``, the
+    same for every run: a limit taken from the periods of the call's other runs would make a
+    point's result depend on the chunk it is computed in.
+
+    Returns which runs repeated (the others keep the transient's quantities, with a reason).
+    """
+    m = _rows(run_steady(p, sel[idx], state0))
+    s["n_rhs"][idx] += m["n_rhs"]
+    done = m["outcome"] == OUTCOME_NAMES.index("periodic")
+    for key in CYCLE_KEYS:
+        s[key][idx[done]] = m[key][done]
+    for i in idx[~done]:
+        s["reason"][i] = "; ".join(filter(None, [s["reason"][i], "a run on the converged orbit did not repeat: the "
+                                                 "cycle's quantities are the transient's"]))  # fmt: skip
+    return done
+
+
+def _leave(p: Points, sel: np.ndarray, s: dict, idx: np.ndarray, moduli: np.ndarray, period: np.ndarray,
+           t_max: float, notes: list[list[str]]) -> np.ndarray:  # fmt: skip
+    """Runs ``idx`` on from near the unstable cycles they stopped on; returns those that stop on a cycle again.
+
+    One core call per run: each has its own time left. Rare (1 of 95 transients in the Stribeck
+    sweep), so it costs little that they do not share a call.
+    """
+    periodic = OUTCOME_NAMES.index("periodic")
+    again = []
+    for i, mu, T in zip(idx, moduli, period):
+        t1 = time.perf_counter()
+        t0 = float(s["t_end"][i])
+        mu_max = float(np.max(mu))
+        notes[i].append(f"at t = {t0:.3g} s it stopped near an unstable cycle (largest multiplier {mu_max:.3g}) "
+                        "and went on")  # fmt: skip
+        grow = np.ceil(np.log(LEAVE_GROWTH) / np.log(mu_max)) if mu_max > 1 else LEAVE_PERIODS_MAX
+        span = min(t_max - t0, float(np.clip(grow, 4, LEAVE_PERIODS_MAX)) * float(T))
+        y = s["y_end"][i]
+        if span > 0:
+            it = p.settings.integration
+            run = _core.ensemble(p.base, p.contact, p.friction_law, p.names, np.ascontiguousarray(p.values[sel[[i]]]),
+                                 np.ascontiguousarray(y[None, :]), span, it.integrator, float(it.rtol),
+                                 atol=None if it.atol is None else np.asarray(it.atol, dtype=np.float64),
+                                 threads=1, kind="final")  # fmt: skip
+            s["n_rhs"][i] += int(run["n_rhs"][0])
+            if int(run["status"][0]) != STATUS["success"]:
+                # It left the model (the escape limit) or failed: that run is the answer.
+                s["outcome"][i] = OUTCOME_NAMES.index("diverged" if run["status"][0] == STATUS["diverged"] else "failed")
+                s["status"][i] = run["status"][0]
+                s["t_end"][i] = t0 + float(run["t_reached"][0])
+                s["y_end"][i] = run["y_end"][0]
+                for key in ("max_abs_z", "max_gap"):
+                    s[key][i] = max(float(s[key][i]), float(run[key][0]))
+                if run["reason"][0]:
+                    notes[i].append(str(run["reason"][0]))
+                p.charge(sel[[i]], t1)
+                continue
+            y = np.asarray(run["y_end"][0])
+        rest = t_max - t0 - span
+        if rest <= 0:
+            s["outcome"][i] = OUTCOME_NAMES.index("unsettled")
+            s["status"][i] = STATUS["not_converged"]
+            s["t_end"][i] = t_max
+            s["y_end"][i] = y
+            p.charge(sel[[i]], t1)
+            continue
+        r = _rows(run_steady(p, sel[[i]], y[None, :], t_max=rest))
+        n_rhs = s["n_rhs"][i] + r["n_rhs"][0]
+        for key in s:
+            if key not in ("reason", "irregular_cells"):  # the cells: padded per call, for the census only
+                s[key][i] = r[key][0]
+        s["n_rhs"][i] = n_rhs
+        s["t_end"][i] = t0 + span + float(r["t_end"][0])
+        if r["reason"][0] and r["outcome"][0] != OUTCOME_NAMES.index("unsettled"):
+            notes[i].append(str(r["reason"][0]))  # an unsettled run's names its own t_max, the rest of the point's
+        p.charge(sel[[i]], t1)
+        if r["outcome"][0] == periodic:
+            again.append(i)
+    return np.asarray(again, dtype=np.int64)
 
 
 def transient(p: Points, *, start_on_mode: bool) -> None:
@@ -361,8 +546,17 @@ def transient(p: Points, *, start_on_mode: bool) -> None:
                                        p.settings.unstable_disturbance * np.abs(z_st[unstable]),
                                        p.eigenvalues[sel[unstable]])  # fmt: skip
     t1 = time.perf_counter()
-    summary = run_steady(p, sel, y0s)
+    # The slowest sliding first. A call's lanes take trajectories in order and it ends with its
+    # longest, so a long run started last leaves lanes idle; where friction depends on speed, the
+    # longest (stick-slip, irregular motion) are at low speeds. On the Stribeck sweep of
+    # benches/bench_stribeck.py the transients took 0.31-0.32 s in this order against 0.36-0.37 s
+    # in the grid's (0.29-0.30 s in the order of their measured lengths). A run's result does
+    # not depend on its place in the call.
+    order = np.argsort(np.broadcast_to(p.full["sliding_speed"], (p.n,))[sel], kind="stable")
+    back = np.argsort(order)
+    summary = {k: _reorder(v, back) for k, v in run_steady(p, sel[order], y0s[order]).items()}
     p.charge(sel, t1)
+    summary, verified = check_cycles(p, sel, summary)
     t_max = float(p.settings.steady.t_max)
     regime, status, why, decided = classify(summary, p.stable[sel], t_max)
     out["regime"][sel] = regime
@@ -373,6 +567,7 @@ def transient(p: Points, *, start_on_mode: bool) -> None:
     for key in ("z1_amplitude", "z2_amplitude", "phi1_amplitude", "fraction_off_disk"):
         out[key][sel] = np.where(periodic, summary[key], np.nan)
     out["cycle_omega"][sel] = np.where(periodic, summary["omega"], np.nan)
+    out["cycle_verified"][sel] = np.where(periodic, verified == 1, -1)
     out["min_normal_force"][sel] = summary["min_normal_force"]
     out["min_slip_velocity"][sel] = summary["min_slip_velocity"]
     out["n_rhs"][sel] += np.asarray(summary["n_rhs"], dtype=np.int64)
