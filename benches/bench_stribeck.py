@@ -10,7 +10,8 @@ regimes the two laws give at each point.
 
 ``--stages`` also prints, for the last run of each law, the wall time of its batched core calls by
 kind (``steady``: the transients; ``sampled``: the irregular points' measurement windows;
-``final``: their Lyapunov-exponent segments), with their right-hand sides and accepted steps.
+``final``: their Lyapunov-exponent segments, and the runs leaving an unstable cycle; ``shooting``:
+the check of every cycle a transient stopped on), with their right-hand sides and accepted steps.
 
 ``--settings`` instead runs one law's sweep over the transients' ``rtol`` x ``irregular_block``
 against a reference run to ``t_max`` at rtol 1e-10 (:mod:`tribosweep.bench.sweep_settings`), prints
@@ -40,30 +41,36 @@ def run(law: str, threads: int) -> tuple[float, object]:
 
 
 class StageClock:
-    """Wraps ``_core.ensemble`` while active: wall time, calls, right-hand sides and accepted steps by kind."""
+    """Wraps ``_core.ensemble`` and ``_core.periodic_orbits`` while active: wall time, calls,
+    right-hand sides and accepted steps by kind (the orbits: ``shooting``, steps not counted)."""
 
     def __init__(self):
         self.rows: dict[str, list[float]] = {}
-        self._orig = None
+        self._orig: dict = {}
 
-    def __enter__(self):
-        self._orig = orig = _core.ensemble
+    def _wrap(self, name: str, kind_of):
+        self._orig[name] = orig = getattr(_core, name)
 
         def timed(*args, **kwargs):
             t0 = time.perf_counter()
             res = orig(*args, **kwargs)
-            row = self.rows.setdefault(kwargs.get("kind", "final"), [0.0, 0, 0, 0])
+            row = self.rows.setdefault(kind_of(kwargs), [0.0, 0, 0, 0])
             row[0] += time.perf_counter() - t0
             row[1] += 1
             row[2] += int(np.asarray(res["n_rhs"]).sum())
-            row[3] += int(np.asarray(res["n_accept"]).sum())
+            row[3] += int(np.asarray(res["n_accept"]).sum()) if "n_accept" in res else 0
             return res
 
-        _core.ensemble = timed
+        setattr(_core, name, timed)
+
+    def __enter__(self):
+        self._wrap("ensemble", lambda kw: kw.get("kind", "final"))
+        self._wrap("periodic_orbits", lambda kw: "shooting")
         return self
 
     def __exit__(self, *exc):
-        _core.ensemble = self._orig
+        for name, orig in self._orig.items():
+            setattr(_core, name, orig)
 
     def report(self, total: float) -> str:
         parts = [f"{k} {v[0]:.3f} s ({v[1]} calls, {v[2] / 1e6:.1f}M rhs, {v[3] / 1e6:.2f}M steps)"
