@@ -142,21 +142,35 @@ def test_a_stop_near_an_unstable_cycle_goes_on_to_the_real_steady_state(saddle, 
     assert regime[0] == (REGIME["steady_sliding"] if fate == "decayed" else REGIME["diverged"])
 
 
-def test_a_shooting_failure_keeps_the_transients_cycle_flagged_and_explained(monkeypatch):
+def _fail(out):
+    out["status"] = np.full_like(np.asarray(out["status"]), ts.STATUS_NAMES.index("not_converged"))
+    out["reason"] = ["Newton did not converge (injected)"] * len(out["reason"])
+
+
+def _elsewhere(out):
+    out["A1"] = np.asarray(out["A1"]) * 1.06  # another orbit: 6 % larger
+
+
+@pytest.mark.parametrize("inject, says", [
+    (_fail, "not verified: shooting from it failed (Newton did not converge (injected))"),
+    (_elsewhere, "not verified: shooting from it converged to another orbit (period"),
+])  # fmt: skip
+def test_a_failed_check_keeps_the_transients_cycle_flagged_and_explained(monkeypatch, bouncing, inject, says):
     real = _core.periodic_orbits
 
-    def failing(*args, **kwargs):
+    def injected(*args, **kwargs):
         out = real(*args, **kwargs)
-        out["status"] = np.full_like(np.asarray(out["status"]), ts.STATUS_NAMES.index("not_converged"))
-        out["reason"] = ["Newton did not converge (injected)"] * len(out["reason"])
+        inject(out)
         return out
 
-    monkeypatch.setattr(_core, "periodic_orbits", failing)
+    monkeypatch.setattr(_core, "periodic_orbits", injected)
     ds = _sweep()
     assert ts.labels(ds.regime).values.ravel()[0] == "contact_loss"
     assert ts.labels(ds.cycle_verified).values.ravel()[0] == "not_verified"
-    assert "not verified: shooting from it failed (Newton did not converge (injected))" in str(_first(ds, "reason"))
-    assert np.isfinite(float(_first(ds, "z1_amplitude")))
+    assert says in str(_first(ds, "reason"))
+    # The transient's own cycle, as without the check: within its 5.8e-4 of the scipy cycle.
+    _, (_, a1_ref) = bouncing
+    assert abs(float(_first(ds, "z1_amplitude")) / a1_ref - 1) < 2e-3
 
 
 def test_points_that_end_on_no_cycle_are_not_checked():

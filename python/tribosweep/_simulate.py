@@ -203,6 +203,12 @@ def ensemble(
         return its summary: ``outcome``, ``omega``, harmonics of z, phi, x, minimum normal force,
         fraction of the period off the disk, minimum sliding velocity, and the state where the run
         ended (``z_end, ...``: on the cycle's section for a periodic outcome, a start for shooting).
+        A periodic outcome is the run's stop, where its section state repeated to
+        ``periodic_tol``: near a slowly attracting cycle about ``periodic_tol / (1 - |mu|)`` from
+        it (0.7 % in A1 on the Stribeck sweep), near an unstable one (intermittent motion) not a
+        steady state at all. :func:`periodic_orbit` from ``(z_end, ...)`` and ``period``
+        converges it and checks its stability; a sweep does so at every such stop
+        (``cycle_verified``).
     periodic_tol : float
         Relative repetition tolerance of the Poincare-section state that declares a cycle.
     decay_amplitude : float, m, optional

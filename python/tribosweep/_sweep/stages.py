@@ -350,6 +350,13 @@ def run_steady(p: Points, sel: np.ndarray, y0: np.ndarray, decay: np.ndarray | N
 #: 53 of 63 cycles in 2, 9 in 3, 1 in 4); the one that had not by 8 had not by 30 either.
 CHECK_MAX_ITER: int = 8
 
+#: Shooting from a transient's stop must end on an orbit of the same period and first-harmonic
+#: amplitude of z within these relative differences, or the cycle is not verified. On the
+#: Stribeck sweep the converged orbits were within 7.1e-3 of the stops in A1 (a slow approach) and
+#: closer in period; a tenfold margin, far below the gap to another orbit of the same multiplicity.
+SAME_ORBIT_PERIOD: float = 1e-2
+SAME_ORBIT_A1: float = 5e-2
+
 #: Most shooting checks of one point's transient: each one after the first follows a stop near an
 #: unstable cycle (a laminar phase of intermittent motion comes back every few seconds).
 CHECK_ROUNDS: int = 8
@@ -422,10 +429,20 @@ def check_cycles(p: Points, sel: np.ndarray, summary: dict) -> tuple[dict, np.nd
         )  # fmt: skip
         s["n_rhs"][todo] += np.asarray(orbs["n_rhs"]).astype(s["n_rhs"].dtype)
         ok = np.asarray(orbs["status"]) == STATUS["success"]
-        stable = ok & np.asarray(orbs["stable"], dtype=bool)
+        # Newton from the stop must end on the cycle the run was near, not on another orbit.
+        dt = np.abs(np.asarray(orbs["period"]) / s["period"][todo] - 1)
+        da = np.abs(np.asarray(orbs["A1"]) / s["z1_amplitude"][todo] - 1)
+        elsewhere = ok & ~((dt <= SAME_ORBIT_PERIOD) & (da <= SAME_ORBIT_A1))
+        for j in np.flatnonzero(elsewhere):
+            notes[todo[j]].append(
+                f"the cycle is the transient's, not verified: shooting from it converged to another orbit "
+                f"(period {float(orbs['period'][j]):.6g} s against {float(s['period'][todo[j]]):.6g} s, A1 "
+                f"{float(orbs['A1'][j]):.4g} m against {float(s['z1_amplitude'][todo[j]]):.4g} m)")  # fmt: skip
         for j in np.flatnonzero(~ok):
             notes[todo[j]].append(f"the cycle is the transient's, not verified: shooting from it failed "
                                   f"({orbs['reason'][j]})")  # fmt: skip
+        ok &= ~elsewhere
+        stable = ok & np.asarray(orbs["stable"], dtype=bool)
         good = todo[stable]
         if good.size:
             verified[good] = _measure(p, sel, s, good, np.asarray(orbs["state0"])[stable])
