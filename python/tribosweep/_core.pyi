@@ -97,6 +97,7 @@ def ensemble(
     known_irregular: npt.NDArray[np.float64] | None = None,
     known_cells: npt.NDArray[np.uint64] | None = None,
     known_cell_extent: npt.NDArray[np.float64] | None = None,
+    restart: npt.NDArray[np.float64] | None = None,
 ) -> dict[str, Any]: ...
 def linear_stability(
     base: dict[str, float],

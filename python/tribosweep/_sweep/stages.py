@@ -327,20 +327,19 @@ def _escape_reason(summary: dict, i: int) -> str:
 
 
 def run_steady(p: Points, sel: np.ndarray, y0: np.ndarray, decay: np.ndarray | None = None,
-               t_max: float | None = None, periodic_tol: float | None = None) -> dict:  # fmt: skip
+               restart: np.ndarray | None = None) -> dict:  # fmt: skip
     """Runs to steady state of the points ``sel`` from ``y0`` (one row, or one per point), in the core.
 
-    ``t_max``, ``periodic_tol``: the runs' longest simulated time and repetition tolerance
-    (default: the settings').
+    ``restart``: per run ``(t_max, hold)``, runs that go on from where earlier ones stopped (the
+    core's ``restart``); default: the settings' ``t_max`` and no hold.
     """
     it, st = p.settings.integration, p.settings.steady
     return _core.ensemble(
         p.base, p.contact, p.friction_law, p.names, np.ascontiguousarray(p.values[sel]),
-        np.ascontiguousarray(y0, dtype=np.float64), float(st.t_max if t_max is None else t_max), it.integrator,
-        float(it.rtol),
+        np.ascontiguousarray(y0, dtype=np.float64), float(st.t_max), it.integrator, float(it.rtol),
         atol=None if it.atol is None else np.asarray(it.atol, dtype=np.float64), threads=p.threads, kind="steady",
-        periodic_tol=float(st.periodic_tol if periodic_tol is None else periodic_tol),
-        decay_amplitude=st.decay_amplitude, n_fourier=512, decay_amplitudes=None if decay is None else np.ascontiguousarray(decay, dtype=np.float64),
+        periodic_tol=float(st.periodic_tol), decay_amplitude=st.decay_amplitude, n_fourier=512,
+        restart=None if restart is None else np.ascontiguousarray(restart, dtype=np.float64), decay_amplitudes=None if decay is None else np.ascontiguousarray(decay, dtype=np.float64),
         irregular_block=int(p.settings.irregular.block),
     )  # fmt: skip
 
@@ -361,10 +360,11 @@ SAME_ORBIT_A1: float = 5e-2
 #: unstable cycle (a laminar phase of intermittent motion comes back every few seconds).
 CHECK_ROUNDS: int = 8
 
-#: Leaving an unstable cycle, a run goes on without stopping until a deviation along the cycle's
-#: largest multiplier ``|mu|`` has grown by this factor: ``ceil(ln(LEAVE_GROWTH) / ln|mu|)``
-#: periods, from 4 to :data:`LEAVE_PERIODS_MAX`. Without it, the run would stop on the same cycle
-#: again a few periods later (it repeats as well as it did when the run first stopped).
+#: Leaving an unstable cycle, a run declares no cycle until a deviation along the cycle's largest
+#: multiplier ``|mu|`` has grown by this factor: ``ceil(ln(LEAVE_GROWTH) / ln|mu|)`` periods, from
+#: 4 to :data:`LEAVE_PERIODS_MAX` (it may decay, escape or turn out irregular meanwhile). Without
+#: it, the run would stop on the same cycle again a few periods later (it repeats as well as it
+#: did when the run first stopped).
 LEAVE_GROWTH: float = 1e3
 LEAVE_PERIODS_MAX: int = 1000
 
@@ -397,9 +397,9 @@ def check_cycles(p: Points, sel: np.ndarray, summary: dict) -> tuple[dict, np.nd
 
     - **stable orbit**: a short run started on it measures it (every cycle quantity of the
       summary, from the same Fourier integrals as the transient's, on the orbit itself);
-    - **unstable orbit**: the run goes on from where it stopped, first without stopping until a
-      deviation along the largest multiplier has grown :data:`LEAVE_GROWTH`-fold, then to a steady
-      state within what is left of ``t_max``; a cycle it stops on is checked again (at most
+    - **unstable orbit**: the run goes on from where it stopped, to a steady state within what is
+      left of ``t_max``, declaring no cycle until a deviation along the largest multiplier has
+      grown :data:`LEAVE_GROWTH`-fold; a cycle it stops on is checked again (at most
       :data:`CHECK_ROUNDS` checks);
     - **no convergence**: the transient's cycle stays, not verified, and the reason says so.
 
@@ -484,61 +484,39 @@ def _leave(p: Points, sel: np.ndarray, s: dict, idx: np.ndarray, moduli: np.ndar
            t_max: float, notes: list[list[str]]) -> np.ndarray:  # fmt: skip
     """Runs ``idx`` on from near the unstable cycles they stopped on; returns those that stop on a cycle again.
 
-    One core call per run: each has its own time left. Rare (1 of 95 transients in the Stribeck
-    sweep), so it costs little that they do not share a call.
+    One core call for all of them, each run with the time it has left (``t_max`` less where it
+    stopped) and no cycle declared until a deviation along its cycle's largest multiplier has
+    grown :data:`LEAVE_GROWTH`-fold (the core's per-run ``restart``).
     """
-    periodic = OUTCOME_NAMES.index("periodic")
-    again = []
-    for i, mu, T in zip(idx, moduli, period):
-        t1 = time.perf_counter()
-        t0 = float(s["t_end"][i])
-        mu_max = float(np.max(mu))
-        notes[i].append(f"at t = {t0:.3g} s it stopped near an unstable cycle (largest multiplier {mu_max:.3g}) "
-                        "and went on")  # fmt: skip
-        grow = np.ceil(np.log(LEAVE_GROWTH) / np.log(mu_max)) if mu_max > 1 else LEAVE_PERIODS_MAX
-        span = min(t_max - t0, float(np.clip(grow, 4, LEAVE_PERIODS_MAX)) * float(T))
-        y = s["y_end"][i]
-        if span > 0:
-            it = p.settings.integration
-            run = _core.ensemble(p.base, p.contact, p.friction_law, p.names, np.ascontiguousarray(p.values[sel[[i]]]),
-                                 np.ascontiguousarray(y[None, :]), span, it.integrator, float(it.rtol),
-                                 atol=None if it.atol is None else np.asarray(it.atol, dtype=np.float64),
-                                 threads=1, kind="final")  # fmt: skip
-            s["n_rhs"][i] += int(run["n_rhs"][0])
-            if int(run["status"][0]) != STATUS["success"]:
-                # It left the model (the escape limit) or failed: that run is the answer.
-                s["outcome"][i] = OUTCOME_NAMES.index("diverged" if run["status"][0] == STATUS["diverged"] else "failed")
-                s["status"][i] = run["status"][0]
-                s["t_end"][i] = t0 + float(run["t_reached"][0])
-                s["y_end"][i] = run["y_end"][0]
-                for key in ("max_abs_z", "max_gap"):
-                    s[key][i] = max(float(s[key][i]), float(run[key][0]))
-                if run["reason"][0]:
-                    notes[i].append(str(run["reason"][0]))
-                p.charge(sel[[i]], t1)
-                continue
-            y = np.asarray(run["y_end"][0])
-        rest = t_max - t0 - span
-        if rest <= 0:
-            s["outcome"][i] = OUTCOME_NAMES.index("unsettled")
-            s["status"][i] = STATUS["not_converged"]
-            s["t_end"][i] = t_max
-            s["y_end"][i] = y
-            p.charge(sel[[i]], t1)
-            continue
-        r = _rows(run_steady(p, sel[[i]], y[None, :], t_max=rest))
-        n_rhs = s["n_rhs"][i] + r["n_rhs"][0]
-        for key in s:
-            if key not in ("reason", "irregular_cells"):  # the cells: padded per call, for the census only
-                s[key][i] = r[key][0]
-        s["n_rhs"][i] = n_rhs
-        s["t_end"][i] = t0 + span + float(r["t_end"][0])
-        if r["reason"][0] and r["outcome"][0] != OUTCOME_NAMES.index("unsettled"):
-            notes[i].append(str(r["reason"][0]))  # an unsettled run's names its own t_max, the rest of the point's
-        p.charge(sel[[i]], t1)
-        if r["outcome"][0] == periodic:
-            again.append(i)
-    return np.asarray(again, dtype=np.int64)
+    t0 = s["t_end"][idx].astype(np.float64)
+    mu = np.max(moduli, axis=1) if len(idx) else np.zeros(0)
+    for i, t, m in zip(idx, t0, mu):
+        notes[i].append(f"at t = {t:.3g} s it stopped near an unstable cycle (largest multiplier {m:.3g}) and went on")
+    with np.errstate(divide="ignore", invalid="ignore"):
+        grow = np.where(mu > 1, np.ceil(np.log(LEAVE_GROWTH) / np.log(mu)), LEAVE_PERIODS_MAX)
+    hold = np.clip(grow, 4, LEAVE_PERIODS_MAX) * period
+    left = t_max - t0
+    done = left <= 0
+    for i in idx[done]:  # stopped at t_max: nothing left to go on with
+        s["outcome"][i] = OUTCOME_NAMES.index("unsettled")
+        s["status"][i] = STATUS["not_converged"]
+    go = idx[~done]
+    if not go.size:
+        return go
+    t1 = time.perf_counter()
+    r = _rows(run_steady(p, sel[go], s["y_end"][go], restart=np.column_stack([left[~done], hold[~done]])))
+    p.charge(sel[go], t1)
+    n_rhs = s["n_rhs"][go] + r["n_rhs"]
+    for key in s:
+        if key not in ("reason", "irregular_cells"):  # the cells: padded per call, for the census only
+            s[key][go] = r[key]
+    s["n_rhs"][go] = n_rhs
+    s["t_end"][go] = t0[~done] + r["t_end"]
+    unsettled = OUTCOME_NAMES.index("unsettled")
+    for j, i in enumerate(go):
+        if r["reason"][j] and r["outcome"][j] != unsettled:  # an unsettled run's names its own t_max
+            notes[i].append(str(r["reason"][j]))
+    return go[r["outcome"] == OUTCOME_NAMES.index("periodic")]
 
 
 def transient(p: Points, *, start_on_mode: bool) -> None:

@@ -7,7 +7,7 @@ use numpy::{IntoPyArray, PyArray3, PyArrayMethods, PyReadonlyArray1, PyReadonlyA
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::collections::HashMap;
-use tribosweep_core::ensemble::{run as run_ensemble, run_sampled_into, Settings, Task, TrajectoryResult};
+use tribosweep_core::ensemble::{run as run_ensemble, run_sampled_into, Restart, Settings, Task, TrajectoryResult};
 use tribosweep_core::model::State;
 use tribosweep_core::status::Status;
 use tribosweep_core::steady::{
@@ -120,6 +120,23 @@ fn decays(
     }
 }
 
+/// Per-trajectory restarts of runs to steady state (`restart`, shape `(n, 2)`: each run's `t_max`
+/// and `hold`, from its own `t = 0`): finite, `t_max > 0`, `0 <= hold`.
+fn restarts(restart: Option<PyReadonlyArray2<'_, f64>>, n: usize) -> PyResult<Option<Vec<Restart>>> {
+    let Some(r) = restart else { return Ok(None) };
+    let r = r.as_array();
+    let ok = |row: &[f64]| row[0].is_finite() && row[0] > 0.0 && row[1].is_finite() && row[1] >= 0.0;
+    if r.shape() != [n, 2] || !r.rows().into_iter().all(|row| ok(&[row[0], row[1]])) {
+        return Err(CoreError(format!(
+            "restart must be an ({n}, 2) array of rows (t_max > 0, hold >= 0), finite, one per trajectory; got \
+             shape {:?}",
+            r.shape()
+        ))
+        .into());
+    }
+    Ok(Some(r.rows().into_iter().map(|row| Restart { t_max: row[0], hold: row[1] }).collect()))
+}
+
 /// Per-trajectory fingerprints of known irregular attractors (`known_irregular`, shape
 /// `(n, KNOWN_MAX, 7)`: the mean residual, then the six largest excursions, in characteristic
 /// sizes, as the `irregular_residual` and `irregular_peaks` of an earlier steady run; a row of NaN
@@ -229,12 +246,12 @@ fn summaries(out: Vec<Result<TrajectoryResult, String>>) -> Vec<(Summary, String
 /// `irregular_block > 0`: sustained irregular motion stops once stationary over three blocks of
 /// that many sections, outcome "irregular", or once a block matches one of the trajectory's
 /// `known_irregular` fingerprints, those of irregular runs of the same model, or its sections keep
-/// to their `known_cells`; see `knowns`).
+/// to their `known_cells`; see `knowns`; `restart`: each run's own `t_max` and hold, see `restarts`).
 /// The core picks the path (lane-batched or scalar) and the grouping; results do not depend on it
 /// beyond integration accuracy, nor on the thread count at all. Every non-success status has a
 /// reason; Ctrl-C stops every thread (`KeyboardInterrupt`, the results are dropped).
 #[pyfunction]
-#[pyo3(signature = (base, contact, friction_law, names, values, y0, t_end, method, rtol, *, atol=None, t_eval=None, threads=None, kind="final", periodic_tol=1e-5, decay_amplitude=None, n_fourier=512, max_steps=None, max_events=None, decay_amplitudes=None, watch_x=true, decay_thresholds=None, irregular_block=0, known_irregular=None, known_cells=None, known_cell_extent=None))]
+#[pyo3(signature = (base, contact, friction_law, names, values, y0, t_end, method, rtol, *, atol=None, t_eval=None, threads=None, kind="final", periodic_tol=1e-5, decay_amplitude=None, n_fourier=512, max_steps=None, max_events=None, decay_amplitudes=None, watch_x=true, decay_thresholds=None, irregular_block=0, known_irregular=None, known_cells=None, known_cell_extent=None, restart=None))]
 #[allow(clippy::too_many_arguments)]
 fn ensemble<'py>(
     py: Python<'py>,
@@ -263,12 +280,14 @@ fn ensemble<'py>(
     known_irregular: Option<PyReadonlyArray3<'py, f64>>,
     known_cells: Option<PyReadonlyArray3<'py, u64>>,
     known_cell_extent: Option<PyReadonlyArray3<'py, f64>>,
+    restart: Option<PyReadonlyArray2<'py, f64>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let call = Call::rows(py, &base, contact, friction_law, &names, &values, threads)?;
     let n = call.len();
     let y0s = y0_rows(&y0.as_array(), n)?;
     let decays = decays(decay_amplitudes, decay_thresholds, n)?;
     let knowns = knowns(known_irregular, known_cells, known_cell_extent, n)?;
+    let restarts = restarts(restart, n)?;
     let settings =
         Settings { t_end, method: method_from(method)?, tol: tolerances(rtol, atol, max_steps, max_events)?, threads };
     let t_eval: Option<Vec<f64>> = t_eval.map(|a| a.as_slice().map(|s| s.to_vec())).transpose()?;
@@ -316,7 +335,12 @@ fn ensemble<'py>(
                 irregular_block,
                 ..SteadyOptions::default()
             };
-            let task = Task::Steady { opts: &opts, decay: decays.as_deref(), known: knowns.as_deref() };
+            let task = Task::Steady {
+                opts: &opts,
+                decay: decays.as_deref(),
+                known: knowns.as_deref(),
+                restart: restarts.as_deref(),
+            };
             let sums = summaries(call.detach(|| run_ensemble(&sliders, &y0s, &settings, task))?);
             summaries_into(&d, &sums)?;
         }

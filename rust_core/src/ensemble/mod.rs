@@ -49,8 +49,14 @@ pub enum Task<'a> {
     /// method, the tolerances and `t_max` (the settings' `t_end`, `method` and `tol` are not
     /// used). `decay`: a decay test per trajectory that overrides `opts`' (`DecayTest`);
     /// `known`: fingerprints of known irregular attractors per trajectory, overriding
-    /// `opts.known_irregular`.
-    Steady { opts: &'a SteadyOptions, decay: Option<&'a [DecayTest]>, known: Option<&'a [Known]> },
+    /// `opts.known_irregular`; `restart`: `t_max` and `hold` per trajectory, overriding `opts`'
+    /// (runs that go on from where earlier ones stopped, each with its own time left).
+    Steady {
+        opts: &'a SteadyOptions,
+        decay: Option<&'a [DecayTest]>,
+        known: Option<&'a [Known]>,
+        restart: Option<&'a [Restart]>,
+    },
     /// The end state and every located event `(index, time)`: for tests and diagnostics.
     Events,
 }
@@ -58,18 +64,35 @@ pub enum Task<'a> {
 impl Task<'_> {
     /// Trajectory `i`'s options of a `Steady` task, with its own overrides (`None` for other tasks).
     pub fn steady_options(&self, i: usize) -> Option<SteadyOptions> {
-        let Task::Steady { opts, decay, known } = *self else { return None };
-        let o = decay.map_or(*opts, |d| d[i].apply(opts));
-        Some(known.map_or(o, |k| SteadyOptions { known_irregular: k[i], ..o }))
+        let Task::Steady { opts, decay, known, restart } = *self else { return None };
+        let mut o = decay.map_or(*opts, |d| d[i].apply(opts));
+        if let Some(k) = known {
+            o.known_irregular = k[i];
+        }
+        if let Some(r) = restart {
+            (o.t_max, o.hold) = (r[i].t_max, r[i].hold);
+        }
+        Some(o)
     }
 
     /// Panics unless the per-trajectory overrides of a `Steady` task have one entry per trajectory.
     pub(crate) fn check_overrides(&self, n: usize, caller: &str) {
-        if let Task::Steady { decay, known, .. } = self {
+        if let Task::Steady { decay, known, restart, .. } = self {
             assert!(decay.is_none_or(|d| d.len() == n), "{caller}: one decay test per slider");
+            assert!(restart.is_none_or(|r| r.len() == n), "{caller}: one restart per slider");
             assert!(known.is_none_or(|k| k.len() == n), "{caller}: one set of known fingerprints per slider");
         }
     }
+}
+
+/// A run to steady state that goes on from where an earlier one stopped: its own longest
+/// simulated time and hold (`SteadyOptions::t_max`, `SteadyOptions::hold`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Restart {
+    /// Longest simulated time of this run [s].
+    pub t_max: f64,
+    /// No periodic state before this time [s].
+    pub hold: f64,
 }
 
 /// The result of one trajectory.

@@ -65,7 +65,7 @@ fn the_policy_picks_the_fastest_route_that_applies() {
     let mixed = vec![bil[0], uni[0]];
     let te = [0.0, 0.1];
     let opts = SteadyOptions::default();
-    let steady = Task::Steady { opts: &opts, decay: None, known: None };
+    let steady = Task::Steady { opts: &opts, decay: None, known: None, restart: None };
     let dp5 = settings(0.5, Method::Dopri5, 1e-8, None);
     let limited = Settings { tol: Tolerances { max_steps: Some(1000), ..tol(1e-8) }, ..dp5 };
     let cases: [(&str, &[Slider], Settings, Task<'_>, Route); 13] = [
@@ -91,7 +91,12 @@ fn the_policy_picks_the_fastest_route_that_applies() {
             "steady with Rodas4 in its options",
             &bil,
             dp5,
-            Task::Steady { opts: &SteadyOptions { method: Method::Rodas4, ..opts }, decay: None, known: None },
+            Task::Steady {
+                opts: &SteadyOptions { method: Method::Rodas4, ..opts },
+                decay: None,
+                known: None,
+                restart: None,
+            },
             Route::Scalar,
         ),
     ];
@@ -210,7 +215,7 @@ fn samples_and_steady_states_agree_across_routes() {
         let y0: Vec<State> =
             (0..mus.len()).map(|k| State::new(1e-6 * (1 + k) as f64, 0.0, 0.0, 0.0, 0.0, 0.0)).collect();
         let opts = SteadyOptions { t_max: 10.0, tol: tol(1e-8), ..SteadyOptions::default() };
-        let task = Task::Steady { opts: &opts, decay: None, known: None };
+        let task = Task::Steady { opts: &opts, decay: None, known: None, restart: None };
         let lanes = unwrap(run_on(Route::Lanes, &s, &y0, &set, task));
         let scalar = unwrap(run_on(Route::Scalar, &s, &y0, &set, task));
         for i in 0..s.len() {
@@ -240,8 +245,12 @@ fn results_are_bitwise_the_same_for_any_thread_count_and_through_the_entry_point
     let te: Vec<f64> = (0..=20).map(|k| k as f64 * 5e-3).collect();
     let opts = SteadyOptions { t_max: 0.3, tol: tol(1e-7), ..SteadyOptions::default() };
     let decay: Vec<DecayTest> = (0..40).map(|k| DecayTest::Amplitude(1e-8 * (1 + k % 3) as f64)).collect();
-    let tasks =
-        [Task::Final, Task::Sampled(&te), Task::Steady { opts: &opts, decay: Some(&decay), known: None }, Task::Events];
+    let tasks = [
+        Task::Final,
+        Task::Sampled(&te),
+        Task::Steady { opts: &opts, decay: Some(&decay), known: None, restart: None },
+        Task::Events,
+    ];
     for (base, z0) in [(seed_bilateral(), 1e-6), (unilateral(), 30e-6)] {
         let s = sliders(base, &mus);
         let y0 = starts(s.len(), z0);
@@ -353,7 +362,7 @@ fn a_call_cancelled_before_it_starts_computes_nothing() {
     token.cancel();
     for threads in [Some(1), Some(2)] {
         let set = settings(1.0, Method::Dopri5, 1e-8, threads);
-        for task in [Task::Final, Task::Steady { opts: &so, decay: None, known: None }] {
+        for task in [Task::Final, Task::Steady { opts: &so, decay: None, known: None, restart: None }] {
             for r in Route::ALL {
                 if !supports(r, &s, &set, &task) {
                     continue;
@@ -423,7 +432,7 @@ fn a_long_trajectory_is_cancelled_inside_its_run() {
     let so = SteadyOptions { t_max: 1e4, periodic_tol: 1e-15, ..SteadyOptions::default() };
     let set = settings(1e4, Method::Dopri5, 1e-8, Some(1));
     for r in [Route::Lanes, Route::Scalar] {
-        let task = Task::Steady { opts: &so, decay: None, known: None };
+        let task = Task::Steady { opts: &so, decay: None, known: None, restart: None };
         let out = cancelled_after(std::time::Duration::from_millis(100), r, &s, &y0, &set, task);
         let sum = *out[0].summary.as_deref().expect("a summary");
         assert_eq!(sum.status, Status::NotComputed, "{r:?}");
@@ -470,4 +479,38 @@ fn samples_written_into_a_buffer_are_those_the_results_carry() {
         }
     }
     assert!(nan_tails > 0, "no run stopped early: the NaN tails are not tested");
+}
+
+/// A restart's `t_max` and `hold` per trajectory give, on the lanes and on the scalar driver,
+/// bitwise what a call whose options carry them gives; a hold lets no cycle be declared before it.
+#[test]
+fn restarts_override_t_max_and_hold_per_trajectory() {
+    let (s, y) = crate::shooting::tests::bouncing_cycle_start();
+    let sliders = vec![s; 4];
+    let y0 = vec![y; 4];
+    let opts = SteadyOptions { t_max: 10.0, method: Method::Dop853, tol: tol(1e-9), ..SteadyOptions::default() };
+    let rs = [(10.0, 0.0), (10.0, 0.5), (0.3, 1.0), (10.0, 2.0)].map(|(t_max, hold)| Restart { t_max, hold });
+    let set = settings(0.0, Method::Dop853, 1e-9, Some(2));
+    for route in [Route::Lanes, Route::Scalar] {
+        let task = Task::Steady { opts: &opts, decay: None, known: None, restart: Some(&rs) };
+        let got = unwrap(run_on(route, &sliders, &y0, &set, task));
+        for (k, r) in rs.iter().enumerate() {
+            let own = SteadyOptions { t_max: r.t_max, hold: r.hold, ..opts };
+            let one = Task::Steady { opts: &own, decay: None, known: None, restart: None };
+            let alone = unwrap(run_on(route, &sliders[..1], &y0[..1], &set, one));
+            assert_eq!(bits(&got[k]), bits(&alone[0]), "{route:?} #{k}");
+        }
+        let m: Vec<Summary> = got.iter().map(|x| *x.summary.as_deref().expect("steady")).collect();
+        // Started on the bouncing cycle: it repeats at once, unless held; t_max 0.3 s is enough.
+        assert_eq!(m[0].outcome, SteadyOutcome::Periodic);
+        assert!(m[0].t_end < 0.2, "{}", m[0].t_end);
+        for k in [1, 3] {
+            assert_eq!(m[k].outcome, SteadyOutcome::Periodic);
+            assert!(m[k].t_end >= rs[k].hold && m[k].t_end < rs[k].hold + 0.1, "#{k}: {}", m[k].t_end);
+            assert!((m[k].omega / m[0].omega - 1.0).abs() < 1e-6);
+        }
+        // Held past its own t_max: unsettled, at that t_max exactly (the other runs' is 10 s).
+        assert_eq!(m[2].outcome, SteadyOutcome::Unsettled);
+        assert_eq!(m[2].t_end, 0.3);
+    }
 }

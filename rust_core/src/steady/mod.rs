@@ -331,6 +331,9 @@ pub struct SteadyOptions {
     pub tol: Tolerances,
     /// Relative tolerance of the section-state repetition that declares a periodic state.
     pub periodic_tol: f64,
+    /// No periodic state is declared at a section crossed before this time [s]: a run going on
+    /// from near an unstable cycle repeats there at first (0: no hold).
+    pub hold: f64,
     /// Amplitude below which a shrinking motion counts as decayed [m of z]; every component is
     /// compared in units of its characteristic size times `decay_amplitude / |z_st|`.
     /// `None`: `1e-3 |z_st|`.
@@ -395,6 +398,7 @@ impl Default for SteadyOptions {
             method: Method::Dopri5,
             tol: Tolerances::new(1e-8),
             periodic_tol: 1e-5,
+            hold: 0.0,
             decay_amplitude: None,
             decay_thresholds: None,
             decay_window: 8,

@@ -24,6 +24,8 @@ pub(crate) struct SectionWatcher {
     pub(crate) peak_since: f64,
     pub(crate) peaks_since: State,
     tol: f64,
+    /// No periodic state at a crossing before this time (`SteadyOptions::hold`).
+    hold: f64,
     /// The decay test: the largest `peaks[c] / decay_scale[c]` over the compared components,
     /// times `decay_unit`, below `decay_amp`.
     decay_scale: [f64; 6],
@@ -267,6 +269,7 @@ impl SectionWatcher {
             peak_since: 0.0,
             peaks_since: State::zeros(),
             tol: opts.periodic_tol,
+            hold: opts.hold,
             decay_scale: opts.decay_thresholds.unwrap_or(sizes),
             decay_unit: if opts.decay_thresholds.is_some() { 1.0 } else { sizes[0] },
             decay_amp: if opts.decay_thresholds.is_some() { 1.0 } else { decay_amplitude(opts, s) },
@@ -346,7 +349,7 @@ impl SectionWatcher {
             amp = amp.sup(&self.get(p - 1).peaks);
             let a = self.get(0);
             let b = self.get(p);
-            let mut ok = self.repeats_within(p, self.tol, &amp);
+            let mut ok = a.t >= self.hold && self.repeats_within(p, self.tol, &amp);
             let dt_now = a.t - b.t;
             if ok && n > 2 * p {
                 let dt_prev = self.get(p).t - self.get(2 * p).t;

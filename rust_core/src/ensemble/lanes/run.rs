@@ -66,6 +66,7 @@ pub(super) fn run_impl<const UNI: bool, const LAW: u8, const M8: bool, const N: 
         peaks: [zero; 6],
         rest: splat(f64::NEG_INFINITY),
         next_sample: splat(f64::INFINITY),
+        t_end: splat(t_end),
         side: std::array::from_fn(|_| None),
     };
     let steady = matches!(task, Task::Steady { .. });
@@ -128,7 +129,7 @@ pub(super) fn run_impl<const UNI: bool, const LAW: u8, const M8: bool, const N: 
             } else {
                 ln.h[l]
             };
-            let rem = t_end - ln.t[l];
+            let rem = ln.t_end[l] - ln.t[l];
             let la = h >= rem || 1.01 * h >= rem;
             last[l] = la;
             hh[l] = if la { rem } else { h };
@@ -283,7 +284,7 @@ pub(super) fn run_impl<const UNI: bool, const LAW: u8, const M8: bool, const N: 
             let lo = if e <= 0.0 { LN_ERR_FLOOR } else { ln_err[l].max(LN_ERR_FLOOR) };
             ln.ln_err_old[l] = if accepted { lo } else { ln.ln_err_old[l] };
             ln.rejected[l] = if hid { ln.rejected[l] } else { !okl };
-            t_new[l] = if last[l] { t_end } else { ln.t[l] + hh[l] };
+            t_new[l] = if last[l] { ln.t_end[l] } else { ln.t[l] + hh[l] };
         }
         for l in 0..N {
             ln.n_acc[l] += acc_ok[l] as u64;

@@ -129,6 +129,8 @@ pub(super) struct Lanes<'a, const N: usize> {
     pub(super) rest: Lw<N>,
     /// Next `t_eval` time of each lane (+inf: none).
     pub(super) next_sample: Lw<N>,
+    /// The end of each lane's run (its own `t_max` under a `restart`; `Side::t_end`).
+    pub(super) t_end: Lw<N>,
     pub(super) side: [Option<Side<'a>>; N],
 }
 
@@ -265,7 +267,7 @@ pub(super) fn refill<'a, const N: usize>(
         }
         let s = &inp.sliders[i];
         let y0 = inp.y0s[i];
-        let t_end = inp.t_end;
+        let mut t_end = inp.t_end;
         let mode = s.mode_at(&y0);
         let watch = match inp.task {
             Task::Final => Watch::Nothing,
@@ -278,6 +280,7 @@ pub(super) fn refill<'a, const N: usize>(
             }
             Task::Steady { .. } => {
                 let o = inp.task.steady_options(i).expect("a steady task");
+                t_end = o.t_max;
                 Watch::Steady(Box::new(SteadyObserver::new(s, &o)), Box::new(o))
             }
             Task::Events => Watch::Log(Vec::new()),
@@ -350,6 +353,7 @@ pub(super) fn refill<'a, const N: usize>(
             ln.f[k][l] = f0[k];
         }
         ln.t[l] = 0.0;
+        ln.t_end[l] = t_end;
         ln.h[l] = h0;
         ln.ln_err_old[l] = LN_ERR_FLOOR;
         ln.rejected[l] = false;

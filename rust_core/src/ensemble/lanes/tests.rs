@@ -282,14 +282,20 @@ fn seed_bouncing_cycle_on_the_lane_path() {
     }
     let sliders = [s; 3];
     let opts8 = SteadyOptions { method: Method::Dop853, ..opts };
-    let r5 = lanes5(&sliders, &starts, 0.0, &tol(1e-9), Task::Steady { opts: &opts, decay: None, known: None });
+    let r5 = lanes5(
+        &sliders,
+        &starts,
+        0.0,
+        &tol(1e-9),
+        Task::Steady { opts: &opts, decay: None, known: None, restart: None },
+    );
     let r8 = run_lanes(
         &sliders,
         &starts,
         0.0,
         Method::Dop853,
         &tol(1e-9),
-        Task::Steady { opts: &opts8, decay: None, known: None },
+        Task::Steady { opts: &opts8, decay: None, known: None, restart: None },
     );
     for (k, x) in r5.iter().chain(&r8).enumerate() {
         let k = k % 3;
@@ -328,9 +334,10 @@ fn steady_outcomes_agree_with_the_scalar_path() {
         let idx: Vec<usize> = (k..s.len()).step_by(2).collect();
         let sk: Vec<Slider> = idx.iter().map(|&i| s[i]).collect();
         let yk: Vec<State> = idx.iter().map(|&i| y0[i]).collect();
-        for (j, x) in lanes5(&sk, &yk, 0.0, &tol(1e-8), Task::Steady { opts: &opts, decay: None, known: None })
-            .into_iter()
-            .enumerate()
+        for (j, x) in
+            lanes5(&sk, &yk, 0.0, &tol(1e-8), Task::Steady { opts: &opts, decay: None, known: None, restart: None })
+                .into_iter()
+                .enumerate()
         {
             r[idx[j]] = Some(x);
         }
@@ -377,8 +384,12 @@ fn results_do_not_depend_on_the_batch() {
         if name == "stick_slip" {
             continue;
         }
-        let tasks =
-            [Task::Final, Task::Sampled(&te), Task::Steady { opts: &opts, decay: None, known: None }, Task::Events];
+        let tasks = [
+            Task::Final,
+            Task::Sampled(&te),
+            Task::Steady { opts: &opts, decay: None, known: None, restart: None },
+            Task::Events,
+        ];
         for (method, task) in [Method::Dopri5, Method::Dop853].into_iter().flat_map(|m| tasks.map(|t| (m, t))) {
             let t = tol(1e-7);
             let all = run_lanes(&s, &y0, 0.1, method, &t, task);
@@ -533,7 +544,7 @@ fn steady_throughput() {
                     &y0,
                     0.0,
                     &tol(1e-6),
-                    Task::Steady { opts: &opts, decay: None, known: None },
+                    Task::Steady { opts: &opts, decay: None, known: None, restart: None },
                 ));
             }));
         }
@@ -545,7 +556,8 @@ fn steady_throughput() {
             }));
         }
     }
-    let r = lanes5(&sliders, &y0, 0.0, &tol(1e-6), Task::Steady { opts: &opts, decay: None, known: None });
+    let r =
+        lanes5(&sliders, &y0, 0.0, &tol(1e-6), Task::Steady { opts: &opts, decay: None, known: None, restart: None });
     let steps: u64 = r.iter().map(|x| x.run.stats.n_accept + x.run.stats.n_reject).sum();
     let events: u64 = r.iter().map(|x| x.run.stats.n_events).sum();
     let simulated: f64 = r.iter().map(|x| x.run.t).sum();
@@ -682,7 +694,7 @@ fn driver_cost() {
         watch_x: false,
         ..SteadyOptions::default()
     };
-    let watched = Task::Steady { opts: &steady, decay: None, known: None };
+    let watched = Task::Steady { opts: &steady, decay: None, known: None, restart: None };
     for (name, m, sl, task) in [
         ("dopri5", Method::Dopri5, &sliders, Task::Final),
         ("dop853", Method::Dop853, &sliders, Task::Final),
@@ -792,7 +804,7 @@ fn switch_scenes_stick_and_bounce() {
 #[test]
 fn lane_width_by_rounds_and_step_cost() {
     let opts = SteadyOptions::default();
-    let steady = Task::Steady { opts: &opts, decay: None, known: None };
+    let steady = Task::Steady { opts: &opts, decay: None, known: None, restart: None };
     for task in [Task::Final, steady] {
         let full = full_width(&task);
         assert!(full == W || full == W_FINAL_AVX512);
