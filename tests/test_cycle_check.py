@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 import tribosweep as ts
-from tribosweep import _core
+from tribosweep import _core, _cycles
 from tribosweep._codes import OUTCOME_NAMES, REGIME
 from tribosweep._settings import Steady, SweepSettings
 from tribosweep._sweep import stages
@@ -100,7 +100,7 @@ def test_without_the_check_the_transients_stop_is_measurably_off(bouncing, monke
     # What the check is for: the transient's own cycle, where it stopped (5.8e-4 off here; about
     # periodic_tol / (1 - |mu|) with |mu| about 0.98).
     _, (_, a1_ref) = bouncing
-    monkeypatch.setattr(stages, "check_cycles", lambda p, sel, s: (stages._rows(s), np.zeros(len(sel), bool)))
+    monkeypatch.setattr(stages, "check_cycles", lambda p, sel, s: (_cycles.rows(s), np.zeros(len(sel), bool)))
     raw = _sweep()
     assert ts.labels(raw.regime).values.ravel()[0] == "contact_loss"
     assert abs(float(_first(raw, "z1_amplitude")) / a1_ref - 1) > 1e-4

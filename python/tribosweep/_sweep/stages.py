@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .. import _census, _core, _irregular
+from .. import _census, _core, _cycles, _irregular
 from .._codes import BISTABLE, DECIDED_BY, OUTCOME_NAMES, REGIME, STATUS, STATUS_NAMES
 from .._settings import SweepSettings
 from .schema import empty_result
@@ -339,46 +339,10 @@ def run_steady(p: Points, sel: np.ndarray, y0: np.ndarray, decay: np.ndarray | N
         np.ascontiguousarray(y0, dtype=np.float64), float(st.t_max), it.integrator, float(it.rtol),
         atol=None if it.atol is None else np.asarray(it.atol, dtype=np.float64), threads=p.threads, kind="steady",
         periodic_tol=float(st.periodic_tol), decay_amplitude=st.decay_amplitude, n_fourier=512,
-        restart=None if restart is None else np.ascontiguousarray(restart, dtype=np.float64), decay_amplitudes=None if decay is None else np.ascontiguousarray(decay, dtype=np.float64),
+        restart=None if restart is None else np.ascontiguousarray(restart, dtype=np.float64),
+        decay_amplitudes=None if decay is None else np.ascontiguousarray(decay, dtype=np.float64),
         irregular_block=int(p.settings.irregular.block),
     )  # fmt: skip
-
-
-#: Newton iterations of the shooting that checks a transient's cycle. From a section state that
-#: repeated to ``periodic_tol`` it converges in 2-4 (the Stribeck sweep of benches/bench_stribeck.py:
-#: 53 of 63 cycles in 2, 9 in 3, 1 in 4); the one that had not by 8 had not by 30 either.
-CHECK_MAX_ITER: int = 8
-
-#: Shooting from a transient's stop must end on an orbit of the same period and first-harmonic
-#: amplitude of z within these relative differences, or the cycle is not verified. On the
-#: Stribeck sweep the converged orbits were within 7.1e-3 of the stops in A1 (a slow approach) and
-#: closer in period; a tenfold margin, far below the gap to another orbit of the same multiplicity.
-SAME_ORBIT_PERIOD: float = 1e-2
-SAME_ORBIT_A1: float = 5e-2
-
-#: Most shooting checks of one point's transient: each one after the first follows a stop near an
-#: unstable cycle (a laminar phase of intermittent motion comes back every few seconds).
-CHECK_ROUNDS: int = 8
-
-#: Leaving an unstable cycle, a run declares no cycle until a deviation along the cycle's largest
-#: multiplier ``|mu|`` has grown by this factor: ``ceil(ln(LEAVE_GROWTH) / ln|mu|)`` periods, from
-#: 4 to :data:`LEAVE_PERIODS_MAX` (it may decay, escape or turn out irregular meanwhile). Without
-#: it, the run would stop on the same cycle again a few periods later (it repeats as well as it
-#: did when the run first stopped).
-LEAVE_GROWTH: float = 1e3
-LEAVE_PERIODS_MAX: int = 1000
-
-#: Cycle quantities of a steady-state summary that the run measured on the converged orbit replaces.
-CYCLE_KEYS: tuple[str, ...] = (
-    "omega", "period", "multiplicity", "z0", "z1_amplitude", "z1_phase", "z2_amplitude", "z2_phase", "z3_amplitude",
-    "z3_phase", "phi1_amplitude", "phi1_phase", "x1_amplitude", "x1_phase", "min_normal_force", "fraction_off_disk",
-    "min_slip_velocity", "max_gap", "max_abs_z",
-)  # fmt: skip
-
-
-def _rows(summary: dict) -> dict:
-    """A steady-state summary as numpy arrays (copies), one row per run."""
-    return {k: np.array(v, dtype=object if k == "reason" else None) for k, v in summary.items()}
 
 
 def _reorder(v, idx: np.ndarray):
@@ -399,61 +363,41 @@ def check_cycles(p: Points, sel: np.ndarray, summary: dict) -> tuple[dict, np.nd
       summary, from the same Fourier integrals as the transient's, on the orbit itself);
     - **unstable orbit**: the run goes on from where it stopped, to a steady state within what is
       left of ``t_max``, declaring no cycle until a deviation along the largest multiplier has
-      grown :data:`LEAVE_GROWTH`-fold; a cycle it stops on is checked again (at most
-      :data:`CHECK_ROUNDS` checks);
+      grown :data:`tribosweep._cycles.LEAVE_GROWTH`-fold; a cycle it stops on is checked again (at most
+      :data:`tribosweep._cycles.CHECK_ROUNDS` checks);
     - **no convergence**: the transient's cycle stays, not verified, and the reason says so.
 
     Returns the summary with those rows replaced (``t_end`` and ``n_rhs`` over all the runs of a
     point, shooting included), and per run whether its cycle was verified (a stable orbit that
     shooting converged and a run on it measured: True).
     """
-    s = _rows(summary)
+    s = _cycles.rows(summary)
     n = len(sel)
     verified = np.zeros(n, dtype=bool)
     notes: list[list[str]] = [[] for _ in range(n)]
-    periodic = OUTCOME_NAMES.index("periodic")
     sh, t_max = p.settings.shooting, float(p.settings.steady.t_max)
-    # Ten times the transients' own tolerance (1e-9 by default): the orbit as accurate as the
-    # transient's integration, and its multipliers to spare. The stages' shooting_rtol (1e-10)
-    # is for the describing function's roots, whose A1 is compared to a few 1e-3.
-    rtol = max(0.1 * float(p.settings.integration.rtol), float(sh.rtol))
-    todo = np.flatnonzero(s["outcome"] == periodic)
-    for _ in range(CHECK_ROUNDS):
+    rtol = _cycles.check_rtol(p.settings.integration.rtol, sh.rtol)
+    todo = np.flatnonzero(s["outcome"] == _cycles.PERIODIC)
+    for _ in range(_cycles.CHECK_ROUNDS):
         if not todo.size:
             break
         t1 = time.perf_counter()
-        orbs = _core.periodic_orbits(
-            p.base, p.contact, p.friction_law, p.names, np.ascontiguousarray(p.values[sel[todo]]),
-            y0=np.ascontiguousarray(s["y_end"][todo]), periods=np.ascontiguousarray(s["period"][todo]),
-            rtol=rtol, tol=sh.tol, max_iter=CHECK_MAX_ITER, threads=p.threads,
-        )  # fmt: skip
-        s["n_rhs"][todo] += np.asarray(orbs["n_rhs"]).astype(s["n_rhs"].dtype)
-        ok = np.asarray(orbs["status"]) == STATUS["success"]
-        # Newton from the stop must end on the cycle the run was near, not on another orbit.
-        dt = np.abs(np.asarray(orbs["period"]) / s["period"][todo] - 1)
-        da = np.abs(np.asarray(orbs["A1"]) / s["z1_amplitude"][todo] - 1)
-        elsewhere = ok & ~((dt <= SAME_ORBIT_PERIOD) & (da <= SAME_ORBIT_A1))
-        for j in np.flatnonzero(elsewhere):
-            notes[todo[j]].append(
-                f"the cycle is the transient's, not verified: shooting from it converged to another orbit "
-                f"(period {float(orbs['period'][j]):.6g} s against {float(s['period'][todo[j]]):.6g} s, A1 "
-                f"{float(orbs['A1'][j]):.4g} m against {float(s['z1_amplitude'][todo[j]]):.4g} m)")  # fmt: skip
-        for j in np.flatnonzero(~ok):
-            notes[todo[j]].append(f"the cycle is the transient's, not verified: shooting from it failed "
-                                  f"({orbs['reason'][j]})")  # fmt: skip
-        ok &= ~elsewhere
-        stable = ok & np.asarray(orbs["stable"], dtype=bool)
-        good = todo[stable]
+        orbs = _cycles.shoot(p.base, p.contact, p.friction_law, p.names, p.values[sel[todo]], s["y_end"][todo],
+                             s["period"][todo], s["z1_amplitude"][todo], rtol=rtol, tol=sh.tol,
+                             threads=p.threads)  # fmt: skip
+        s["n_rhs"][todo] += orbs["n_rhs"].astype(s["n_rhs"].dtype)
+        for j in np.flatnonzero(orbs["note"] != ""):
+            notes[todo[j]].append(f"the cycle is the transient's, not verified: {orbs['note'][j]}")
+        good = todo[orbs["stable"]]
         if good.size:
-            verified[good] = _measure(p, sel, s, good, np.asarray(orbs["state0"])[stable])
+            verified[good] = _measure(p, sel, s, good, orbs["state0"][orbs["stable"]])
         p.charge(sel[todo], t1)
-        unstable = np.flatnonzero(ok & ~stable)
-        todo = _leave(p, sel, s, todo[unstable], np.asarray(orbs["moduli"])[unstable],
-                      np.asarray(orbs["period"])[unstable], t_max, notes)  # fmt: skip
+        u = orbs["unstable"]
+        todo = _leave(p, sel, s, todo[u], orbs["moduli"][u], orbs["period"][u], t_max, notes)
     for i in todo:  # still stopping near unstable cycles after CHECK_ROUNDS checks
-        s["outcome"][i] = OUTCOME_NAMES.index("unsettled")
+        s["outcome"][i] = _cycles.UNSETTLED
         s["status"][i] = STATUS["not_converged"]
-        notes[i].append(f"it stopped near an unstable cycle {CHECK_ROUNDS} times")
+        notes[i].append(f"it stopped near an unstable cycle {_cycles.CHECK_ROUNDS} times")
     for i, parts in enumerate(notes):
         if parts:
             s["reason"][i] = "; ".join(([s["reason"][i]] if s["reason"][i] else []) + parts)
@@ -469,10 +413,10 @@ def _measure(p: Points, sel: np.ndarray, s: dict, idx: np.ndarray, state0: np.nd
 
     Returns which runs repeated (the others keep the transient's quantities, with a reason).
     """
-    m = _rows(run_steady(p, sel[idx], state0))
+    m = _cycles.rows(run_steady(p, sel[idx], state0))
     s["n_rhs"][idx] += m["n_rhs"]
-    done = m["outcome"] == OUTCOME_NAMES.index("periodic")
-    for key in CYCLE_KEYS:
+    done = m["outcome"] == _cycles.PERIODIC
+    for key in _cycles.CYCLE_KEYS:
         s[key][idx[done]] = m[key][done]
     for i in idx[~done]:
         s["reason"][i] = "; ".join(filter(None, [s["reason"][i], "a run on the converged orbit did not repeat: the "
@@ -485,38 +429,26 @@ def _leave(p: Points, sel: np.ndarray, s: dict, idx: np.ndarray, moduli: np.ndar
     """Runs ``idx`` on from near the unstable cycles they stopped on; returns those that stop on a cycle again.
 
     One core call for all of them, each run with the time it has left (``t_max`` less where it
-    stopped) and no cycle declared until a deviation along its cycle's largest multiplier has
-    grown :data:`LEAVE_GROWTH`-fold (the core's per-run ``restart``).
+    stopped) and a hold on cycles (:func:`tribosweep._cycles.leave`).
     """
     t0 = s["t_end"][idx].astype(np.float64)
-    mu = np.max(moduli, axis=1) if len(idx) else np.zeros(0)
-    for i, t, m in zip(idx, t0, mu):
+    for i, t, m in zip(idx, t0, np.max(moduli, axis=1) if len(idx) else []):
         notes[i].append(f"at t = {t:.3g} s it stopped near an unstable cycle (largest multiplier {m:.3g}) and went on")
-    with np.errstate(divide="ignore", invalid="ignore"):
-        grow = np.where(mu > 1, np.ceil(np.log(LEAVE_GROWTH) / np.log(mu)), LEAVE_PERIODS_MAX)
-    hold = np.clip(grow, 4, LEAVE_PERIODS_MAX) * period
-    left = t_max - t0
+    left, hold = _cycles.leave(t0, t_max, moduli, period)
     done = left <= 0
-    for i in idx[done]:  # stopped at t_max: nothing left to go on with
-        s["outcome"][i] = OUTCOME_NAMES.index("unsettled")
-        s["status"][i] = STATUS["not_converged"]
+    s["outcome"][idx[done]] = _cycles.UNSETTLED  # stopped at t_max: nothing left to go on with
+    s["status"][idx[done]] = STATUS["not_converged"]
     go = idx[~done]
     if not go.size:
         return go
     t1 = time.perf_counter()
-    r = _rows(run_steady(p, sel[go], s["y_end"][go], restart=np.column_stack([left[~done], hold[~done]])))
+    r = _cycles.rows(run_steady(p, sel[go], s["y_end"][go], restart=np.column_stack([left[~done], hold[~done]])))
     p.charge(sel[go], t1)
-    n_rhs = s["n_rhs"][go] + r["n_rhs"]
-    for key in s:
-        if key not in ("reason", "irregular_cells"):  # the cells: padded per call, for the census only
-            s[key][go] = r[key]
-    s["n_rhs"][go] = n_rhs
-    s["t_end"][go] = t0[~done] + r["t_end"]
-    unsettled = OUTCOME_NAMES.index("unsettled")
+    _cycles.merge(s, go, r, t0[~done])
     for j, i in enumerate(go):
-        if r["reason"][j] and r["outcome"][j] != unsettled:  # an unsettled run's names its own t_max
+        if r["reason"][j] and r["outcome"][j] != _cycles.UNSETTLED:  # an unsettled run's names its own t_max
             notes[i].append(str(r["reason"][j]))
-    return go[r["outcome"] == OUTCOME_NAMES.index("periodic")]
+    return go[r["outcome"] == _cycles.PERIODIC]
 
 
 def transient(p: Points, *, start_on_mode: bool) -> None:
