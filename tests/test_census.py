@@ -123,11 +123,13 @@ def test_the_default_tolerance_is_converged_where_the_fractions_depend_on_it():
     assert a.attrs["rtol"] == 1e-6
     _within_3_se(a, b, k)
     for c in (a, b):
-        # Sliding is the majority and the cycle is present, each by 3 standard errors (the fractions
-        # were 0.69 +- 0.03 and 0.18 +- 0.02; with the inputs moved by an ulp, which draws other
-        # samples, 0.69-0.75 and 0.10-0.18: a fixed bound of 0.1 on the cycle was a coin toss).
+        # Sliding is the majority and irregular motion is present, each by 3 standard errors. What
+        # the census counted as a cycle here (0.18 +- 0.02 of the samples) was irregular motion
+        # lingering near an unstable period orbit (largest multiplier 1.087: test_cycle_check): the
+        # census's cycle check sends those samples on, and none ends on a cycle.
         p, se = c.basin_fraction.values, c.basin_fraction_se.values
-        assert p[0] - 3 * se[0] > 0.5 and p[1] - 3 * se[1] > 0 and c.n_cycles >= 1, (p, se)
+        assert p[0] - 3 * se[0] > 0.5 and p[2] - 3 * se[2] > 0, (p, se)
+        assert p[1] < 0.02, (p, se)  # 8 standard errors below the 0.18 it was
         # The motion stays within a tenth of the escape limit: no sample escapes (was 14 of 256).
         assert float(c.basin_fraction[3]) * k < 2 and int(c.census_failed) == 0
 

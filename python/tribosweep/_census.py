@@ -25,7 +25,11 @@ The disturbances (documented distribution)
 
 What each sample reaches (``ATTRACTOR_NAMES``)
     ``sliding`` (decayed), ``cycle`` (a periodic state; cycles are told apart by period
-    multiplicity, frequency and first-harmonic amplitude within ``CYCLE_TOL``), ``irregular``
+    multiplicity, frequency and first-harmonic amplitude within ``CYCLE_TOL``; each distinct
+    cycle of a point is then checked by shooting from its first sample's stop: where it is an
+    unstable orbit, its samples had stopped near it (close to a saddle, or lingering in irregular
+    motion) and go on with the time they have left, :class:`tribosweep._cycles.CensusCheck`;
+    the largest cycle's ``largest_cycle_*`` are measured on its converged orbit), ``irregular``
     (bounded, neither periodic nor decaying, and stationary over three blocks of sections, or still
     so at ``t_max``: quasi-periodic or chaotic bouncing, or an approach slower than ``t_max``),
     ``escape`` (``|z|`` past the escape limit: outside the model's validity). A sample whose
@@ -119,6 +123,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from . import _core
+from . import _cycles as cyc
 from ._codes import ATTRACTOR_NAMES, OUTCOME_NAMES, STATUS, STATUS_NAMES
 from ._irregular import characteristic_sizes
 from ._modes import jacobians, mode_shape
@@ -225,23 +230,6 @@ def starts(
     return y0
 
 
-def _cycles(omega, mult, a1, tol: float) -> tuple[np.ndarray, list[int]]:
-    """Cluster periodic samples (in sample order, deterministic); label per sample, first member per cluster."""
-    label = np.full(omega.size, -1)
-    heads: list[int] = []
-    for s in range(omega.size):
-        for c, h in enumerate(heads):
-            if mult[s] == mult[h] and abs(omega[s] - omega[h]) <= tol * omega[h] and abs(a1[s] - a1[h]) <= tol * max(
-                a1[h], 1e-12
-            ):
-                label[s] = c
-                break
-        else:
-            label[s] = len(heads)
-            heads.append(s)
-    return label, heads
-
-
 #: Per-point census output: name -> (dtype, units or None, long name, has the attractor dimension).
 CENSUS_VARIABLES: dict[str, tuple[str, str | None, str, bool]] = {
     "basin_fraction": ("f8", "1", "fraction of the census disturbances that reach each attractor", True),
@@ -260,7 +248,13 @@ CENSUS_VARIABLES: dict[str, tuple[str, str | None, str, bool]] = {
     "largest_cycle_fraction_off_disk": ("f8", "1", "fraction of the period the pin is off the disk on the census "
                                         "cycle with the largest basin", False),
     "irregular_max_abs_z": ("f8", "m", "largest |z| reached by the census samples in irregular motion", False),
+    "largest_cycle_verified": ("i1", None, "whether shooting converged the census cycle with the largest basin to a "
+                               "stable orbit, on which the largest_cycle_* variables were measured", False),
 }  # fmt: skip
+
+
+#: Flags of ``largest_cycle_verified``.
+VERIFIED_FLAGS: tuple[tuple[int, ...], tuple[str, ...]] = ((-1, 0, 1), ("no_census_cycle", "not_verified", "verified"))
 
 
 def empty(n: int) -> dict[str, np.ndarray]:
@@ -272,6 +266,7 @@ def empty(n: int) -> dict[str, np.ndarray]:
         out[name] = np.full(shape, np.nan) if dtype == "f8" else np.zeros(shape, dtype=dtype)
     out["n_attractors"][:] = -1
     out["n_cycles"][:] = -1
+    out["largest_cycle_verified"][:] = -1
     return out
 
 
@@ -296,6 +291,8 @@ def run(
     cycle_tol: float = CYCLE_TOL,
     irregular_block: int = DEFAULTS.irregular.block,
     recurrence: bool = True,
+    shooting_rtol: float = DEFAULTS.shooting.rtol,
+    shooting_tol: float = DEFAULTS.shooting.tol,
 ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
     """Census of the points ``sel`` of a chunk: one batched call per phase (``PHASE_STARTS``) for those
     samples of every point.
@@ -326,21 +323,27 @@ def run(
     values = np.column_stack([np.asarray(point_params[k], dtype=np.float64)[sel] for k in names])
     decay = return_thresholds(sub, saddle)
 
-    def batch(cols: slice, known: tuple[np.ndarray, np.ndarray, np.ndarray] | None) -> dict[str, np.ndarray]:
-        """The samples ``cols`` of every point, in one call; arrays shaped ``(m, k, ...)``."""
-        k = len(range(samples)[cols])
-        r = _core.ensemble(
-            {kk: float(v) for kk, v in model_values.items()}, contact, friction_law, names,
-            np.repeat(values, k, axis=0), np.ascontiguousarray(y0[:, cols].reshape(m * k, 6)), float(t_max),
-            integrator, float(rtol), atol=None if atol is None else np.asarray(atol, dtype=np.float64),
+    base = {kk: float(v) for kk, v in model_values.items()}
+
+    def steady(rows: np.ndarray, starts: np.ndarray, known, restart: np.ndarray | None = None) -> dict:
+        """Runs to steady state of points ``rows`` (indices into ``sel``, one per run) from ``starts``."""
+        return _core.ensemble(
+            base, contact, friction_law, names, np.ascontiguousarray(values[rows]), np.ascontiguousarray(starts),
+            float(t_max), integrator, float(rtol), atol=None if atol is None else np.asarray(atol, dtype=np.float64),
             threads=threads, kind="steady", periodic_tol=float(periodic_tol), n_fourier=512,
-            decay_thresholds=np.ascontiguousarray(np.repeat(decay, k, axis=0)),
+            decay_thresholds=np.ascontiguousarray(decay[rows]),
             watch_x=False,  # x is left out only where it is slaved (constant friction); the core decides
             irregular_block=int(irregular_block),
-            **({} if known is None else {name: np.ascontiguousarray(np.repeat(a, k, axis=0)) for name, a in
+            restart=None if restart is None else np.ascontiguousarray(restart, dtype=np.float64),
+            **({} if known is None else {name: np.ascontiguousarray(a[rows]) for name, a in
                                          zip(("known_irregular", "known_cells", "known_cell_extent"), known)
                                          if a is not None}),
         )  # fmt: skip
+
+    def batch(cols: slice, known: tuple[np.ndarray, np.ndarray, np.ndarray] | None) -> dict[str, np.ndarray]:
+        """The samples ``cols`` of every point, in one call; arrays shaped ``(m, k, ...)``."""
+        k = len(range(samples)[cols])
+        r = steady(np.repeat(np.arange(m), k), y0[:, cols].reshape(m * k, 6), known)
         return {key: np.asarray(v).reshape((m, k) + np.shape(v)[1:]) for key, v in r.items()}
 
     # Phases: the pilots establish each point's irregular attractors; the later samples stop as
@@ -350,6 +353,11 @@ def run(
     for a, b in zip(cuts[:-1], cuts[1:]):
         part = batch(slice(a, b), fingerprints(res) if res else None)
         res = {key: _join(res[key], part[key]) for key in part} if res else part
+    res = {key: np.array(v, dtype=object) if key == "reason" else v for key, v in res.items()}
+    check = cyc.CensusCheck(res, cycle_tol, steady, lambda: fingerprints(res) if irregular_block > 0 and recurrence
+                        else None, float(t_max), cyc.check_rtol(rtol, shooting_rtol), float(shooting_tol))  # fmt: skip
+    check.settle(lambda rows, y, p, z1: cyc.shoot(base, contact, friction_law, names, values[rows], y, p, z1,
+                                                       rtol=check.rtol, tol=check.tol, threads=threads))  # fmt: skip
     outcome, status = res["outcome"], res["status"]
     attractor = np.vectorize(lambda o: _ATTRACTOR_OF[OUTCOME_NAMES[o]], otypes=[np.int64])(outcome)
     # A run that stopped at t_max is bounded motion (irregular) only if it was not a numerical failure.
@@ -362,6 +370,7 @@ def run(
     max_z = res["max_abs_z"]
     cycle = np.full((m, samples), -1)
     k = len(ATTRACTOR_NAMES)
+    largest: list[tuple[int, int]] = []
     for i in range(m):
         a = attractor[i]
         valid = a >= 0
@@ -376,7 +385,7 @@ def run(
         out["basin_fraction_se"][i] = np.sqrt(p * (1.0 - p) / nv)
         out["basin_stability"][i] = p[0]
         per = np.flatnonzero(a == 1)
-        label, heads = _cycles(omega[i, per], mult[i, per], a1[i, per], cycle_tol)
+        label, heads = cyc.cluster(omega[i, per], mult[i, per], a1[i, per], cycle_tol)
         cycle[i, per] = label
         out["n_cycles"][i] = len(heads)
         out["n_attractors"][i] = int(counts[0] > 0) + len(heads) + int(counts[2] > 0)
@@ -385,10 +394,13 @@ def run(
             s = per[heads[big]]
             out["largest_cycle_omega"][i] = omega[i, s]
             out["largest_cycle_a1"][i] = a1[i, s]
-            out["largest_cycle_period_ratio"][i] = linear_frequency[i] / omega[i, s]
             out["largest_cycle_fraction_off_disk"][i] = off[i, s]
+            out["largest_cycle_verified"][i] = 0
+            largest.append((i, s))
         if counts[2]:
             out["irregular_max_abs_z"][i] = float(np.max(max_z[i, a == 2]))
+    check.measure(largest, out)
+    out["largest_cycle_period_ratio"] = linear_frequency / out["largest_cycle_omega"]
     per_sample = {
         "outcome": outcome, "status": status, "attractor": attractor, "cycle": cycle, "omega": omega,
         "z1_amplitude": a1, "multiplicity": mult, "fraction_off_disk": off, "max_abs_z": max_z,
@@ -593,6 +605,9 @@ def census(
     data = {}
     for name, (_dtype, units, long_name, per_attractor) in CENSUS_VARIABLES.items():
         attrs = {"long_name": long_name} | ({} if units is None else {"units": units})
+        if name == "largest_cycle_verified":
+            attrs = {"long_name": long_name, "flag_values": np.array(VERIFIED_FLAGS[0], dtype=np.int8),
+                     "flag_meanings": " ".join(VERIFIED_FLAGS[1])}  # fmt: skip
         data[name] = (("attractor",), res[name][0], attrs) if per_attractor else ((), res[name][0], attrs)
     flag = {"flag_values": np.arange(-1, len(ATTRACTOR_NAMES), dtype=np.int8),
             "flag_meanings": "failed " + " ".join(ATTRACTOR_NAMES)}  # fmt: skip

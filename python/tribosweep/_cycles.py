@@ -114,3 +114,116 @@ def merge(s: dict, idx: np.ndarray, r: dict, t0: np.ndarray, skip: tuple[str, ..
             s[key][idx] = v
     s["n_rhs"][idx] = n_rhs
     s["t_end"][idx] = t0 + r["t_end"]
+
+
+def cluster(omega, mult, a1, tol: float) -> tuple[np.ndarray, list[int]]:
+    """Cluster periodic samples (in sample order, deterministic); label per sample, first member per cluster."""
+    label = np.full(omega.size, -1)
+    heads: list[int] = []
+    for s in range(omega.size):
+        for c, h in enumerate(heads):
+            if mult[s] == mult[h] and abs(omega[s] - omega[h]) <= tol * omega[h] and abs(a1[s] - a1[h]) <= tol * max(
+                a1[h], 1e-12
+            ):
+                label[s] = c
+                break
+        else:
+            label[s] = len(heads)
+            heads.append(s)
+    return label, heads
+
+
+class CensusCheck:
+    """The census's cycles (``tribosweep._census.run``), checked by shooting.
+
+    Each distinct cycle of a point (the head of its cluster, :func:`cluster`) is shot from. A
+    cycle that is an unstable orbit is no attractor: its samples stopped near it (close to a
+    saddle, or in a laminar phase of intermittent motion) and go on, in one call, each with the
+    time it has left and a hold on cycles; the cycles they then stop on are checked in turn. A
+    stable orbit is kept (:meth:`largest` measures the largest cluster's on its orbit); one whose
+    shooting failed or landed on another orbit stays, not verified.
+    """
+
+    def __init__(self, res: dict, cycle_tol: float, steady, known, t_max: float, rtol: float, tol: float):
+        self.res, self.cycle_tol, self.steady, self.known = res, cycle_tol, steady, known
+        self.t_max, self.rtol, self.tol = t_max, rtol, tol
+        self.orbit: dict[tuple[int, int], tuple[bool, np.ndarray | None]] = {}  # (point, sample) -> (stable, state0)
+
+    def flat(self, key: str) -> np.ndarray:
+        """``res[key]`` as one row per sample (a view: writes go to ``res``)."""
+        v = self.res[key]
+        flat = v.reshape((-1,) + v.shape[2:])
+        assert np.shares_memory(flat, v), key  # a copy would drop the writes
+        return flat
+
+    def settle(self, shoot) -> None:
+        res, m = self.res, self.res["outcome"].shape[0]
+        for _ in range(CHECK_ROUNDS):
+            heads, members = [], []
+            for i in range(m):
+                per = np.flatnonzero(res["outcome"][i] == PERIODIC)
+                label, hs = _cluster_of(res, i, per, self.cycle_tol)
+                for c, h in enumerate(hs):
+                    if (i, per[h]) not in self.orbit:
+                        heads.append((i, per[h]))
+                        members.append(per[label == c])
+            if not heads:
+                return
+            pts = np.array([i for i, _ in heads])
+            cols = np.array([s for _, s in heads])
+            orbs = shoot(pts, res["y_end"][pts, cols], res["period"][pts, cols], res["z1_amplitude"][pts, cols])
+            res["n_rhs"][pts, cols] += orbs["n_rhs"].astype(res["n_rhs"].dtype)
+            for j, key in enumerate(heads):
+                self.orbit[key] = (bool(orbs["stable"][j]), orbs["state0"][j] if orbs["stable"][j] else None)
+            go = [(heads[j][0], s, orbs["moduli"][j], orbs["period"][j]) for j in np.flatnonzero(orbs["unstable"])
+                  for s in members[j]]  # fmt: skip
+            if not go:
+                return
+            self._leave(go)
+        # Still stopping near unstable cycles after CHECK_ROUNDS checks: not decided.
+        for (i, s), (stable, _) in self.orbit.items():
+            if not stable and res["outcome"][i, s] == PERIODIC:
+                res["outcome"][i, s] = UNSETTLED
+                res["status"][i, s] = STATUS["not_converged"]
+
+    def _leave(self, go: list) -> None:
+        k = self.res["outcome"].shape[1]
+        pts = np.array([i for i, *_ in go])
+        flat = pts * k + np.array([s for _, s, *_ in go])
+        t0 = self.flat("t_end")[flat].astype(np.float64)
+        left, hold = leave(t0, self.t_max, np.array([g[2] for g in go]), np.array([g[3] for g in go]))
+        for f, t, g in zip(flat, t0, go):
+            self.orbit.pop((g[0], g[1]), None)  # its next stop is another, to be checked afresh
+            why = f"at t = {t:.3g} s it stopped near an unstable cycle (largest multiplier {np.max(g[2]):.3g})"
+            self.flat("reason")[f] = "; ".join(filter(None, [self.flat("reason")[f], why]))
+        done = left <= 0
+        self.flat("outcome")[flat[done]] = UNSETTLED
+        self.flat("status")[flat[done]] = STATUS["not_converged"]
+        if done.all():
+            return
+        flat, pts, t0 = flat[~done], pts[~done], t0[~done]
+        r = rows(self.steady(pts, self.flat("y_end")[flat], self.known(),
+                                     np.column_stack([left[~done], hold[~done]])))  # fmt: skip
+        s = {key: self.flat(key) for key in r if key in self.res and key != "reason"}
+        s["n_rhs"], s["t_end"] = self.flat("n_rhs"), self.flat("t_end")
+        merge(s, flat, r, t0)
+
+    def measure(self, largest: list[tuple[int, int]], out: dict) -> None:
+        """``largest_cycle_*`` of the points ``i`` whose largest cycle (head sample ``s``) is a verified
+        stable orbit: measured by runs started on it, in one call (``largest_cycle_verified`` 1)."""
+        pick = [(i, s) for i, s in largest if self.orbit.get((i, s), (False, None))[0]]
+        if not pick:
+            return
+        pts = np.array([i for i, _ in pick])
+        r = rows(self.steady(pts, np.array([self.orbit[key][1] for key in pick]), None))
+        self.res["n_rhs"][pts, [s for _, s in pick]] += r["n_rhs"].astype(self.res["n_rhs"].dtype)
+        ok = r["outcome"] == PERIODIC
+        out["largest_cycle_omega"][pts[ok]] = r["omega"][ok]
+        out["largest_cycle_a1"][pts[ok]] = r["z1_amplitude"][ok]
+        out["largest_cycle_fraction_off_disk"][pts[ok]] = r["fraction_off_disk"][ok]
+        out["largest_cycle_verified"][pts[ok]] = 1
+
+
+def _cluster_of(res: dict, i: int, per: np.ndarray, tol: float) -> tuple[np.ndarray, list[int]]:
+    """:func:`cluster` of point ``i``'s periodic samples ``per``."""
+    return cluster(res["omega"][i, per], res["multiplicity"][i, per], res["z1_amplitude"][i, per], tol)

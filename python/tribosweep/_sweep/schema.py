@@ -208,6 +208,7 @@ FLAG_MEANINGS: dict[str, tuple[tuple[int, ...], tuple[str, ...]]] = {
     "tidf_contact_opens": ((-1, 0, 1), ("not_computed", "closed", "opens")),
     "orbit_stable": ((-1, 0, 1), ("not_computed", "unstable", "stable")),
     "cycle_verified": ((-1, 0, 1), ("no_transient_cycle", "not_verified", "verified")),
+    "largest_cycle_verified": _census.VERIFIED_FLAGS,
 }
 
 
@@ -237,7 +238,10 @@ def point_specs(dims: tuple[str, ...], *, wear_rate: bool = False) -> list[VarSp
                 attrs["units"] = units
         out.append(VarSpec(name, dims, dtype, attrs))
     for name, (dtype, units, long_name, per_attractor) in _census.CENSUS_VARIABLES.items():
-        attrs = {"long_name": long_name} | ({} if units is None else {"units": units})
+        if name in FLAG_MEANINGS:
+            attrs = flag_attrs(FLAG_MEANINGS[name][1], long_name, FLAG_MEANINGS[name][0], dtype)
+        else:
+            attrs = {"long_name": long_name} | ({} if units is None else {"units": units})
         out.append(VarSpec(name, dims + (("attractor",) if per_attractor else ()), dtype, attrs))
     by_name = {v.name: v for v in out}
     by_name["basin_fraction"].attrs["comment"] = (
