@@ -356,8 +356,8 @@ def run(
     res = {key: np.array(v, dtype=object) if key == "reason" else v for key, v in res.items()}
     check = cyc.CensusCheck(res, cycle_tol, steady, lambda: fingerprints(res) if irregular_block > 0 and recurrence
                         else None, float(t_max), cyc.check_rtol(rtol, shooting_rtol), float(shooting_tol))  # fmt: skip
-    check.settle(lambda rows, y, p, z1: cyc.shoot(base, contact, friction_law, names, values[rows], y, p, z1,
-                                                       rtol=check.rtol, tol=check.tol, threads=threads))  # fmt: skip
+    check.settle(lambda rows, y, p, z1, size: cyc.shoot(base, contact, friction_law, names, values[rows], y, p, z1,
+                                                             size, rtol=check.rtol, tol=check.tol, threads=threads))  # fmt: skip
     outcome, status = res["outcome"], res["status"]
     attractor = np.vectorize(lambda o: _ATTRACTOR_OF[OUTCOME_NAMES[o]], otypes=[np.int64])(outcome)
     # A run that stopped at t_max is bounded motion (irregular) only if it was not a numerical failure.

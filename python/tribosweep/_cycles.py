@@ -21,10 +21,12 @@ from ._codes import OUTCOME_NAMES, STATUS
 #: not by 8 had not by 30 either.
 CHECK_MAX_ITER: int = 8
 
-#: Shooting from a stop must end on an orbit of the same period and first-harmonic amplitude of z
-#: within these relative differences, or the cycle is not verified. On the Stribeck sweep the
-#: converged orbits were within 7.1e-3 of the stops in A1 (a slow approach) and closer in period;
-#: a tenfold margin, far below the gap to another orbit of the same multiplicity.
+#: Shooting from a stop must end on an orbit of the same period, relatively, and the same
+#: first-harmonic amplitude of z in units of the stop's largest harmonic of z (a subharmonic
+#: cycle's A1 can be a thousandth of its motion, and its relative change then means nothing), or
+#: the cycle is not verified. On the Stribeck sweep the converged orbits were within 7.1e-3 of
+#: the stops in A1 (a slow approach) and closer in period; a tenfold margin, far below the gap to
+#: another orbit of the same multiplicity.
 SAME_ORBIT_PERIOD: float = 1e-2
 SAME_ORBIT_A1: float = 5e-2
 
@@ -64,8 +66,9 @@ def check_rtol(rtol: float, shooting_rtol: float) -> float:
 
 
 def shoot(base, contact: str, friction_law: str, names, values: np.ndarray, y_end: np.ndarray, period: np.ndarray,
-          z1: np.ndarray, *, rtol: float, tol: float, threads: int | None) -> dict:  # fmt: skip
-    """Shooting from the stops ``(y_end, period)`` whose first-harmonic amplitude of z was ``z1``.
+          z1: np.ndarray, z_size: np.ndarray, *, rtol: float, tol: float, threads: int | None) -> dict:  # fmt: skip
+    """Shooting from the stops ``(y_end, period)`` whose first-harmonic amplitude of z was ``z1`` and
+    largest harmonic of z ``z_size``.
 
     Returns the core's orbits with ``stable`` and ``unstable`` (converged, on the same orbit:
     :data:`SAME_ORBIT_PERIOD`, :data:`SAME_ORBIT_A1`) and ``note``: why a check verified nothing
@@ -78,7 +81,8 @@ def shoot(base, contact: str, friction_law: str, names, values: np.ndarray, y_en
     out = {k: np.asarray(v) for k, v in orbs.items()}
     ok = out["status"] == STATUS["success"]
     with np.errstate(divide="ignore", invalid="ignore"):
-        same = (np.abs(out["period"] / period - 1) <= SAME_ORBIT_PERIOD) & (np.abs(out["A1"] / z1 - 1) <= SAME_ORBIT_A1)
+        same = (np.abs(out["period"] / period - 1) <= SAME_ORBIT_PERIOD) & (
+            np.abs(out["A1"] - z1) <= SAME_ORBIT_A1 * z_size)
     note = np.full(len(ok), "", dtype=object)
     for j in np.flatnonzero(~ok):
         note[j] = f"shooting from it failed ({out['reason'][j]})"
@@ -171,7 +175,8 @@ class CensusCheck:
                 return
             pts = np.array([i for i, _ in heads])
             cols = np.array([s for _, s in heads])
-            orbs = shoot(pts, res["y_end"][pts, cols], res["period"][pts, cols], res["z1_amplitude"][pts, cols])
+            orbs = shoot(pts, res["y_end"][pts, cols], res["period"][pts, cols], res["z1_amplitude"][pts, cols],
+                         z_size(res, (pts, cols)))
             res["n_rhs"][pts, cols] += orbs["n_rhs"].astype(res["n_rhs"].dtype)
             for j, key in enumerate(heads):
                 self.orbit[key] = (bool(orbs["stable"][j]), orbs["state0"][j] if orbs["stable"][j] else None)
@@ -227,3 +232,8 @@ class CensusCheck:
 def _cluster_of(res: dict, i: int, per: np.ndarray, tol: float) -> tuple[np.ndarray, list[int]]:
     """:func:`cluster` of point ``i``'s periodic samples ``per``."""
     return cluster(res["omega"][i, per], res["multiplicity"][i, per], res["z1_amplitude"][i, per], tol)
+
+
+def z_size(summary: dict, idx) -> np.ndarray:
+    """The largest harmonic amplitude of z of the runs ``summary[...][idx]``: the size :func:`shoot` compares A1 in."""
+    return np.max([summary[k][idx] for k in ("z1_amplitude", "z2_amplitude", "z3_amplitude")], axis=0)
