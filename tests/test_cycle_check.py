@@ -244,3 +244,15 @@ def test_a_repeating_slow_decay_at_a_stable_point_is_sliding_not_a_cycle(monkeyp
     raw = ts.sweep(**axes)
     assert ts.labels(raw.regime).values.ravel()[0] in ("self_excited", "contact_loss")
     assert float(_first(raw, "z1_amplitude")) < 1e-6  # the 'cycle': a fraction of a micrometre
+
+
+def test_census_samples_still_stopping_near_unstable_orbits_after_the_last_check_are_undecided(monkeypatch):
+    # One round of checks, and a hold of 4 periods only: the 120 N samples that go on from the
+    # unstable orbit stop near it again at once. They are not taken for a cycle: unsettled, i.e.
+    # bounded motion (irregular).
+    m = ts.apparatus_model(120.0, 0.09, 0.3)
+    monkeypatch.setattr(_cycles, "CHECK_ROUNDS", 1)
+    monkeypatch.setattr(_cycles, "LEAVE_GROWTH", 1.0)
+    one = ts.census(m, samples=64)
+    assert float(one.basin_fraction.sel(attractor=1)) == 0.0 and int(one.n_cycles) == 0
+    assert float(one.basin_fraction.sel(attractor=2)) > 0.05

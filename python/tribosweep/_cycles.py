@@ -144,8 +144,9 @@ class CensusCheck:
     cycle that is an unstable orbit is no attractor: its samples stopped near it (close to a
     saddle, or in a laminar phase of intermittent motion) and go on, in one call, each with the
     time it has left and a hold on cycles; the cycles they then stop on are checked in turn. A
-    stable orbit is kept (:meth:`largest` measures the largest cluster's on its orbit); one whose
-    shooting failed or landed on another orbit stays, not verified.
+    stable orbit is kept (:meth:`measure` measures the largest cluster's on its orbit); one whose
+    shooting failed or landed on another orbit stays, not verified. Samples that still stop on
+    cycles after :data:`CHECK_ROUNDS` checks of cycles they left are not decided (``unsettled``).
     """
 
     def __init__(self, res: dict, cycle_tol: float, steady, known, t_max: float, rtol: float, tol: float):
@@ -162,6 +163,7 @@ class CensusCheck:
 
     def settle(self, shoot) -> None:
         res, m = self.res, self.res["outcome"].shape[0]
+        went_on = np.zeros(0, dtype=np.int64)
         for _ in range(CHECK_ROUNDS):
             heads, members = [], []
             for i in range(m):
@@ -184,14 +186,15 @@ class CensusCheck:
                   for s in members[j]]  # fmt: skip
             if not go:
                 return
-            self._leave(go)
-        # Still stopping near unstable cycles after CHECK_ROUNDS checks: not decided.
-        for (i, s), (stable, _) in self.orbit.items():
-            if not stable and res["outcome"][i, s] == PERIODIC:
-                res["outcome"][i, s] = UNSETTLED
-                res["status"][i, s] = STATUS["not_converged"]
+            went_on = self._leave(go)
+        # The samples that went on in the last round and stopped on a cycle again: not decided.
+        again = went_on[self.flat("outcome")[went_on] == PERIODIC]
+        self.flat("outcome")[again] = UNSETTLED
+        self.flat("status")[again] = STATUS["not_converged"]
 
-    def _leave(self, go: list) -> None:
+    def _leave(self, go: list) -> np.ndarray:
+        """Samples ``go`` (point, sample, moduli, period) go on from near their unstable cycles; returns
+        their flat indices."""
         k = self.res["outcome"].shape[1]
         pts = np.array([i for i, *_ in go])
         flat = pts * k + np.array([s for _, s, *_ in go])
@@ -205,13 +208,14 @@ class CensusCheck:
         self.flat("outcome")[flat[done]] = UNSETTLED
         self.flat("status")[flat[done]] = STATUS["not_converged"]
         if done.all():
-            return
+            return flat[:0]
         flat, pts, t0 = flat[~done], pts[~done], t0[~done]
         r = rows(self.steady(pts, self.flat("y_end")[flat], self.known(),
                                      np.column_stack([left[~done], hold[~done]])))  # fmt: skip
         s = {key: self.flat(key) for key in r if key in self.res and key != "reason"}
         s["n_rhs"], s["t_end"] = self.flat("n_rhs"), self.flat("t_end")
         merge(s, flat, r, t0)
+        return flat
 
     def measure(self, largest: list[tuple[int, int]], out: dict) -> None:
         """``largest_cycle_*`` of the points ``i`` whose largest cycle (head sample ``s``) is a verified
