@@ -120,6 +120,95 @@ def merge(s: dict, idx: np.ndarray, r: dict, t0: np.ndarray, skip: tuple[str, ..
     s["t_end"][idx] = t0 + r["t_end"]
 
 
+def check(summary: dict, shoot, steady, t_max: float) -> tuple[dict, np.ndarray]:
+    """The cycles that the runs of ``summary`` stopped on, checked and converged by shooting.
+
+    ``shoot(idx, y_end, period, z1, z_size)``: :func:`shoot` for the runs ``idx``;
+    ``steady(idx, y0, restart=None)``: runs to steady state of the runs ``idx`` from ``y0`` (the
+    core's summary), each with its own ``(t_max, hold)`` under ``restart``.
+
+    - **stable orbit**: a run started on it measures it (every cycle quantity of the summary,
+      from the same Fourier integrals as the first run's, on the orbit itself);
+    - **unstable orbit**: the run goes on from where it stopped, to a steady state within what is
+      left of ``t_max``, declaring no cycle until a deviation along the largest multiplier has
+      grown :data:`LEAVE_GROWTH`-fold; a cycle it stops on is checked again (at most
+      :data:`CHECK_ROUNDS` checks; still stopping on one after that: ``unsettled``);
+    - **no convergence, or another orbit**: the stop's cycle stays, not verified, and the reason
+      says so.
+
+    Returns the summary with those rows replaced (``t_end`` and ``n_rhs`` over all the runs of a
+    row, shooting included), and per row whether its cycle was verified (a stable orbit that
+    shooting converged and a run on it measured).
+    """
+    s = rows(summary)
+    n = len(s["outcome"])
+    verified = np.zeros(n, dtype=bool)
+    notes: list[list[str]] = [[] for _ in range(n)]
+    todo = np.flatnonzero(s["outcome"] == PERIODIC)
+    for _ in range(CHECK_ROUNDS):
+        if not todo.size:
+            break
+        orbs = shoot(todo, s["y_end"][todo], s["period"][todo], s["z1_amplitude"][todo], z_size(s, todo))
+        s["n_rhs"][todo] += orbs["n_rhs"].astype(s["n_rhs"].dtype)
+        for j in np.flatnonzero(orbs["note"] != ""):
+            notes[todo[j]].append(f"the cycle is the run's stop, not verified: {orbs['note'][j]}")
+        good = todo[orbs["stable"]]
+        if good.size:
+            verified[good] = _measure(steady, s, good, orbs["state0"][orbs["stable"]])
+        u = orbs["unstable"]
+        todo = _leave(steady, s, todo[u], orbs["moduli"][u], orbs["period"][u], t_max, notes)
+    for i in todo:  # still stopping near unstable cycles after CHECK_ROUNDS checks
+        s["outcome"][i] = UNSETTLED
+        s["status"][i] = STATUS["not_converged"]
+        notes[i].append(f"it stopped near an unstable cycle {CHECK_ROUNDS} times")
+    for i, parts in enumerate(notes):
+        if parts:
+            s["reason"][i] = "; ".join(([s["reason"][i]] if s["reason"][i] else []) + parts)
+    return s, verified
+
+
+def _measure(steady, s: dict, idx: np.ndarray, state0: np.ndarray) -> np.ndarray:
+    """The cycle quantities of ``s`` at rows ``idx``, measured by runs started on their converged orbits.
+
+    Such a run stops once its section state repeats, two periods in. Its limit is the runs'
+    ``t_max``, the same for every run: a limit taken from the periods of the call's other runs
+    would make a row's result depend on what shares its call (a sweep point's, on its chunk).
+
+    Returns which runs repeated (the others keep the first run's quantities, with a reason).
+    """
+    m = rows(steady(idx, state0))
+    s["n_rhs"][idx] += m["n_rhs"]
+    done = m["outcome"] == PERIODIC
+    for key in CYCLE_KEYS:
+        s[key][idx[done]] = m[key][done]
+    for i in idx[~done]:
+        s["reason"][i] = "; ".join(filter(None, [s["reason"][i], "a run on the converged orbit did not repeat: the "
+                                                 "cycle's quantities are the stop's"]))  # fmt: skip
+    return done
+
+
+def _leave(steady, s: dict, idx: np.ndarray, moduli: np.ndarray, period: np.ndarray, t_max: float,
+           notes: list[list[str]]) -> np.ndarray:  # fmt: skip
+    """Runs ``idx`` on from near the unstable cycles they stopped on, in one call (:func:`leave`);
+    returns those that stop on a cycle again."""
+    t0 = s["t_end"][idx].astype(np.float64)
+    for i, t, m in zip(idx, t0, np.max(moduli, axis=1) if len(idx) else []):
+        notes[i].append(f"at t = {t:.3g} s it stopped near an unstable cycle (largest multiplier {m:.3g}) and went on")
+    left, hold = leave(t0, t_max, moduli, period)
+    done = left <= 0
+    s["outcome"][idx[done]] = UNSETTLED  # stopped at t_max: nothing left to go on with
+    s["status"][idx[done]] = STATUS["not_converged"]
+    go = idx[~done]
+    if not go.size:
+        return go
+    r = rows(steady(go, s["y_end"][go], restart=np.column_stack([left[~done], hold[~done]])))
+    merge(s, go, r, t0[~done])
+    for j, i in enumerate(go):
+        if r["reason"][j] and r["outcome"][j] != UNSETTLED:  # an unsettled run's names its own t_max
+            notes[i].append(str(r["reason"][j]))
+    return go[r["outcome"] == PERIODIC]
+
+
 def cluster(omega, mult, a1, tol: float) -> tuple[np.ndarray, list[int]]:
     """Cluster periodic samples (in sample order, deterministic); label per sample, first member per cluster."""
     label = np.full(omega.size, -1)

@@ -7,7 +7,7 @@ from collections.abc import Sequence
 import numpy as np
 import xarray as xr
 
-from . import _checks, _core, _settings
+from . import _checks, _core, _cycles, _settings
 from ._codes import OUTCOME_NAMES, STATUS_NAMES, flag_attrs
 from ._model import PARAM_LONG_NAMES, PARAM_NAMES, PARAM_UNITS, SliderModel
 from ._settings import DEFAULTS
@@ -176,6 +176,7 @@ def ensemble(
     decay_amplitude: float | None = None,
     max_steps: int | None = None,
     max_events: int | None = None,
+    check_cycles: bool = False,
 ) -> xr.Dataset:
     """Integrate many parameter sets of ``model`` in parallel (GIL released, Rust threads).
 
@@ -206,15 +207,19 @@ def ensemble(
         A periodic outcome is the run's stop, where its section state repeated to
         ``periodic_tol``: near a slowly attracting cycle about ``periodic_tol / (1 - |mu|)`` from
         it (0.7 % in A1 on the Stribeck sweep), near an unstable one (intermittent motion) not a
-        steady state at all. :func:`periodic_orbit` from ``(z_end, ...)`` and ``period``
-        converges it and checks its stability; a sweep does so at every such stop
-        (``cycle_verified``).
+        steady state at all. ``check_cycles=True`` checks each such stop as a sweep does.
     periodic_tol : float
         Relative repetition tolerance of the Poincare-section state that declares a cycle.
     decay_amplitude : float, m, optional
         Amplitude below which a shrinking motion counts as decayed (default ``1e-3 |z_st|``).
     max_steps, max_events : int, optional
         Per-trajectory step and event budgets, as in :func:`simulate`.
+    check_cycles : bool
+        With ``steady=True``: shoot from every periodic stop (Floquet multipliers, at ten times
+        ``rtol``). A stable orbit is measured by a run started on it, so its quantities are the
+        orbit's; from an unstable one the run goes on with the time it has left; a failed check
+        leaves the stop, with a reason. Adds ``cycle_verified``. Without it a stop is reported as
+        it was (:func:`periodic_orbit` from ``(z_end, ...)`` and ``period`` converges one).
 
     Returns
     -------
@@ -243,11 +248,24 @@ def ensemble(
     kind = "steady" if steady else ("sampled" if t_eval is not None else "final")
     if steady and t_eval is not None:
         raise ValueError("t_eval cannot be combined with steady=True: a steady run returns a summary")
-    out = _core.ensemble(
-        model.values(), model.contact, model.friction_law, names, values, np.atleast_2d(y0), t_end, method, rtol,
-        atol=atol, t_eval=t_eval, threads=threads, kind=kind, periodic_tol=periodic_tol,
-        decay_amplitude=decay_amplitude, n_fourier=512, max_steps=max_steps, max_events=max_events,
-    )
+    if check_cycles and not steady:
+        raise ValueError("check_cycles = True needs steady=True: only a run to steady state stops on a cycle")
+
+    def run(idx, starts, restart=None):
+        return _core.ensemble(
+            model.values(), model.contact, model.friction_law, names, np.ascontiguousarray(values[idx]),
+            np.ascontiguousarray(np.atleast_2d(starts)), t_end, method, rtol, atol=atol, t_eval=t_eval,
+            threads=threads, kind=kind, periodic_tol=periodic_tol, decay_amplitude=decay_amplitude, n_fourier=512,
+            max_steps=max_steps, max_events=max_events, restart=restart,
+        )  # fmt: skip
+
+    out = run(np.arange(n), y0)
+    verified = None
+    if check_cycles:
+        shoot_rtol = _cycles.check_rtol(rtol, DEFAULTS.shooting.rtol)
+        out, verified = _cycles.check(out, lambda idx, y, p, z1, size: _cycles.shoot(
+            model.values(), model.contact, model.friction_law, names, values[idx], y, p, z1, size, rtol=shoot_rtol,
+            tol=DEFAULTS.shooting.tol, threads=threads), run, t_end)  # fmt: skip
     dims = ("trajectory",)
     coords = {"trajectory": ("trajectory", np.arange(n))}
     for i, k in enumerate(names):
@@ -279,6 +297,12 @@ def ensemble(
         for k, (units, text) in summary_units.items():
             data[k] = (dims, out[k], {"units": units, "long_name": text})
         data["multiplicity"] = (dims, out["multiplicity"], {"units": "1", "long_name": "section crossings per period"})
+        if verified is not None:
+            data["cycle_verified"] = (dims, np.where(np.asarray(out["outcome"]) == _cycles.PERIODIC, verified, -1)
+                                      .astype(np.int8), {"long_name": "whether shooting converged the run's cycle to a "
+                                      "stable orbit, on which its quantities were measured", "flag_values":
+                                      np.array([-1, 0, 1], dtype=np.int8), "flag_meanings":
+                                      "no_cycle not_verified verified"})  # fmt: skip
         for i, (name, units, text) in enumerate(STATE_VARS):
             data[f"{name}_end"] = (dims, out["y_end"][:, i], {
                 "units": units, "long_name": f"{text} where the run ended (on the section zd = 0 if periodic)"})

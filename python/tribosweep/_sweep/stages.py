@@ -353,102 +353,29 @@ def _reorder(v, idx: np.ndarray):
 def check_cycles(p: Points, sel: np.ndarray, summary: dict) -> tuple[dict, np.ndarray]:
     """Stage 4a: the cycles that the transients of ``sel`` stopped on, checked and converged by shooting.
 
-    A transient stops on a cycle once its section state has repeated to ``periodic_tol``. Near a
-    slowly attracting cycle (a multiplier near 1) it is then still about ``residual / (1 - |mu|)``
-    away from it: the Stribeck sweep's transient amplitudes were up to 0.7 % off. In a laminar
-    phase of intermittent motion it repeats near an unstable cycle, which is not a steady state.
-    Shooting from the stop's state (Floquet multipliers, saltation at every switch) tells:
-
-    - **stable orbit**: a short run started on it measures it (every cycle quantity of the
-      summary, from the same Fourier integrals as the transient's, on the orbit itself);
-    - **unstable orbit**: the run goes on from where it stopped, to a steady state within what is
-      left of ``t_max``, declaring no cycle until a deviation along the largest multiplier has
-      grown :data:`tribosweep._cycles.LEAVE_GROWTH`-fold; a cycle it stops on is checked again (at most
-      :data:`tribosweep._cycles.CHECK_ROUNDS` checks);
-    - **no convergence**: the transient's cycle stays, not verified, and the reason says so.
-
-    Returns the summary with those rows replaced (``t_end`` and ``n_rhs`` over all the runs of a
-    point, shooting included), and per run whether its cycle was verified (a stable orbit that
-    shooting converged and a run on it measured: True).
+    :func:`tribosweep._cycles.check` with the sweep's settings (shooting at ten times the
+    transients' tolerance), the work charged to the points. A transient's stop near a slowly
+    attracting cycle is ``periodic_tol / (1 - |mu|)`` from it (the Stribeck sweep's amplitudes were
+    up to 0.7 % off); one in a laminar phase of intermittent motion repeats near an unstable cycle.
+    Returns the summary with the checked rows replaced and per run whether its cycle was verified.
     """
-    s = _cycles.rows(summary)
-    n = len(sel)
-    verified = np.zeros(n, dtype=bool)
-    notes: list[list[str]] = [[] for _ in range(n)]
-    sh, t_max = p.settings.shooting, float(p.settings.steady.t_max)
+    sh = p.settings.shooting
     rtol = _cycles.check_rtol(p.settings.integration.rtol, sh.rtol)
-    todo = np.flatnonzero(s["outcome"] == _cycles.PERIODIC)
-    for _ in range(_cycles.CHECK_ROUNDS):
-        if not todo.size:
-            break
+
+    def shoot(idx, y, period, z1, size):
         t1 = time.perf_counter()
-        orbs = _cycles.shoot(p.base, p.contact, p.friction_law, p.names, p.values[sel[todo]], s["y_end"][todo],
-                             s["period"][todo], s["z1_amplitude"][todo], _cycles.z_size(s, todo), rtol=rtol,
-                             tol=sh.tol, threads=p.threads)  # fmt: skip
-        s["n_rhs"][todo] += orbs["n_rhs"].astype(s["n_rhs"].dtype)
-        for j in np.flatnonzero(orbs["note"] != ""):
-            notes[todo[j]].append(f"the cycle is the transient's, not verified: {orbs['note'][j]}")
-        good = todo[orbs["stable"]]
-        if good.size:
-            verified[good] = _measure(p, sel, s, good, orbs["state0"][orbs["stable"]])
-        p.charge(sel[todo], t1)
-        u = orbs["unstable"]
-        todo = _leave(p, sel, s, todo[u], orbs["moduli"][u], orbs["period"][u], t_max, notes)
-    for i in todo:  # still stopping near unstable cycles after CHECK_ROUNDS checks
-        s["outcome"][i] = _cycles.UNSETTLED
-        s["status"][i] = STATUS["not_converged"]
-        notes[i].append(f"it stopped near an unstable cycle {_cycles.CHECK_ROUNDS} times")
-    for i, parts in enumerate(notes):
-        if parts:
-            s["reason"][i] = "; ".join(([s["reason"][i]] if s["reason"][i] else []) + parts)
-    return s, verified
+        out = _cycles.shoot(p.base, p.contact, p.friction_law, p.names, p.values[sel[idx]], y, period, z1, size,
+                            rtol=rtol, tol=sh.tol, threads=p.threads)  # fmt: skip
+        p.charge(sel[idx], t1)
+        return out
 
+    def steady(idx, y0, restart=None):
+        t1 = time.perf_counter()
+        out = run_steady(p, sel[idx], y0, restart=restart)
+        p.charge(sel[idx], t1)
+        return out
 
-def _measure(p: Points, sel: np.ndarray, s: dict, idx: np.ndarray, state0: np.ndarray) -> np.ndarray:
-    """The cycle quantities of ``s`` at rows ``idx``, measured by runs started on their converged orbits.
-
-    Such a run stops once its section state repeats, two periods in. Its limit is ``t_max``, the
-    same for every run: a limit taken from the periods of the call's other runs would make a
-    point's result depend on the chunk it is computed in.
-
-    Returns which runs repeated (the others keep the transient's quantities, with a reason).
-    """
-    m = _cycles.rows(run_steady(p, sel[idx], state0))
-    s["n_rhs"][idx] += m["n_rhs"]
-    done = m["outcome"] == _cycles.PERIODIC
-    for key in _cycles.CYCLE_KEYS:
-        s[key][idx[done]] = m[key][done]
-    for i in idx[~done]:
-        s["reason"][i] = "; ".join(filter(None, [s["reason"][i], "a run on the converged orbit did not repeat: the "
-                                                 "cycle's quantities are the transient's"]))  # fmt: skip
-    return done
-
-
-def _leave(p: Points, sel: np.ndarray, s: dict, idx: np.ndarray, moduli: np.ndarray, period: np.ndarray,
-           t_max: float, notes: list[list[str]]) -> np.ndarray:  # fmt: skip
-    """Runs ``idx`` on from near the unstable cycles they stopped on; returns those that stop on a cycle again.
-
-    One core call for all of them, each run with the time it has left (``t_max`` less where it
-    stopped) and a hold on cycles (:func:`tribosweep._cycles.leave`).
-    """
-    t0 = s["t_end"][idx].astype(np.float64)
-    for i, t, m in zip(idx, t0, np.max(moduli, axis=1) if len(idx) else []):
-        notes[i].append(f"at t = {t:.3g} s it stopped near an unstable cycle (largest multiplier {m:.3g}) and went on")
-    left, hold = _cycles.leave(t0, t_max, moduli, period)
-    done = left <= 0
-    s["outcome"][idx[done]] = _cycles.UNSETTLED  # stopped at t_max: nothing left to go on with
-    s["status"][idx[done]] = STATUS["not_converged"]
-    go = idx[~done]
-    if not go.size:
-        return go
-    t1 = time.perf_counter()
-    r = _cycles.rows(run_steady(p, sel[go], s["y_end"][go], restart=np.column_stack([left[~done], hold[~done]])))
-    p.charge(sel[go], t1)
-    _cycles.merge(s, go, r, t0[~done])
-    for j, i in enumerate(go):
-        if r["reason"][j] and r["outcome"][j] != _cycles.UNSETTLED:  # an unsettled run's names its own t_max
-            notes[i].append(str(r["reason"][j]))
-    return go[r["outcome"] == _cycles.PERIODIC]
+    return _cycles.check(summary, shoot, steady, float(p.settings.steady.t_max))
 
 
 def transient(p: Points, *, start_on_mode: bool) -> None:
