@@ -285,10 +285,14 @@ def test_info_counts_bistable_points_and_multi_period_cycles(tmp_path, capsys):
     ds = ts.sweep(normal_load=[10.0, 30.0], arm_length=[0.05, 0.1], strategy="linear", progress=False)
     ds["cycle_period_ratio"][1, 0, 0] = 2.03
     ds["bistable"][0, 1, 0] = 1
+    ds["cycle_verified"][1, 0, 0] = 1
+    ds["cycle_verified"][1, 1, 0] = 0
     ds.to_netcdf(nc)
     code, out, _ = run(["info", nc], capsys)
     assert code == 0
     assert "cycles of several mode periods (period doubling, subharmonic): 1" in out
+    assert "transient cycles checked by shooting: 1 verified (a stable orbit, measured on it), 1 not verified" in out
+    assert "census largest cycles checked" not in out  # no census: nothing to say
     assert "bistable:" in out and "not_checked" in out and "coexisting" in out
 
 

@@ -362,6 +362,12 @@ def describe(ds, path: str | None = None) -> str:
         multi = np.isfinite(r) & (np.rint(np.where(np.isfinite(r), r, 0)) >= 2)
         if multi.any():
             lines.append(f"cycles of several mode periods (period doubling, subharmonic): {int(multi.sum())}")
+    for var, what in (("cycle_verified", "transient cycles"), ("largest_cycle_verified", "census largest cycles")):
+        if var in ds:
+            v = np.asarray(ds[var].values).ravel()
+            if (v >= 0).any():
+                lines.append(f"{what} checked by shooting: {int((v == 1).sum())} verified (a stable orbit, measured on "
+                             f"it), {int((v == 0).sum())} not verified (see reason)")  # fmt: skip
     if "irregular_ftle" in ds:
         f = np.asarray(ds.irregular_ftle.values).ravel()
         se = np.asarray(ds.irregular_ftle_se.values).ravel()
