@@ -74,6 +74,18 @@ def test_the_exception_hierarchy():
                                    known_cells=np.zeros((1, 2, 216), dtype=np.uint64)),
             r"known_cells and known_cell_extent go together, and with known_irregular",
         ),
+        (
+            # A restart with no time left (t_max must be > 0), and one of the wrong shape.
+            lambda: _core.ensemble({}, "unilateral", "constant", [], np.zeros((1, 0)), np.zeros((1, 6)), 0.1, "dop853",
+                                   1e-6, kind="steady", restart=np.array([[0.0, 0.0]])),
+            r"restart must be an \(1, 2\) array of rows \(t_max > 0, hold >= 0\), finite, one per trajectory; got "
+            r"shape \[1, 2\]",
+        ),
+        (
+            lambda: _core.ensemble({}, "unilateral", "constant", [], np.zeros((2, 0)), np.zeros((2, 6)), 0.1, "dop853",
+                                   1e-6, kind="steady", restart=np.array([[1.0, 0.0]])),
+            r"restart must be an \(2, 2\) array .* got shape \[1, 2\]",
+        ),
     ],
 )
 def test_bad_input_raises_invalid_argument_naming_it(call, message):
