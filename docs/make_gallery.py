@@ -11,7 +11,9 @@ Every chart comes from the public API, on grids small enough to run in a minute 
 - ``work_precision.png``: error against wall time per trajectory of the three Rust integrators and
   scipy on the report's seed scene (``tribosweep.bench``; timings are this machine's);
 - ``sweep_settings.png``: the issue-10 Stribeck sweep's points/s against its agreement with a
-  reference, over the transients' rtol x ``irregular_block`` (``tribosweep.bench.sweep_settings``).
+  reference, over the transients' rtol x ``irregular_block`` (``tribosweep.bench.sweep_settings``);
+- ``cycle_check.png``: where the Stribeck sweep's transients stopped on cycles against the orbits that
+  shooting converged, and what the check costs (``tribosweep.bench.cycle_check``).
 
 Options: ``--out DIR`` (default: docs/gallery next to this script), ``--skip-bench`` (no work-precision
 chart), ``--dpi N`` (default 100: the size a README shows without scaling).
@@ -145,6 +147,16 @@ def main(argv=None) -> int:
             "against the cycles' amplitude error"
         )
         print(f"{ss['files']['sweep_settings']}: {made['sweep_settings.png']}")
+        from tribosweep.bench.cycle_check import cycle_check
+
+        cc = cycle_check(out, quick=True)
+        made["cycle_check.png"] = (
+            "The Stribeck sweep's cycles (both laws, 200 points each): the z1 amplitude where each transient stopped "
+            "against the orbit shooting converged, over the gap of its slowest Floquet multiplier to 1 (dashed: "
+            f"periodic_tol / (1 - |mu|)), and the sweep's wall time with that check and without it (2 threads of a "
+            f"{platform.machine()} machine)"
+        )
+        print(f"{cc['files']['cycle_check']}: {made['cycle_check.png']}")
     lines = ["# Gallery", "", "Regenerate with `python docs/make_gallery.py` (the sweeps took "
              f"{t_sweeps:.0f} s on the machine that drew these). Each chart is described in "
              "[the guide](../guide.md).", ""]

@@ -396,6 +396,8 @@ def _json_safe(o):
         return [_json_safe(v) for v in o]
     if isinstance(o, np.generic):
         return _json_safe(o.item())
+    if isinstance(o, np.ndarray):
+        return _json_safe(o.tolist())
     return o
 
 
@@ -461,6 +463,13 @@ def run_work_precision(out_dir: os.PathLike, config: BenchConfig | None = None, 
         payload["sweep_settings"] = ss["numbers"]
         files.update(ss["files"])
         extra = (extra + "\n\n" + ss["markdown"]).strip()
+        from .cycle_check import cycle_check
+
+        _log("checking the cycles the Stribeck sweep's transients stop on", progress)
+        cc = cycle_check(out, quick=payload["meta"]["quick"])
+        payload["cycle_check"] = cc["numbers"]
+        files.update(cc["files"])
+        extra = (extra + "\n\n" + cc["markdown"]).strip()
     payload["files"] = {k: str(v) for k, v in files.items()}
     payload["command"] = command
     with open(files["json"], "w") as f:
