@@ -192,7 +192,8 @@ CYCLE_NOTE: str = (
     "unstable (growth_rate > 0), the motion that replaces it; where sliding is linearly stable (growth_rate < 0) "
     "and regime is a cycle, a cycle that COEXISTS with stable sliding, reached because the run started outside "
     "the saddle cycle (reason says so). A cycle seen only by the attractor census, at a point whose regime is "
-    "steady_sliding, is not here but in the largest_cycle_* variables"
+    "steady_sliding, is not here but in the largest_cycle_* variables. Where cycle_verified is verified, the values "
+    "are measured on the periodic orbit that shooting converged from the run's stop; elsewhere they are the stop's"
 )
 #: Optional per-point output (present only when configured).
 OPTIONAL_POINT_VARIABLES: dict[str, tuple[str, str | None, str]] = {
@@ -283,7 +284,8 @@ def point_specs(dims: tuple[str, ...], *, wear_rate: bool = False) -> list[VarSp
         by_name[name].attrs["comment"] = (
             "a cycle that coexists with stable sliding: the census runs only where sliding is linearly stable and a "
             "saddle cycle is predicted, and regime there stays steady_sliding (bistable says coexisting when the "
-            "census saw more than one attractor)"
+            "census saw more than one attractor); measured on the orbit shooting converged where "
+            "largest_cycle_verified is verified"
         )
     by_name["wall_time"].attrs["comment"] = "a measurement: differs between runs"
     by_name["wear_rate_relative"].attrs["comment"] = (
