@@ -114,6 +114,36 @@ def test_a_signal_stops_a_long_call_promptly(name):
     assert reaction < REACTION, f"{name}: {reaction:.2f} s from the signal to the exception"
 
 
+def test_a_signal_delivered_to_a_pool_thread_still_stops_boundary_curves_promptly():
+    # The kernel gives a process-directed SIGINT (Ctrl-C, os.kill) to any thread. One that lands on
+    # a pool thread wakes no blocked wait of the main thread; Python runs the handler once the
+    # main thread is back in the interpreter. boundary_curves waited for its kinds' futures without
+    # a timeout: a signal on a pool thread waited for the whole box (10.4-10.6 s, once in CI).
+    fired: dict[str, float] = {}
+
+    def handler(signum, frame):
+        raise Interrupted
+
+    def send():
+        others = [t for t in threading.enumerate() if t not in (threading.main_thread(), threading.current_thread())]
+        assert others, "no pool thread to signal"
+        fired["t"] = time.monotonic()
+        signal.pthread_kill(others[0].ident, signal.SIGINT)
+
+    old = signal.signal(signal.SIGINT, handler)
+    timer = threading.Timer(0.5, send)
+    timer.start()
+    try:
+        with pytest.raises(Interrupted):
+            ts.boundary_curves(SEED, slices=60, threads=2)
+        reaction = time.monotonic() - fired["t"]
+    finally:
+        timer.cancel()
+        timer.join()
+        signal.signal(signal.SIGINT, old)
+    assert reaction < REACTION, f"{reaction:.2f} s from the signal to the exception"
+
+
 def test_after_an_interrupted_call_the_next_one_is_unchanged():
     # The thread pools and the per-call stop request survive an interruption: the same small
     # ensemble gives bitwise the same numbers before and after (and on 1 and 2 threads).

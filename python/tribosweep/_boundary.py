@@ -186,7 +186,7 @@ def boundary_curves(
             runs = [pool.submit(_kind_curves, k, model, hopf, (x_lo, x_hi), (y_lo, y_hi), slices, w, stop)
                     for k, w in zip(todo, share)]  # fmt: skip
             try:
-                done = [r.result() for r in runs]
+                done = [_curves._result(r) for r in runs]
             except BaseException:
                 stop.set()
                 raise

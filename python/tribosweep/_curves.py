@@ -140,6 +140,23 @@ def _nearest(hopfs: tuple[np.ndarray, np.ndarray], near: float) -> tuple[float, 
     return float(values[i]), float(omegas[i])
 
 
+#: The main thread waits for a pool's futures in slices this long [s]: a SIGINT that the kernel
+#: delivers to another thread (any thread may get a process-directed signal) wakes no blocked
+#: wait, and Python runs its handler only once the main thread is back in the interpreter. A wait
+#: without a timeout then held Ctrl-C back until the whole computation ended (10.4 s, seen once in
+#: test_cancel's boundary_curves case).
+WAIT_SLICE: float = 0.05
+
+
+def _result(fut: concurrent.futures.Future):
+    """``fut.result()``, waited for in :data:`WAIT_SLICE` slices so that Ctrl-C reaches the main thread."""
+    while True:
+        try:
+            return fut.result(timeout=WAIT_SLICE)
+        except concurrent.futures.TimeoutError:
+            continue
+
+
 def _slices_in_order(ys, hopfs, target: float, run, take, workers: int) -> list[tuple[float, dict | None, str]]:
     """:func:`_arm_curve`'s slices, each from the Hopf point nearest the last point found, with the
     branches on ``workers`` threads: ``(y, point or None, why)`` per slice, as a loop in order gives.
@@ -164,7 +181,7 @@ def _slices_in_order(ys, hopfs, target: float, run, take, workers: int) -> list[
                 slices.append((float(yv), None, "no Hopf point"))
                 continue
             h, omega = _nearest(hp, target)
-            pt, why = take(yv, h, fut.result() if (h, omega) == g else run(yv, h, omega))
+            pt, why = take(yv, h, _result(fut) if (h, omega) == g else run(yv, h, omega))
             if pt is not None:
                 target = pt["hopf"]
             slices.append((float(yv), pt, why))
