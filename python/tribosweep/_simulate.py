@@ -298,11 +298,10 @@ def ensemble(
             data[k] = (dims, out[k], {"units": units, "long_name": text})
         data["multiplicity"] = (dims, out["multiplicity"], {"units": "1", "long_name": "section crossings per period"})
         if verified is not None:
-            data["cycle_verified"] = (dims, np.where(np.asarray(out["outcome"]) == _cycles.PERIODIC, verified, -1)
-                                      .astype(np.int8), {"long_name": "whether shooting converged the run's cycle to a "
-                                      "stable orbit, on which its quantities were measured", "flag_values":
-                                      np.array([-1, 0, 1], dtype=np.int8), "flag_meanings":
-                                      "no_cycle not_verified verified"})  # fmt: skip
+            data["cycle_verified"] = (dims, np.where(out["outcome"] == _cycles.PERIODIC, verified, -1).astype(np.int8),
+                                      flag_attrs(("no_cycle", "not_verified", "verified"), "whether shooting "
+                                                 "converged the run's cycle to a stable orbit, on which its "
+                                                 "quantities were measured", (-1, 0, 1), "i1"))  # fmt: skip
         for i, (name, units, text) in enumerate(STATE_VARS):
             data[f"{name}_end"] = (dims, out["y_end"][:, i], {
                 "units": units, "long_name": f"{text} where the run ended (on the section zd = 0 if periodic)"})

@@ -345,11 +345,6 @@ def run_steady(p: Points, sel: np.ndarray, y0: np.ndarray, decay: np.ndarray | N
     )  # fmt: skip
 
 
-def _reorder(v, idx: np.ndarray):
-    """``v`` (an array, or a list of one item per run) at ``idx``."""
-    return np.asarray(v)[idx] if isinstance(v, np.ndarray) else [v[i] for i in idx]
-
-
 def check_cycles(p: Points, sel: np.ndarray, summary: dict) -> tuple[dict, np.ndarray]:
     """Stage 4a: the cycles that the transients of ``sel`` stopped on, checked and converged by shooting.
 
@@ -408,7 +403,7 @@ def transient(p: Points, *, start_on_mode: bool) -> None:
     # not depend on its place in the call.
     order = np.argsort(np.broadcast_to(p.full["sliding_speed"], (p.n,))[sel], kind="stable")
     back = np.argsort(order)
-    summary = {k: _reorder(v, back) for k, v in run_steady(p, sel[order], y0s[order]).items()}
+    summary = {k: v[back] for k, v in _cycles.rows(run_steady(p, sel[order], y0s[order])).items()}
     p.charge(sel, t1)
     summary, verified = check_cycles(p, sel, summary)
     t_max = float(p.settings.steady.t_max)
@@ -425,29 +420,40 @@ def transient(p: Points, *, start_on_mode: bool) -> None:
     # for a slow irregular run (:func:`irregular`).
     slow = periodic & ~verified & p.stable[sel]
     if slow.any():
-        slow &= _cycles.z_size(summary, slice(None)) < SLOW_DECAY_FRACTION * np.abs(static_penetration(p.full, sel))
-    if slow.any():
-        regime[slow] = REGIME["steady_sliding"]
-        status[slow] = STATUS["not_converged"]
-        decided[slow] = DECIDED_BY["linear"]
-        out["regime"][sel[slow]], out["status"][sel[slow]] = regime[slow], status[slow]
-        out["decided_by"][sel[slow]] = decided[slow]
-        for j in np.flatnonzero(slow):
-            reason[sel[j]] = (f"sliding is linearly stable and the motion small (z harmonics <= "
-                              f"{_cycles.z_size(summary, j):.3g} m, below {SLOW_DECAY_FRACTION:g} |z_st|): still "
-                              f"decaying at t_end = {float(summary['t_end'][j]):.3g} s, though its sections repeated "
-                              "to periodic_tol (shooting from there found no orbit of that size)")  # fmt: skip
+        slow = _still_decaying(p, sel, _cycles.z_size(summary, slice(None)), slow, [
+            f"at t_end = {float(t):.3g} s, though its sections repeated to periodic_tol (shooting from there found no "
+            "orbit of that size)" for t in summary["t_end"]])  # fmt: skip
         periodic &= ~slow
     for key in ("z1_amplitude", "z2_amplitude", "phi1_amplitude", "fraction_off_disk"):
         out[key][sel] = np.where(periodic, summary[key], np.nan)
     out["cycle_omega"][sel] = np.where(periodic, summary["omega"], np.nan)
-    out["cycle_verified"][sel] = np.where(periodic, verified == 1, -1)
+    out["cycle_verified"][sel] = np.where(periodic, verified, -1)
     out["min_normal_force"][sel] = summary["min_normal_force"]
     out["min_slip_velocity"][sel] = summary["min_slip_velocity"]
     out["n_rhs"][sel] += np.asarray(summary["n_rhs"], dtype=np.int64)
     irr = regime == REGIME["irregular"]
     if irr.any():
         irregular(p, sel[irr], np.asarray(summary["y_end"])[irr], t_max)
+
+
+def _still_decaying(p: Points, pts: np.ndarray, amp: np.ndarray, candidate: np.ndarray, when: list[str]) -> np.ndarray:
+    """Which of the points ``pts`` (where ``candidate``) are sliding still decaying; marks them so.
+
+    At a linearly stable point, a motion that stays well inside the contact (``amp`` below
+    ``SLOW_DECAY_FRACTION |z_st|``: the law nearly linear, no opening) is sliding's own least-damped
+    mode still decaying, at the linear rate (0.03 1/s near a Hopf load): a run that did not settle
+    by ``t_max``, or whose sections repeated so slowly did it shrink. Sliding, as linear stability
+    says, status ``not_converged``; ``when`` (per point) completes the reason.
+    """
+    slow = candidate & (amp < SLOW_DECAY_FRACTION * np.abs(static_penetration(p.full, pts)))
+    q = pts[slow]
+    p.out["regime"][q] = REGIME["steady_sliding"]
+    p.out["decided_by"][q] = DECIDED_BY["linear"]
+    p.out["status"][q] = STATUS["not_converged"]
+    p.reason[q] = [f"sliding is linearly stable and the motion small (|z| <= {a:.3g} m, below "
+                   f"{SLOW_DECAY_FRACTION:g} |z_st|): still decaying {w}"
+                   for a, w in zip(amp[slow], np.asarray(when, dtype=object)[slow])]  # fmt: skip
+    return slow
 
 
 def irregular(p: Points, pts: np.ndarray, y_end: np.ndarray, t_max: float) -> None:
@@ -469,15 +475,7 @@ def irregular(p: Points, pts: np.ndarray, y_end: np.ndarray, t_max: float) -> No
     # least-damped mode still decaying, at the linear rate (0.03 1/s near a Hopf load): too
     # slow for t_max, not sustained motion. Sliding, as linear stability says.
     amp = np.maximum(np.abs(meas["irregular_z_min"]), np.abs(meas["irregular_z_max"]))
-    slow = stable[pts] & (amp < SLOW_DECAY_FRACTION * np.abs(static_penetration(p.full, pts)))
-    if slow.any():
-        q = pts[slow]
-        out["regime"][q] = REGIME["steady_sliding"]
-        out["decided_by"][q] = DECIDED_BY["linear"]
-        out["status"][q] = STATUS["not_converged"]
-        reason[q] = [f"the transient did not settle by t_max = {t_max:g} s; sliding is linearly stable and the "
-                     f"motion small (|z| <= {a:.3g} m, below {SLOW_DECAY_FRACTION:g} |z_st|): still decaying"
-                     for a in amp[slow]]  # fmt: skip
+    slow = _still_decaying(p, pts, amp, stable[pts], [f"(the transient did not settle by t_max = {t_max:g} s)"] * len(pts))
     pts, meas = pts[~slow], {k: v[~slow] for k, v in meas.items()}
     # Transient chaos: bounded until t_max, the motion left through the escape limit during the
     # measurement window. That is an answer (the run diverged), not a failure.
