@@ -89,10 +89,12 @@ pub(super) fn run_impl<const UNI: bool, const LAW: u8, const M8: bool, const N: 
     // The step's interpolants, built into buffers kept across steps (built and moved per step,
     // they cost copies and zeroing): for the hidden-crossing check (the components its event
     // functions read), for samples, and DOP853's of all components shared by samples and the cold
-    // path (`full`, valid where `full_built`).
+    // path (`full`, valid where `full_built`). The switch law's events read every component, so
+    // its check builds `full` itself: the cold path and the samples read the same coefficients
+    // (same function, same inputs for the lanes they read) without building them again (an
+    // eleventh of a Stribeck sweep's transients).
     let mut ev5 = LaneDense::<5, N>::new();
     let mut ev3 = LaneDense::<3, N>::new();
-    let mut ev6 = LaneDense::<6, N>::new();
     let mut samp = LaneDense::<6, N>::new();
     let mut full = LaneDense::<6, N>::new();
     let mut yn = Al([zero; 6]);
@@ -210,6 +212,7 @@ pub(super) fn run_impl<const UNI: bool, const LAW: u8, const M8: bool, const N: 
         // `turn[e]`: each near lane's turning point of event function `e` inside the step (0:
         // none), checked on the interpolant beside the three fixed points, as the scalar does.
         let mut turn = [zero; NE];
+        let mut full_built = false;
         let need = if checks {
             near_events::<LAW, N>(c, cm, y, k1, &yn, fnew, &ln.g0, &g1, &ln.pend, &ok, &hh, &mut turn)
         } else {
@@ -239,7 +242,10 @@ pub(super) fn run_impl<const UNI: bool, const LAW: u8, const M8: bool, const N: 
                 }};
             }
             match LAW {
-                SWITCH => check!(&ALL_COMPS, &mut ev6),
+                SWITCH => {
+                    check!(&ALL_COMPS, &mut full);
+                    full_built = M8;
+                }
                 TANH => check!(&EV_COMPS, &mut ev5),
                 _ => check!(&EV_COMPS_CONST, &mut ev3),
             }
@@ -319,7 +325,7 @@ pub(super) fn run_impl<const UNI: bool, const LAW: u8, const M8: bool, const N: 
             if cand.iter().any(|&x| x) {
                 let span = (&t_start, &t_new, &hh);
                 match LAW {
-                    SWITCH => pending_on_lanes::<LAW, 6, N>(&mut ln, &ev6, &cand, &g1, span, &mut busy),
+                    SWITCH => pending_on_lanes::<LAW, 6, N>(&mut ln, &full, &cand, &g1, span, &mut busy),
                     TANH => pending_on_lanes::<LAW, 5, N>(&mut ln, &ev5, &cand, &g1, span, &mut busy),
                     _ => pending_on_lanes::<LAW, 3, N>(&mut ln, &ev3, &cand, &g1, span, &mut busy),
                 }
@@ -366,7 +372,6 @@ pub(super) fn run_impl<const UNI: bool, const LAW: u8, const M8: bool, const N: 
         // DOP853's interpolant of every lane, all components, from the extra stages the
         // hidden-crossing check built this step: built at most once per step, for the samples
         // here or the cold path below (which reads only lanes it leaves uncommitted).
-        let mut full_built = false;
         let checked = need.iter().any(|&x| x);
         if sampled {
             let due: [bool; N] =
@@ -377,8 +382,10 @@ pub(super) fn run_impl<const UNI: bool, const LAW: u8, const M8: bool, const N: 
                         ln.n_extra[l] += 3 * (due[l] & !(ok[l] & need[l])) as u64;
                     }
                     if checked {
-                        dop853_poly_into(&mut full, &ALL_COMPS, &ln.y, &yn, &ln.f, &hh, &kk, &extra);
-                        full_built = true;
+                        if !full_built {
+                            dop853_poly_into(&mut full, &ALL_COMPS, &ln.y, &yn, &ln.f, &hh, &kk, &extra);
+                            full_built = true;
+                        }
                         &full
                     } else {
                         let mut f = SliderRhs::<UNI, LAW, N> { c: &ln.c, m: &ln.modes, fzl: &mut fzl_scratch };
