@@ -188,6 +188,41 @@ def test_a_step_that_cannot_converge_is_halved_and_the_branch_ends_with_a_reason
     assert ds.sizes["branch_point"] == 1
 
 
+def test_a_switch_law_branch_ends_where_its_cycle_first_reaches_stick_in_bounded_work():
+    """The Stribeck switch law under bilateral contact (the grazing curve's model for issue 10's
+    slider at 0.2 m/s, 7.91 cm): continued down in load from its Hopf point, the cycle's slip phase
+    reaches zero sliding velocity near 25.31 N and gains a stick phase, a sliding bifurcation that
+    continuation does not follow. A fixed-mode flow across v_r = 0 chattered in ever smaller steps
+    (the sweep's boundary stage ran for more than ten minutes); the branch now ends there with the
+    reason, every flow within the orbit flows' step budget."""
+    from tribosweep import _core
+
+    base = ts.SliderModel(contact="unilateral", friction_law="switch", mu_static=0.3, sliding_speed=0.2)
+    m = ts.apparatus_model(84.46, 0.0791, 0.2, base=base)
+    sb = ts.sliding_branch(m, ("normal_load", 20.0, 140.0))
+    ok = sb.is_hopf.values == 1
+    h, om = float(sb.hopf_normal_load.values[ok][0]), float(sb.hopf_frequency.values[ok][0])
+    out = _core.branch(m.replace(normal_load=h).values(), "bilateral", "switch", "normal_load", h, 20.0, 140.0,
+                       hopf_omega=om, options=dict(_core.branch_defaults()), stop_at="grazing")  # fmt: skip
+    assert ts.STATUS_NAMES[int(out["status"])] == "event_missed"
+    assert "reaches zero sliding velocity" in str(out["reason"]) and "halved below ds_min" in str(out["reason"])
+    p = np.asarray(out["parameter"])
+    assert p.size > 100 and 25.2 < p[-1] < 25.4
+    # Each flow within the budget (50,000 steps of DOP853's 12 stages, with event location).
+    assert int(out["n_rhs"]) < int(out["n_flows"]) * 50_000 * 16
+    # The last orbit's sliding velocity comes down to the stick band (its edge, 1 um/s: 1.0e-6 here);
+    # 50 points before, it stays 2 cm/s clear of it.
+    bil = m.replace(contact="bilateral")
+    lowest = []
+    for j in (-1, -50):
+        at = bil.replace(normal_load=float(p[j]))
+        period = float(np.asarray(out["period"])[j])
+        run = ts.simulate(at, period, y0=np.asarray(out["state0"])[j], rtol=1e-11, t_eval=np.linspace(0, period, 2001))
+        lowest.append(float(np.min(at.sliding_speed - (run.x_dot.values + at.torsion_sign * at.moment_arm
+                                                       * run.phi_dot.values))))  # fmt: skip
+    assert lowest[0] < 2 * bil.stick_band and lowest[1] > 1e-3, lowest
+
+
 def test_dataset_is_labelled_and_survives_netcdf(bilateral, tmp_path):
     ds = bilateral
     for name, v in ds.data_vars.items():

@@ -10,7 +10,7 @@
 //! where its mode stops being the physical one (a lift-off in contact, a touch-down in flight, a
 //! law force that pulls), located on the dense output.
 
-use crate::model::{event, idx, ContactMode, Jacobian, Params, Slider, State};
+use crate::model::{event, idx, ContactMode, FrictionLaw, Jacobian, Params, Slider, State};
 use crate::ode::{Control, EventAction, Method, Observer, OdeSystem, Options, Outcome, Stats, StepView, MAX_EVENTS};
 use crate::shooting::{run_watched, switch_normal, Cap};
 use crate::status::Status;
@@ -184,6 +184,7 @@ pub(crate) struct FlowSettings {
 fn options(fs: &FlowSettings) -> Options<48> {
     let sz = fs.sizes;
     let mut o = Options::<48>::new(fs.rtol, 1.0);
+    o.max_steps = crate::shooting::ORBIT_FLOW_MAX_STEPS;
     for i in 0..6 {
         o.atol[i] = fs.rtol * sz[i];
         for j in 0..6 {
@@ -287,6 +288,10 @@ struct SegObs<'a> {
     z: &'a mut Vec<f64>,
     w: SegmentWatch,
     diverged: bool,
+    /// Slip under the switch law: the sign of the sliding velocity at the segment's start (0: not
+    /// watched), and whether it reached zero, where the slip force reverses.
+    slip_sign: f64,
+    slip_reversed: bool,
 }
 
 impl SegObs<'_> {
@@ -366,6 +371,13 @@ impl Observer<48, ContactMode> for SegObs<'_> {
             self.diverged = true;
             return Control::Stop;
         }
+        // A slip segment whose sliding velocity reaches zero has left its mode: the slip force
+        // `mu N sign(v_r)` reverses there and a fixed-mode flow chatters across it in ever smaller
+        // steps (one continuation flow took millions); the orbit has gained a stick phase.
+        if self.slip_sign != 0.0 && self.s.slip_velocity(&state_of(st.y1)) * self.slip_sign <= 0.0 {
+            self.slip_reversed = true;
+            return Control::Stop;
+        }
         Control::Continue
     }
 }
@@ -408,7 +420,9 @@ pub(crate) fn segment(
         z_min: y0[idx::Z],
     };
     let (t_off, dt, n) = samples.unwrap_or((0.0, 0.0, 0));
-    let mut obs = SegObs { s: &m.s, mode, t_off, dt, n, z, w, diverged: false };
+    let slip = m.s.p.friction_law == FrictionLaw::Switch && mode == ContactMode::Contact;
+    let slip_sign = if slip { m.s.slip_velocity(y0).signum() } else { 0.0 };
+    let mut obs = SegObs { s: &m.s, mode, t_off, dt, n, z, w, diverged: false, slip_sign, slip_reversed: false };
     if tau == 0.0 {
         return Ok(Segment { y: *y0, phi: Jacobian::identity(), psi: State::zeros(), watch: obs.w });
     }
@@ -417,6 +431,9 @@ pub(crate) fn segment(
     *stats += sol.stats;
     if obs.diverged {
         return Err(Status::Diverged);
+    }
+    if obs.slip_reversed {
+        return Err(Status::EventMissed);
     }
     if sol.outcome != Outcome::Finished {
         return Err(sol.outcome.status());

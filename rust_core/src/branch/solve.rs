@@ -257,7 +257,18 @@ impl Ctx<'_> {
             let include_start = i == 0 && mode != ContactMode::Free;
             let sg =
                 segment(&model, mode, &y, tau, &fs, samples, &mut z, include_start, &mut self.stats).map_err(|st| {
-                    fail(st, format!("segment {i} of the orbit failed ({}) at parameter {p:.10e}", st.name()))
+                    if st == Status::EventMissed && mode == ContactMode::Contact {
+                        fail(
+                            st,
+                            format!(
+                                "segment {i} of the orbit (slip) reaches zero sliding velocity at parameter \
+                                          {p:.10e}: the orbit gains a stick phase there (a sliding bifurcation, which \
+                                          continuation does not follow)"
+                            ),
+                        )
+                    } else {
+                        fail(st, format!("segment {i} of the orbit failed ({}) at parameter {p:.10e}", st.name()))
+                    }
                 })?;
             let f_end = s.rhs(&sg.y, mode);
             d = sg.phi * d;

@@ -205,9 +205,21 @@ pub(crate) fn scales(s: &Slider) -> State {
     State::from(crate::steady::characteristic_sizes(s))
 }
 
+/// The step budget of one flow of an orbit (one period, or one segment of it, with its variational
+/// equations), in shooting and in continuation. An orbit's period takes about 100 steps at rtol
+/// 1e-11 (the seed's bouncing cycle; stick-slip cycles up to a few thousand at twenty mode
+/// periods). The integrators' own budget (10^7) let one flow run for minutes: a branch of the
+/// switch law under bilateral contact (the grazing curve of the issue-10 model at 0.2 m/s, 7.9 cm,
+/// near 25 N) took more than ten minutes in one continuation point's flows, and with it the
+/// sweep's boundary stage. Past this budget the flow fails with `max_steps`, as an orbit that
+/// does not converge: shooting reports it per point, continuation halves its step and ends with
+/// the reason.
+pub(crate) const ORBIT_FLOW_MAX_STEPS: u64 = 50_000;
+
 fn options_42(s: &Slider, rtol: f64) -> Options<42> {
     let sz = scales(s);
     let mut o = Options::<42>::new(rtol, 1.0);
+    o.max_steps = ORBIT_FLOW_MAX_STEPS;
     for i in 0..6 {
         o.atol[i] = rtol * sz[i];
         for j in 0..6 {
