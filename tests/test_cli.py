@@ -120,6 +120,28 @@ def test_config_file(tmp_path, capsys):
         assert ds.normal_load.values.tolist() == [10.0, 60.0]
 
 
+def test_model_options_make_the_api_model_and_win_over_the_config(tmp_path, capsys):
+    """Issue 10's Stribeck sweep from the command line: --friction-law and --model FIELD=VALUE give
+    the API's model (the same points, bit for bit), field by field over the config's [model] table,
+    and `info` names the laws."""
+    cfg = tmp_path / "m.toml"
+    cfg.write_text('[model]\nfriction_law = "coulomb"\nmu_static = 0.25\nstick_band = 2e-6\n')
+    nc = tmp_path / "s.nc"
+    axes = dict(normal_load=[20.0, 120.0], arm_length=[0.05, 0.09], sliding_speed=[0.2, 0.6])
+    code, out, err = run(["sweep", "--normal-load", "20,120", "--arm-length", "0.05,0.09", "--sliding-speed", "0.2,0.6",
+                          "--config", cfg, "--friction-law", "switch", "--model", "mu_static=0.3", "--no-census",
+                          "--t-max", "20", "--threads", "1", "-o", nc, "--no-progress"], capsys)  # fmt: skip
+    assert code == 0, err
+    model = ts.SliderModel(contact="unilateral", friction_law="switch", mu_static=0.3, stick_band=2e-6)
+    api = ts.sweep(model, **axes, census=False, t_max=20.0, threads=1, progress=False)
+    with xr.open_dataset(nc) as ds:
+        assert ds.attrs["model_friction_law"] == "switch" and ds.attrs["model_mu_static"] == 0.3
+        assert ds.attrs["model_stick_band"] == 2e-6  # the config's, where no option overrides it
+        for var in ("regime", "status", "z1_amplitude", "cycle_omega", "min_slip_velocity"):
+            np.testing.assert_array_equal(ds[var].values, api[var].values)
+    assert "model: unilateral contact, switch friction law, mu 0.215, mu_static 0.3, Stribeck velocity 0.1 m/s" in out
+
+
 def test_census_flags_and_config(tmp_path, capsys):
     # Every census setting is a flag and a [census] key; the flag wins over the file.
     nc = tmp_path / "c.nc"
@@ -174,6 +196,14 @@ def test_census_flags_and_config(tmp_path, capsys):
         (["sweep", "--axis", "nonsense"], "NAME=SPEC"),
         (["sweep", "--axis", "bogus=1,2"], "unknown field 'bogus'"),
         (["sweep", "--axis", "omega_normal=1,2"], "follows arm_length"),
+        (["sweep", "--model", "mu_static"], "--model 'mu_static': must be FIELD=VALUE"),
+        (["sweep", "--model", "bogus=1"], "--model bogus: not a SliderModel field; valid: contact_damping, "),
+        (["sweep", "--model", "normal_load=5"], "--model normal_load: give it with --normal-load"),
+        (["sweep", "--model", "friction_law=2"], "--model friction_law: give it with --friction-law"),
+        (["sweep", "--model", "stick_band=x"], "--model stick_band = 'x' is not a number"),
+        (["sweep", "--model", "stick_band=-1"], "stick_band = -1.0 is out of range: must be a finite number > 0"),
+        (["sweep", "--friction-law", "switch", "--model", "mu_static=0.1"], "mu_static = 0.1 is out of range"),
+        (["sweep", "--friction-law", "tanh"], "invalid choice: 'tanh'"),
         (["sweep", "--config", "missing.toml"], "missing.toml"),
         (["info", "missing.nc"], "no such file"),
         (["plot", "missing.nc", "-o", "x.png"], "no such file"),
@@ -307,7 +337,7 @@ def test_every_sweep_argument_is_a_cli_flag_and_a_config_key():
     dests = {a.dest for a in sub._actions}
     # Arguments with another form on the command line, and why:
     other = {
-        "model": "the [model] table of --config",
+        "model": "--contact, --friction-law, --model FIELD=VALUE and the [model] table of --config",
         "extra_axes": "--mu and --axis NAME=SPEC",
         "executor": "an object: no command-line form (dask runs through the API)",
         "progress": "--no-progress",

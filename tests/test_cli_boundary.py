@@ -133,6 +133,29 @@ def test_boundary_command_hopf_and_fold_curves(tmp_path, capsys, png_size, saved
     assert texts[3:] == ["Hopf curve, subcritical\n(l1 > 0: a saddle cycle)", "fold of cycles: the\nsaddle cycle ends"]
 
 
+def test_boundary_command_takes_the_friction_law_and_model_fields(tmp_path, capsys):
+    """--friction-law and --model reach the curves: the Hopf curve of the Stribeck law (tanh,
+    mu_static 0.3, at the default 0.46 m/s) is hopf_load's for that model (issue 12's 1e-6), at
+    arm lengths where the constant law has none."""
+    nc = tmp_path / "st.nc"
+    code, out, err = run(["boundary", "--curves", "hopf", "--friction-law", "coulomb", "--model", "mu_static=0.3",
+                          "-o", nc], capsys)  # fmt: skip
+    assert code == 0, err
+    assert "coulomb friction law (mu_static 0.3, Stribeck velocity 0.1 m/s)" in out
+    base = ts.SliderModel(contact="unilateral", friction_law="coulomb", mu_static=0.3)
+    with xr.open_dataset(nc) as ds:
+        assert ds.attrs["model_friction_law"] == "coulomb" and ds.attrs["model_mu_static"] == 0.3
+        inside = np.flatnonzero((ds.hopf_normal_load.values > 11.0) & (ds.hopf_normal_load.values < 149.0))
+        assert inside.size > 10
+        for i in inside[np.linspace(0, inside.size - 1, 3).astype(int)]:
+            arm = float(ds.hopf_arm_length[i])
+            (h,) = [r for r in ts.hopf_load(ts.apparatus_model(50.0, arm, 0.46, base=base), (1.0, 250.0))
+                    if abs(r["normal_load"] / float(ds.hopf_normal_load[i]) - 1) < 1e-3]  # fmt: skip
+            assert abs(float(ds.hopf_normal_load[i]) / h["normal_load"] - 1) < 1e-6
+            # The constant law has no Hopf load there at all.
+            assert ts.hopf_load(ts.apparatus_model(50.0, arm, 0.46, base=SEED_U), (1.0, 250.0)) == []
+
+
 def _cf_errors(paths) -> dict[str, list[str]]:
     """High-priority CF 1.11 findings of each file, from one run of the IOOS compliance checker."""
     pytest.importorskip("compliance_checker", reason="compliance-checker is not installed (pip install '.[test]')")
@@ -267,6 +290,8 @@ def test_a_linear_sweep_stores_no_fold_or_grazing_curve_and_a_bilateral_one_no_f
         (["boundary", "--normal-load", "0:150"], "--normal-load = 0:... is out of range: must be > 0"),
         (["boundary", "--arm-length", "0.1:0.1"], "must be LO:HI with finite LO < HI"),
         (["boundary", "--sliding-speed", "x"], "--sliding-speed = 'x' is not a number"),
+        (["boundary", "--model", "mu=0.3"], "--model mu: give it with --mu"),
+        (["branch", "--friction-law", "switch", "--model", "stick_band=0"], "stick_band = 0.0 is out of range"),
     ],
 )
 def test_bad_input_exits_2_with_a_one_line_message(argv, message, tmp_path, monkeypatch, capsys):

@@ -110,18 +110,71 @@ def _scalar(cfg_value, where: str) -> float:
     return float(cfg_value)
 
 
+#: Model fields with their own options (axes, the operating point, the laws): not for ``--model``.
+_OWN_OPTIONS = {"normal_load": "--normal-load", "sliding_speed": "--sliding-speed", "mu": "--mu",
+                "contact": "--contact", "friction_law": "--friction-law"}  # fmt: skip
+
+
+def _model_field(text: str) -> tuple[str, float]:
+    """``--model FIELD=VALUE``: a real field of SliderModel and its value (checked by the model)."""
+    import dataclasses
+
+    from ._model import SliderModel
+
+    name, eq, value = text.partition("=")
+    name = name.strip()
+    real = sorted(f.name for f in dataclasses.fields(SliderModel) if f.name not in _OWN_OPTIONS)
+    if not eq or not name:
+        raise argparse.ArgumentTypeError(f"--model {text!r}: must be FIELD=VALUE, e.g. mu_static=0.3")
+    if name in _OWN_OPTIONS:
+        raise argparse.ArgumentTypeError(f"--model {name}: give it with {_OWN_OPTIONS[name]}")
+    if name not in real:
+        raise argparse.ArgumentTypeError(f"--model {name}: not a SliderModel field; valid: {', '.join(real)}")
+    return name, _number(value.strip(), f"--model {name}")
+
+
+def add_model_arguments(group, *, contact: bool) -> None:
+    """``--friction-law`` and ``--model FIELD=VALUE`` (and ``--contact`` where ``contact``) on ``group``."""
+    if contact:
+        group.add_argument("--contact", choices=("unilateral", "bilateral"), help="contact law (default unilateral)")
+    group.add_argument("--friction-law", choices=("constant", "coulomb", "switch"),
+                       help="friction law (default constant mu): coulomb is a Stribeck curve regularised by tanh, "
+                       "switch the same curve with stick-slip as an event-driven switch; the curve's static "
+                       "coefficient and velocity by --model mu_static=X, stribeck_velocity=V")  # fmt: skip
+    group.add_argument("--model", type=_model_field, action="append", default=[], metavar="FIELD=VALUE",
+                       help="any other real SliderModel field, e.g. mu_static=0.3 or contact_damping=150 (SI "
+                       "units; repeatable; wins over the config's [model] table)")  # fmt: skip
+
+
+def model_fields(args, cfg: dict) -> dict:
+    """The SliderModel fields of the config's [model] table, overridden by ``--contact``,
+    ``--friction-law`` and ``--model``; contact unilateral by default."""
+    fields = dict(cfg.get("model", {}))
+    for name in ("contact", "friction_law"):
+        v = _pick(args, cfg, name)
+        if v is not None:
+            fields[name] = v
+    fields.update(dict(getattr(args, "model", None) or []))
+    fields.setdefault("contact", "unilateral")
+    return fields
+
+
+def law_text(model) -> str:
+    """The friction law for a one-line summary: empty for constant mu, else the law and its curve."""
+    if model.friction_law == "constant":
+        return ""
+    ms = model.mu if model.mu_static is None else model.mu_static
+    return f", {model.friction_law} friction law (mu_static {ms:g}, Stribeck velocity {model.stribeck_velocity:g} m/s)"
+
+
 def _model(args, cfg: dict, need: tuple[str, ...]):
-    """The model of the operating point: [model] table and --contact, the apparatus at the arm length."""
+    """The model of the operating point: [model] table and the model options (:func:`model_fields`),
+    the apparatus at the arm length."""
     from ._apparatus import arm_frequencies
     from ._model import SliderModel
 
-    fields = dict(cfg.get("model", {}))
-    contact = _pick(args, cfg, "contact")
-    if contact is not None:
-        fields["contact"] = contact
-    fields.setdefault("contact", "unilateral")
     try:
-        base = SliderModel(**fields)
+        base = SliderModel(**model_fields(args, cfg))
     except TypeError as e:
         raise ValueError(f"config [model]: {e}") from None
     values = {}
@@ -187,7 +240,7 @@ def add_branch_arguments(p: argparse.ArgumentParser) -> None:
     op.add_argument("--arm-length", type=lambda t: _number(t, "--arm-length"), metavar="L", help="arm length [m]")
     op.add_argument("--sliding-speed", type=lambda t: _number(t, "--sliding-speed"), metavar="V", help="V [m/s]")
     op.add_argument("--mu", type=lambda t: _number(t, "--mu"), metavar="MU", help="friction coefficient [1]")
-    op.add_argument("--contact", choices=("unilateral", "bilateral"), help="contact law (default unilateral)")
+    add_model_arguments(op, contact=True)
     p.add_argument("-o", "--output", metavar="FILE", help="netCDF output file (default branch.nc)")
     p.add_argument("--plot", metavar="PNG", help="bifurcation diagram (default: the output's name with .png)")
     p.add_argument("--amplitude", metavar="VAR",
@@ -277,7 +330,7 @@ def run_branch(args: argparse.Namespace) -> int:
     fig.savefig(png, dpi=120)
     units = "" if ds.attrs["parameter_units"] == "1" else " " + ds.attrs["parameter_units"]
     print(output)
-    print(f"{parameter} from the Hopf point at {hopf:.6g}{units} ({crit}), {model.contact} contact: "
+    print(f"{parameter} from the Hopf point at {hopf:.6g}{units} ({crit}), {model.contact} contact{law_text(model)}: "
           f"{ds.sizes['branch_point']} points in [{lo:g}, {hi:g}]{units}")  # fmt: skip
     print(f"status: {STATUS_NAMES[int(ds.status)]} ({ds.attrs['reason']})")
     names = [_branch.POINT_TYPE_NAMES[int(t)] for t in ds.point_type.values]
@@ -309,7 +362,7 @@ def add_boundary_arguments(p: argparse.ArgumentParser) -> None:
     box.add_argument("--sliding-speed", type=lambda t: _number(t, "--sliding-speed"), metavar="V",
                      help="sliding speed [m/s] (one value; default 0.46)")  # fmt: skip
     box.add_argument("--mu", type=lambda t: _number(t, "--mu"), metavar="MU", help="friction coefficient [1]")
-    p.add_argument("--contact", choices=("unilateral", "bilateral"), help="contact law (default unilateral)")
+    add_model_arguments(p, contact=True)
     p.add_argument("--curves", type=_curves_arg, metavar="LIST",
                    help="which curves, comma-separated: hopf,fold,grazing (default all three)")  # fmt: skip
     p.add_argument("--slices", type=_slices_arg, metavar="N",
@@ -409,7 +462,8 @@ def run_boundary(args: argparse.Namespace) -> int:
     png = _png_path(output, _pick(args, cfg, "plot"))
     threads = args.threads if args.threads is not None else cfg.get("threads")
     ds = boundary_curves(model, loads, arms, curves=curves, slices=slices, threads=threads)
-    title = (f"stability boundaries ({model.contact} contact, mu = {model.mu:g}, V = {model.sliding_speed:g} m/s)")
+    law = "" if model.friction_law == "constant" else f", {model.friction_law} law"
+    title = f"stability boundaries ({model.contact} contact{law}, mu = {model.mu:g}, V = {model.sliding_speed:g} m/s)"
     ds.attrs |= {f"model_{k}": v for k, v in model.values().items() if k not in ("normal_load", *_MODE_FIELDS)}
     ds.attrs |= {"model_contact": model.contact, "model_friction_law": model.friction_law,
                  "model_frequencies_at_arm_length": 0.072}  # fmt: skip
@@ -419,7 +473,7 @@ def run_boundary(args: argparse.Namespace) -> int:
     fig.savefig(png, dpi=120)
     print(output)
     print(f"box: normal load {loads[0]:g}..{loads[1]:g} N x arm length {arms[0]:g}..{arms[1]:g} m, "
-          f"{model.contact} contact, sliding speed {model.sliding_speed:g} m/s, mu {model.mu:g}")  # fmt: skip
+          f"{model.contact} contact, sliding speed {model.sliding_speed:g} m/s, mu {model.mu:g}{law_text(model)}")  # fmt: skip
     for kind in CURVE_KINDS:
         if f"{kind}_curves" in ds.attrs:
             print(f"{kind}: {ds.attrs[f'{kind}_curves']}")

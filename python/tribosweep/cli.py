@@ -191,6 +191,9 @@ def _add_sweep_arguments(p: argparse.ArgumentParser) -> None:
     axes.add_argument("--mu", type=parse_axis, metavar="SPEC", help="friction coefficient [1] (an extra axis)")
     axes.add_argument("--axis", type=_named_axis, action="append", default=[], metavar="NAME=SPEC",
                       help="an extra axis over any real model field, e.g. contact_damping=100:300:3 (SI units)")  # fmt: skip
+    model = p.add_argument_group("model (also the [model] table of --config; these options win)",
+                                 "The seed apparatus (docs/model.md); the arm length sets its natural frequencies.")
+    _cli_curves.add_model_arguments(model, contact=True)
     p.add_argument("-o", "--output", metavar="FILE", help="netCDF output file (default sweep.nc)")
     p.add_argument("--strategy", choices=("auto", "linear", "tidf", "shooting", "transient"),
                    help="auto (default): each point gets the cheapest model that decides it (eigenvalues, the "
@@ -280,10 +283,8 @@ def _run_sweep(args: argparse.Namespace) -> int:
         extra["mu"] = args.mu
     for name, values in args.axis:
         extra[name] = values
-    model_cfg = dict(cfg.get("model", {}))
-    model_cfg.setdefault("contact", "unilateral")
     try:
-        model = SliderModel(**model_cfg)
+        model = SliderModel(**_cli_curves.model_fields(args, cfg))
     except TypeError as e:
         raise UsageError(f"config [model]: {e}") from None
     solver = dict(cfg.get("solver", {}))
@@ -335,6 +336,19 @@ def _run_sweep(args: argparse.Namespace) -> int:
 # --- info --------------------------------------------------------------------------------------
 
 
+def _model_line(ds) -> str:
+    """The contact and friction laws a sweep file records (its ``model_*`` attributes)."""
+    a = ds.attrs
+    mu = "mu on an axis" if "mu" in ds.regime.dims else f"mu {float(a.get('model_mu', float('nan'))):g}"
+    law = str(a.get("model_friction_law", "constant"))
+    text = f"{a['model_contact']} contact, {law} friction law, {mu}"
+    if law != "constant":
+        ms = a.get("model_mu_static")
+        ms = "= mu" if ms is None or not np.isfinite(ms) else f"{float(ms):g}"
+        text += f", mu_static {ms}, Stribeck velocity {float(a.get('model_stribeck_velocity', float('nan'))):g} m/s"
+    return text
+
+
 def describe(ds, path: str | None = None) -> str:
     """A short text summary of a sweep Dataset: dimensions, regime counts, key attributes."""
     lines = [str(path)] if path else []
@@ -345,6 +359,8 @@ def describe(ds, path: str | None = None) -> str:
         span = f"{v[0]:g}" if v.size == 1 else f"{v[0]:g} .. {v[-1]:g}"
         dims.append(f"{d} {v.size} [{span} {units}]".replace(" ]", "]"))
     lines.append("dimensions: " + ", ".join(dims) + f" ({int(ds.regime.size)} points)")
+    if "model_contact" in ds.attrs:
+        lines.append("model: " + _model_line(ds))
     for key in ("strategy", "source", "history"):
         if key in ds.attrs:
             lines.append(f"{key}: {ds.attrs[key]}")
