@@ -462,8 +462,10 @@ def run_boundary(args: argparse.Namespace) -> int:
     png = _png_path(output, _pick(args, cfg, "plot"))
     threads = args.threads if args.threads is not None else cfg.get("threads")
     ds = boundary_curves(model, loads, arms, curves=curves, slices=slices, threads=threads)
-    law = "" if model.friction_law == "constant" else f", {model.friction_law} law"
-    title = f"stability boundaries ({model.contact} contact{law}, mu = {model.mu:g}, V = {model.sliding_speed:g} m/s)"
+    title = f"stability boundaries ({model.contact} contact, mu = {model.mu:g}, V = {model.sliding_speed:g} m/s)"
+    if model.friction_law != "constant":  # a second line: one would overrun the axes
+        ms = model.mu if model.mu_static is None else model.mu_static
+        title += f"\n{model.friction_law} friction law, mu_static = {ms:g}, Stribeck velocity {model.stribeck_velocity:g} m/s"
     ds.attrs |= {f"model_{k}": v for k, v in model.values().items() if k not in ("normal_load", *_MODE_FIELDS)}
     ds.attrs |= {"model_contact": model.contact, "model_friction_law": model.friction_law,
                  "model_frequencies_at_arm_length": 0.072}  # fmt: skip
