@@ -223,6 +223,29 @@ def test_a_switch_law_branch_ends_where_its_cycle_first_reaches_stick_in_bounded
     assert lowest[0] < 2 * bil.stick_band and lowest[1] > 1e-3, lowest
 
 
+def test_a_branch_starts_at_a_hopf_point_of_a_mode_that_is_not_the_least_stable():
+    """Under the Stribeck switch law at 0.2 m/s, 7.91 cm, sliding is unstable at every load (the
+    torsion mode grows), and the friction mode's pair crosses the imaginary axis at 39.6 N (283.6
+    rad/s): a Hopf point all the same, which sliding_branch and hopf_curve report. branch(from_hopf=...) starts
+    there (it refused it: "the largest growth rate there is 4.079"), with that pair's frequency;
+    its cycles are born unstable (the growing mode), and the branch ends where they gain a stick
+    phase."""
+    base = ts.SliderModel(contact="unilateral", friction_law="switch", mu_static=0.3, sliding_speed=0.2)
+    m = ts.apparatus_model(84.46, 0.0791, 0.2, base=base)
+    sb = ts.sliding_branch(m, ("normal_load", 20.0, 140.0))
+    ok = sb.is_hopf.values == 1
+    h, om = float(sb.hopf_normal_load.values[ok][0]), float(sb.hopf_frequency.values[ok][0])
+    lin = ts.linear_stability(m.replace(normal_load=h))
+    assert float(lin.growth_rate) > 1.0  # the least stable mode (torsion) grows there
+    friction = lin.sel(mode="friction")
+    assert abs(float(friction.mode_growth_rate)) < 1e-6 * om and abs(float(friction.mode_frequency) / om - 1) < 1e-9
+    ds = ts.branch(m, "normal_load", 140.0, from_hopf=h, bounds=(20.0, 140.0))
+    assert abs(float(ds.period[0]) * om / (2 * np.pi) - 1) < 1e-6
+    assert not bool(ds.stable[1]) and int(ds.n_unstable[1]) >= 1
+    assert ts.STATUS_NAMES[int(ds.status)] == "event_missed" and "gains a stick phase" in ds.attrs["reason"]
+    assert 25.2 < float(ds.parameter[-1]) < 25.4
+
+
 def test_dataset_is_labelled_and_survives_netcdf(bilateral, tmp_path):
     ds = bilateral
     for name, v in ds.data_vars.items():
