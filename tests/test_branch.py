@@ -221,6 +221,17 @@ def test_a_switch_law_branch_ends_where_its_cycle_first_reaches_stick_in_bounded
         lowest.append(float(np.min(at.sliding_speed - (run.x_dot.values + at.torsion_sign * at.moment_arm
                                                        * run.phi_dot.values))))  # fmt: skip
     assert lowest[0] < 2 * bil.stick_band and lowest[1] > 1e-3, lowest
+    # The branch's own min_slip_velocity (located at the extremes of v_r on the dense output) is
+    # the simulation's sampled minimum (2,001 samples a period: 2.4e-7 m/s at most above the true
+    # one at this curvature), and the sliding speed itself at the Hopf point.
+    got = np.asarray(out["min_slip_velocity"])
+    assert abs(got[0] / 0.2 - 1) < 1e-12
+    assert -1e-12 <= lowest[1] - got[-50] < 5e-7, (lowest[1], got[-50])
+    # At the end the branch's orbits (slip throughout, a fixed mode) dip into the stick band, where
+    # the switch law, as the simulation, would stick: flagged.
+    in_band = 1 << ts.BRANCH_FLAG_NAMES.index("slip_in_stick_band")
+    flagged = (np.asarray(out["flags"]) & in_band) != 0
+    assert np.array_equal(flagged, got < bil.stick_band) and flagged[-1] and not flagged[:-10].any()
 
 
 def test_a_branch_starts_at_a_hopf_point_of_a_mode_that_is_not_the_least_stable():

@@ -202,7 +202,7 @@ def branch(
     xarray.Dataset
         On dim ``branch_point``: ``parameter``, ``period``, ``omega``, ``A0``, ``A1``, ``z_max``,
         ``min_gap`` (``-max_t zc``: > 0 the pin never leaves the disk, 0 at grazing),
-        ``min_law_force``, ``fraction_off_disk``, Floquet multipliers on dim ``multiplier`` (real and
+        ``min_law_force``, ``min_slip_velocity``, ``fraction_off_disk``, Floquet multipliers on dim ``multiplier`` (real and
         imaginary parts, modulus and argument; netCDF has no complex type), ``stable``,
         ``n_unstable``, ``point_type`` (``POINT_TYPE_NAMES``), ``flags`` (``BRANCH_FLAG_NAMES``,
         CF ``flag_masks``), ``n_switches``, ``dp_ds``, ``arclength``, ``state0``. Scalar ``status``
@@ -288,6 +288,7 @@ def _dataset(out: dict, dim: str, parameter: str, attrs: dict) -> xr.Dataset:
         "z_min": v("z_min", "m", "smallest z on the orbit"),
         "min_gap": v("min_gap", "m", "smallest distance to contact loss, -max_t zc(t) (< 0: the pin leaves the disk; 0: grazing)"),
         "min_law_force": v("min_law_force", "N", "smallest total normal force of the contact law in contact"),
+        "min_slip_velocity": v("min_slip_velocity", "m s-1", "smallest sliding speed |v_r| of the contact point in contact (0 where the orbit sticks)"),
         "fraction_off_disk": v("fraction_off_disk", "1", "fraction of the period with the pin off the disk"),
         "floquet_multiplier_real": (two, mult.real, {"units": "1", "long_name": "Floquet multiplier, real part (by modulus descending)"}),
         "floquet_multiplier_imag": (two, mult.imag, {"units": "1", "long_name": "Floquet multiplier, imaginary part"}),

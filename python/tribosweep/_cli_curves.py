@@ -29,7 +29,7 @@ BRANCH_SETTINGS: dict[str, tuple[type, str, str]] = {
 }
 #: Variables of a branch the diagram can draw against the parameter (``--amplitude``).
 AMPLITUDES: tuple[str, ...] = ("A1", "A0", "z_max", "z_min", "min_gap", "period", "omega", "min_law_force",
-                               "fraction_off_disk")  # fmt: skip
+                               "min_slip_velocity", "fraction_off_disk")  # fmt: skip
 _OPERATING = ("normal_load", "arm_length", "sliding_speed", "mu")
 _BRANCH_KEYS = {"parameter", "range", "start", "stop_at", "amplitude", "contact", "output", "plot", "model",
                 "continuation", *_OPERATING}  # fmt: skip

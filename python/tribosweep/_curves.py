@@ -126,7 +126,8 @@ _ARM_END_BISECTIONS: int = 4
 #: Per-point arrays of a raw branch (``_core.branch``) and their trailing shapes.
 _RAW_KEYS: dict[str, tuple[tuple[int, ...], str]] = {
     **{k: ((), "f8") for k in ("parameter", "period", "trivial_error", "a0", "a1", "z_max", "z_min", "min_gap",
-                                "min_law_force", "fraction_off_disk", "dp_ds", "arclength", "residual")},
+                                "min_law_force", "min_slip_velocity", "fraction_off_disk", "dp_ds", "arclength",
+                                "residual")},
     **{k: ((), "u1") for k in ("n_unstable", "point_type", "contact", "flags", "trivial")},
     "stable": ((), "?"), "n_switches": ((), "u4"), "newton_iterations": ((), "u4"),
     **{k: ((6,), "f8") for k in ("state0", "multipliers_re", "multipliers_im")},

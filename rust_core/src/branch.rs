@@ -108,16 +108,20 @@ pub mod flags {
     /// A grazing point where the branch turns back in the parameter (a non-smooth fold: two
     /// cycles, with and without the new switches, meet there and end).
     pub const PARAMETER_TURNS: u8 = 32;
+    /// Switch law: the orbit slips with `|v_r|` inside the stick band somewhere, where the law
+    /// would stick: past a sliding bifurcation (the cycle has gained a stick phase).
+    pub const SLIP_IN_STICK_BAND: u8 = 64;
 }
 
 /// Names of the bits of [`flags`], lowest first.
-pub const FLAG_NAMES: [&str; 6] = [
+pub const FLAG_NAMES: [&str; 7] = [
     "switch_suspected",
     "trivial_multiplier_off",
     "law_tension",
     "outside_bilateral_validity",
     "not_located",
     "parameter_turns",
+    "slip_in_stick_band",
 ];
 
 /// Options of the continuation.
@@ -213,6 +217,9 @@ pub struct BranchPoint {
     pub min_law_force: f64,
     /// Fraction of the period off the disk.
     pub open_fraction: f64,
+    /// Smallest sliding speed `|v_r|` of the contact point in contact [m/s] (0 where the orbit
+    /// sticks, NaN if never in contact): how near the cycle comes to stick.
+    pub min_slip_velocity: f64,
     /// Mode switches per period.
     pub n_switches: u32,
     /// `dp/ds`: parameter component of the unit tangent, in parameter units (per unit of scaled arclength).

@@ -126,6 +126,7 @@ fn points_into(d: &Bound<'_, PyDict>, pts: &[BranchPoint]) -> PyResult<()> {
     d.set_item("z_min", f(|p| p.z_min))?;
     d.set_item("min_gap", f(|p| p.min_gap))?;
     d.set_item("min_law_force", f(|p| p.min_law_force))?;
+    d.set_item("min_slip_velocity", f(|p| p.min_slip_velocity))?;
     d.set_item("fraction_off_disk", f(|p| p.open_fraction))?;
     d.set_item("dp_ds", f(|p| p.dp_ds))?;
     d.set_item("arclength", f(|p| p.arclength))?;

@@ -138,6 +138,8 @@ pub(crate) struct Observed {
     pub min_law_force: f64,
     /// Fraction of the period off the disk (in free segments).
     pub open_fraction: f64,
+    /// Smallest `|v_r|` in contact [m/s] (0 where the orbit sticks; NaN: never in contact).
+    pub min_slip_velocity: f64,
 }
 
 /// Records the mode switches of a run (taking each one).
@@ -276,6 +278,9 @@ pub(crate) struct SegmentWatch {
     /// Largest and smallest `z` [m].
     pub z_max: f64,
     pub z_min: f64,
+    /// Smallest `|v_r|` in sliding contact [m/s], at the step ends and the extremes of `v_r`
+    /// (0 in a stick or transition segment, or where `v_r` changes sign; infinite off the disk).
+    pub slip_min: f64,
 }
 
 struct SegObs<'a> {
@@ -299,15 +304,28 @@ impl SegObs<'_> {
         self.s.p.normal_load + self.s.dynamic_law_force(y)
     }
 
-    /// Rates whose sign changes mark the extremes: `zd` and `dN_law/dt`.
-    fn rates(&self, y: &Aug) -> [f64; 2] {
+    /// Rates whose sign changes mark the extremes: `zd`, `dN_law/dt` and `dv_r/dt`.
+    fn rates(&self, y: &Aug) -> [f64; 3] {
         let x = state_of(y);
         let n = switch_normal(self.s, &x, event::NORMAL).unwrap_or_else(State::zeros);
-        [y[idx::ZD], n.dot(&self.s.rhs(&x, self.mode))]
+        let f = self.s.rhs(&x, self.mode);
+        let sl = self.s.p.torsion_sign * self.s.p.moment_arm;
+        [y[idx::ZD], n.dot(&f), -(f[idx::XD] + sl * f[idx::PHID])]
+    }
+
+    /// `|v_r|` at `x` into the segment's smallest (sliding contact only).
+    fn slip_at(&mut self, x: &State) {
+        if self.mode == ContactMode::Contact {
+            self.w.slip_min = self.w.slip_min.min(self.s.slip_velocity(x).abs());
+        }
     }
 
     fn extreme(&mut self, y: &Aug, t: f64, which: usize, up: bool) {
         let x = state_of(y);
+        if which == 2 {
+            self.slip_at(&x);
+            return;
+        }
         let (zc, law) = (self.s.z_st + x[idx::Z], self.law(&x));
         let w = &mut self.w;
         w.z_max = w.z_max.max(x[idx::Z]);
@@ -367,6 +385,11 @@ impl Observer<48, ContactMode> for SegObs<'_> {
             }
             prev = (tk, rk);
         }
+        let (x0, x1) = (state_of(st.y0), state_of(st.y1));
+        self.slip_at(&x1);
+        if self.mode == ContactMode::Contact && self.s.slip_velocity(&x0) * self.s.slip_velocity(&x1) <= 0.0 {
+            self.w.slip_min = 0.0;
+        }
         if st.y1[idx::Z].abs() > self.s.p.escape_limit {
             self.diverged = true;
             return Control::Stop;
@@ -418,6 +441,11 @@ pub(crate) fn segment(
         margin_max: (f64::NEG_INFINITY, 0.0, event::GAP),
         z_max: y0[idx::Z],
         z_min: y0[idx::Z],
+        slip_min: match mode {
+            ContactMode::Contact => m.s.slip_velocity(y0).abs(),
+            ContactMode::Free => f64::INFINITY,
+            _ => 0.0,
+        },
     };
     let (t_off, dt, n) = samples.unwrap_or((0.0, 0.0, 0));
     let slip = m.s.p.friction_law == FrictionLaw::Switch && mode == ContactMode::Contact;

@@ -98,6 +98,7 @@ pub(super) fn first_from_hopf(
         min_gap: -s.z_st,
         min_law_force: s.p.normal_load,
         open_fraction: 0.0,
+        min_slip_velocity: s.p.sliding_speed.abs(),
         n_switches: 0,
         dp_ds: 0.0,
         arclength: 0.0,

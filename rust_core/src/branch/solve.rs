@@ -20,7 +20,7 @@
 use super::flow::{event_scale, segment, FlowSettings, Model, Observed, SegmentWatch};
 use super::{flags, BranchOptions, BranchPoint, PointType, C64};
 use crate::linear::eigenvalues;
-use crate::model::{event, idx, ContactMode, ContactModel, Jacobian, Params, State};
+use crate::model::{event, idx, ContactMode, ContactModel, FrictionLaw, Jacobian, Params, State};
 use crate::ode::Stats;
 use crate::shooting::{saltation, FREE};
 use crate::status::Status;
@@ -250,6 +250,7 @@ impl Ctx<'_> {
         let mut t_off = 0.0;
         let mut mon = Monitors::new();
         let mut law_min = f64::INFINITY;
+        let mut slip_min = f64::INFINITY;
         let (mut z_max, mut z_min) = (f64::NEG_INFINITY, f64::INFINITY);
         self.n_flows += 1;
         for (i, (&mode, &tau)) in seq.modes.iter().zip(&taus).enumerate() {
@@ -279,6 +280,7 @@ impl Ctx<'_> {
             watch(&mut mon, &sg.watch, mode, i, tau);
             if mode != ContactMode::Free {
                 law_min = law_min.min(sg.watch.law_min.0);
+                slip_min = slip_min.min(sg.watch.slip_min);
             }
             z_max = z_max.max(sg.watch.z_max);
             z_min = z_min.min(sg.watch.z_min);
@@ -318,8 +320,11 @@ impl Ctx<'_> {
                 jac[(k - 1 + r, c)] = (d[(r, c)] - d0[(r, c)]) / sz[r];
             }
         }
-        let observed =
-            if record && z.len() == ns { harmonics(&z, z_max, z_min, &taus, seq, law_min) } else { unobserved() };
+        let observed = if record && z.len() == ns {
+            harmonics(&z, z_max, z_min, &taus, seq, law_min, slip_min)
+        } else {
+            unobserved()
+        };
         let residual = res.amax();
         let e = Eval {
             xi: xi.clone(),
@@ -418,6 +423,10 @@ impl Ctx<'_> {
         if law == ContactModel::Bilateral && min_gap < 0.0 {
             fl |= flags::OUTSIDE_BILATERAL_VALIDITY;
         }
+        let p_m = &e.model.s.p;
+        if p_m.friction_law == FrictionLaw::Switch && o.min_slip_velocity < p_m.stick_band {
+            fl |= flags::SLIP_IN_STICK_BAND;
+        }
         BranchPoint {
             parameter: p,
             period: taus.iter().sum(),
@@ -434,6 +443,7 @@ impl Ctx<'_> {
             min_gap,
             min_law_force: o.min_law_force,
             open_fraction: o.open_fraction,
+            min_slip_velocity: o.min_slip_velocity,
             n_switches: e.seq.events.len() as u32,
             dp_ds: tangent[tangent.len() - 1] * self.p_ref,
             arclength,
@@ -482,10 +492,18 @@ fn watch(mon: &mut Monitors, w: &SegmentWatch, mode: ContactMode, i: usize, tau:
 
 fn unobserved() -> Observed {
     let nan = f64::NAN;
-    Observed { a0: nan, a1: nan, z_max: nan, z_min: nan, min_law_force: nan, open_fraction: nan }
+    Observed {
+        a0: nan,
+        a1: nan,
+        z_max: nan,
+        z_min: nan,
+        min_law_force: nan,
+        open_fraction: nan,
+        min_slip_velocity: nan,
+    }
 }
 
-fn harmonics(z: &[f64], z_max: f64, z_min: f64, taus: &[f64], seq: &Seq, law_min: f64) -> Observed {
+fn harmonics(z: &[f64], z_max: f64, z_min: f64, taus: &[f64], seq: &Seq, law_min: f64, slip_min: f64) -> Observed {
     let n = z.len();
     let (mut a, mut b) = (0.0, 0.0);
     for (k, v) in z.iter().enumerate() {
@@ -501,6 +519,7 @@ fn harmonics(z: &[f64], z_max: f64, z_min: f64, taus: &[f64], seq: &Seq, law_min
         z_min,
         min_law_force: law_min,
         open_fraction: free / taus.iter().sum::<f64>(),
+        min_slip_velocity: if slip_min.is_finite() { slip_min } else { f64::NAN },
     }
 }
 
