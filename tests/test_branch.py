@@ -188,13 +188,14 @@ def test_a_step_that_cannot_converge_is_halved_and_the_branch_ends_with_a_reason
     assert ds.sizes["branch_point"] == 1
 
 
-def test_a_switch_law_branch_ends_where_its_cycle_first_reaches_stick_in_bounded_work():
+def test_a_switch_law_branch_ends_at_the_located_point_where_its_cycle_reaches_stick():
     """The Stribeck switch law under bilateral contact (the grazing curve's model for issue 10's
     slider at 0.2 m/s, 7.91 cm): continued down in load from its Hopf point, the cycle's slip phase
-    reaches zero sliding velocity near 25.31 N and gains a stick phase, a sliding bifurcation that
-    continuation does not follow. A fixed-mode flow across v_r = 0 chattered in ever smaller steps
-    (the sweep's boundary stage ran for more than ten minutes); the branch now ends there with the
-    reason, every flow within the orbit flows' step budget."""
+    comes down to the stick band near 25.31 N and gains a stick phase, a sliding bifurcation that
+    continuation does not follow. Before, a fixed-mode flow went on across v_r = 0, chattering in
+    ever smaller steps (the sweep's boundary stage ran for more than ten minutes). Now the point is
+    located (a secant on min_slip_velocity - stick_band) and the branch ends there, every flow within
+    the orbit flows' step budget."""
     from tribosweep import _core
 
     base = ts.SliderModel(contact="unilateral", friction_law="switch", mu_static=0.3, sliding_speed=0.2)
@@ -204,34 +205,32 @@ def test_a_switch_law_branch_ends_where_its_cycle_first_reaches_stick_in_bounded
     h, om = float(sb.hopf_normal_load.values[ok][0]), float(sb.hopf_frequency.values[ok][0])
     out = _core.branch(m.replace(normal_load=h).values(), "bilateral", "switch", "normal_load", h, 20.0, 140.0,
                        hopf_omega=om, options=dict(_core.branch_defaults()), stop_at="grazing")  # fmt: skip
-    assert ts.STATUS_NAMES[int(out["status"])] == "event_missed"
-    assert "reaches zero sliding velocity" in str(out["reason"]) and "halved below ds_min" in str(out["reason"])
-    p = np.asarray(out["parameter"])
-    assert p.size > 100 and 25.2 < p[-1] < 25.4
+    assert ts.STATUS_NAMES[int(out["status"])] == "success"
+    assert "reaches the stick band" in str(out["reason"]) and "gains a stick phase" in str(out["reason"])
+    p, kinds = np.asarray(out["parameter"]), np.asarray(out["point_type"])
+    assert p.size > 100 and 25.2 < p[-1] < 25.4 and ts.BRANCH_POINT_TYPE_NAMES[int(kinds[-1])] == "stick"
+    assert not np.isin(kinds[:-1], [ts.BRANCH_POINT_TYPE_NAMES.index("stick")]).any()
     # Each flow within the budget (50,000 steps of DOP853's 12 stages, with event location).
     assert int(out["n_rhs"]) < int(out["n_flows"]) * 50_000 * 16
-    # The last orbit's sliding velocity comes down to the stick band (its edge, 1 um/s: 1.0e-6 here);
-    # 50 points before, it stays 2 cm/s clear of it.
     bil = m.replace(contact="bilateral")
-    lowest = []
+    got = np.asarray(out["min_slip_velocity"])
+    assert abs(got[0] / 0.2 - 1) < 1e-12  # the sliding speed itself at the Hopf point
+    assert abs(got[-1] / bil.stick_band - 1) < 1e-2  # located: 1.00003e-6 against the band's 1e-6
+    # The branch's min_slip_velocity (located at the extremes of v_r on the dense output) against
+    # an independent simulation's sampled minimum (2,001 samples a period: at most 2.4e-7 m/s above
+    # the true one at this curvature): at the stick point and 50 points before, 2 cm/s clear.
     for j in (-1, -50):
         at = bil.replace(normal_load=float(p[j]))
         period = float(np.asarray(out["period"])[j])
         run = ts.simulate(at, period, y0=np.asarray(out["state0"])[j], rtol=1e-11, t_eval=np.linspace(0, period, 2001))
-        lowest.append(float(np.min(at.sliding_speed - (run.x_dot.values + at.torsion_sign * at.moment_arm
-                                                       * run.phi_dot.values))))  # fmt: skip
-    assert lowest[0] < 2 * bil.stick_band and lowest[1] > 1e-3, lowest
-    # The branch's own min_slip_velocity (located at the extremes of v_r on the dense output) is
-    # the simulation's sampled minimum (2,001 samples a period: 2.4e-7 m/s at most above the true
-    # one at this curvature), and the sliding speed itself at the Hopf point.
-    got = np.asarray(out["min_slip_velocity"])
-    assert abs(got[0] / 0.2 - 1) < 1e-12
-    assert -1e-12 <= lowest[1] - got[-50] < 5e-7, (lowest[1], got[-50])
-    # At the end the branch's orbits (slip throughout, a fixed mode) dip into the stick band, where
-    # the switch law, as the simulation, would stick: flagged.
+        low = float(np.min(at.sliding_speed - (run.x_dot.values + at.torsion_sign * at.moment_arm
+                                               * run.phi_dot.values)))  # fmt: skip
+        assert -1e-12 <= low - got[j] < 5e-7, (j, low, got[j])
+    assert got[-50] > 1e-2
+    # No orbit of the branch slips inside the band (the flag for those: none here).
     in_band = 1 << ts.BRANCH_FLAG_NAMES.index("slip_in_stick_band")
     flagged = (np.asarray(out["flags"]) & in_band) != 0
-    assert np.array_equal(flagged, got < bil.stick_band) and flagged[-1] and not flagged[:-10].any()
+    assert np.array_equal(flagged, got < bil.stick_band) and not flagged.any()
 
 
 def test_a_branch_starts_at_a_hopf_point_of_a_mode_that_is_not_the_least_stable():
@@ -253,7 +252,8 @@ def test_a_branch_starts_at_a_hopf_point_of_a_mode_that_is_not_the_least_stable(
     ds = ts.branch(m, "normal_load", 140.0, from_hopf=h, bounds=(20.0, 140.0))
     assert abs(float(ds.period[0]) * om / (2 * np.pi) - 1) < 1e-6
     assert not bool(ds.stable[1]) and int(ds.n_unstable[1]) >= 1
-    assert ts.STATUS_NAMES[int(ds.status)] == "event_missed" and "gains a stick phase" in ds.attrs["reason"]
+    assert ts.STATUS_NAMES[int(ds.status)] == "success" and "gains a stick phase" in ds.attrs["reason"]
+    assert ts.BRANCH_POINT_TYPE_NAMES[int(ds.point_type.values[-1])] == "stick"
     assert 25.2 < float(ds.parameter[-1]) < 25.4
 
 

@@ -51,9 +51,10 @@ _LEGEND = {
     "PD": "period doubling",
     "NS": "Neimark-Sacker (torus)",
     "BP": "branch point",
+    "S": "stick: the cycle first\nreaches the stick band",
 }
 _LABELS = {"fold": "F", "period_doubling": "PD", "neimark_sacker": "NS", "grazing": "G", "hopf": "H",
-           "branch_point": "BP", "end": ""}  # fmt: skip
+           "branch_point": "BP", "stick": "S", "end": ""}  # fmt: skip
 
 
 def _model(model) -> SliderModel:

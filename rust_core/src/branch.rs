@@ -86,11 +86,14 @@ pub enum PointType {
     End = 6,
     /// A real multiplier through +1 without a fold: another branch of cycles crosses here.
     BranchPoint = 7,
+    /// Switch law: the orbit's slip first reaches the stick band (`min_slip_velocity` = the
+    /// band's half-width): it gains a stick phase, a sliding bifurcation. The branch ends here.
+    Stick = 8,
 }
 
 /// Names of [`PointType`], in code order.
-pub const POINT_TYPE_NAMES: [&str; 8] =
-    ["regular", "fold", "period_doubling", "neimark_sacker", "grazing", "hopf", "end", "branch_point"];
+pub const POINT_TYPE_NAMES: [&str; 9] =
+    ["regular", "fold", "period_doubling", "neimark_sacker", "grazing", "hopf", "end", "branch_point", "stick"];
 
 /// Bits of [`BranchPoint::flags`] (CF `flag_masks`, names in [`FLAG_NAMES`]).
 pub mod flags {

@@ -57,7 +57,7 @@ fn start(
 }
 
 fn point_type_from(name: Option<&str>) -> PyResult<Option<PointType>> {
-    const ALL: [PointType; 8] = [
+    const ALL: [PointType; 9] = [
         PointType::Regular,
         PointType::Fold,
         PointType::PeriodDoubling,
@@ -66,6 +66,7 @@ fn point_type_from(name: Option<&str>) -> PyResult<Option<PointType>> {
         PointType::Hopf,
         PointType::End,
         PointType::BranchPoint,
+        PointType::Stick,
     ];
     match name {
         None => Ok(None),

@@ -6,7 +6,7 @@ use super::locate::{locate, on_plane, unit, Search};
 use super::solve::{fail, node, valid, Ctx, Failure, Node, Seq};
 use super::{flags, BranchPoint, PointType, C64, POINT_TYPE_NAMES};
 use crate::linear::eigenvalues;
-use crate::model::{idx, ContactMode, ContactModel, Slider, State};
+use crate::model::{idx, ContactMode, ContactModel, FrictionLaw, Slider, State};
 use crate::status::Status;
 use nalgebra::{SMatrix, SVector};
 use std::f64::consts::PI;
@@ -238,6 +238,19 @@ pub(super) fn follow(
             let p = specials[i].point.parameter;
             return (Status::Success, format!("stopped at the first {k} point, {name} = {p:.10e}"));
         }
+        // The cycle reaches the stick band: past it the orbit of this mode sequence is not the
+        // switch law's (it would stick), and stick phases are not followed.
+        if let Some(i) = specials.iter().position(|n| n.point.point_type == PointType::Stick) {
+            points.extend(specials.iter().take(i + 1).map(|n| n.point));
+            let p = specials[i].point.parameter;
+            return (
+                Status::Success,
+                format!(
+                    "the cycle reaches the stick band at {name} = {p:.10e}: it gains a stick phase there (a sliding \
+                     bifurcation, which continuation does not follow)"
+                ),
+            );
+        }
         points.extend(specials.iter().map(|n| n.point));
         if !inside(next.point.parameter) {
             let bound = if next.point.parameter > hi { hi } else { lo };
@@ -314,6 +327,14 @@ fn locate_all(ctx: &mut Ctx<'_>, cur: &Node, next: &Node, ds: f64) -> Vec<Node> 
         }
         if crosses && a.n_real_pos != b.n_real_pos && !fold {
             tests.push(count(PointType::BranchPoint, a.n_real_pos, b.n_real_pos, 0.0, 0.0, |s| (s.n_real_pos, 0.0)));
+        }
+    }
+    // The switch law's slip reaching the stick band (`min_slip_velocity` down to its half-width).
+    // Each node's own band (the continued parameter may be the band itself).
+    if ctx.base.friction_law == FrictionLaw::Switch {
+        let margin = |n: &Node| n.point.min_slip_velocity - n.e.model.s.p.stick_band;
+        if margin(cur) >= 0.0 && margin(next) < 0.0 {
+            tests.push((PointType::Stick, Box::new(margin), Search::Secant));
         }
     }
     // Grazing of the bilateral law (the unilateral law changes its mode sequence there instead).
