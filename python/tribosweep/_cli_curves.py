@@ -154,17 +154,18 @@ def model_fields(args, cfg: dict) -> dict:
         v = _pick(args, cfg, name)
         if v is not None:
             fields[name] = v
-    fields.update(dict(getattr(args, "model", None) or []))
+    fields.update(dict(args.model))
     fields.setdefault("contact", "unilateral")
     return fields
 
 
-def law_text(model) -> str:
-    """The friction law for a one-line summary: empty for constant mu, else the law and its curve."""
+def law_text(model, sep: str = ", ") -> str:
+    """The friction law after ``sep`` for a summary or a title: empty for constant mu, else the law
+    and its Stribeck curve."""
     if model.friction_law == "constant":
         return ""
     ms = model.mu if model.mu_static is None else model.mu_static
-    return f", {model.friction_law} friction law (mu_static {ms:g}, Stribeck velocity {model.stribeck_velocity:g} m/s)"
+    return f"{sep}{model.friction_law} friction law (mu_static {ms:g}, Stribeck velocity {model.stribeck_velocity:g} m/s)"
 
 
 def _model(args, cfg: dict, need: tuple[str, ...]):
@@ -462,10 +463,9 @@ def run_boundary(args: argparse.Namespace) -> int:
     png = _png_path(output, _pick(args, cfg, "plot"))
     threads = args.threads if args.threads is not None else cfg.get("threads")
     ds = boundary_curves(model, loads, arms, curves=curves, slices=slices, threads=threads)
-    title = f"stability boundaries ({model.contact} contact, mu = {model.mu:g}, V = {model.sliding_speed:g} m/s)"
-    if model.friction_law != "constant":  # a second line: one would overrun the axes
-        ms = model.mu if model.mu_static is None else model.mu_static
-        title += f"\n{model.friction_law} friction law, mu_static = {ms:g}, Stribeck velocity {model.stribeck_velocity:g} m/s"
+    # The law on a second line: on one the title overran the axes.
+    title = (f"stability boundaries ({model.contact} contact, mu = {model.mu:g}, V = {model.sliding_speed:g} m/s)"
+             f"{law_text(model, sep=chr(10))}")  # fmt: skip
     ds.attrs |= {f"model_{k}": v for k, v in model.values().items() if k not in ("normal_load", *_MODE_FIELDS)}
     ds.attrs |= {"model_contact": model.contact, "model_friction_law": model.friction_law,
                  "model_frequencies_at_arm_length": 0.072}  # fmt: skip

@@ -364,7 +364,9 @@ impl Observer<48, ContactMode> for SegObs<'_> {
             let tk = st.t0 + (st.t1 - st.t0) * k as f64 / SUB as f64;
             let yk = if k == SUB { *st.y1 } else { st.dense.eval(tk) };
             let rk = self.rates(&yk);
-            for (which, (&a, &b)) in prev.1.iter().zip(&rk).enumerate() {
+            // v_r's extremes (the last rate) matter in sliding contact only.
+            let n_rates = if self.mode == ContactMode::Contact { 3 } else { 2 };
+            for (which, (&a, &b)) in prev.1.iter().zip(&rk).enumerate().take(n_rates) {
                 if (a > 0.0 && b <= 0.0) || (a < 0.0 && b >= 0.0) {
                     let up = a > 0.0;
                     let (mut lo, mut hi) = (prev.0, tk);
@@ -385,10 +387,10 @@ impl Observer<48, ContactMode> for SegObs<'_> {
             }
             prev = (tk, rk);
         }
-        let (x0, x1) = (state_of(st.y0), state_of(st.y1));
-        self.slip_at(&x1);
-        if self.mode == ContactMode::Contact && self.s.slip_velocity(&x0) * self.s.slip_velocity(&x1) <= 0.0 {
-            self.w.slip_min = 0.0;
+        let vr1 = self.s.slip_velocity(&state_of(st.y1));
+        if self.mode == ContactMode::Contact {
+            let crossed = self.s.slip_velocity(&state_of(st.y0)) * vr1 <= 0.0;
+            self.w.slip_min = if crossed { 0.0 } else { self.w.slip_min.min(vr1.abs()) };
         }
         if st.y1[idx::Z].abs() > self.s.p.escape_limit {
             self.diverged = true;
@@ -397,7 +399,7 @@ impl Observer<48, ContactMode> for SegObs<'_> {
         // A slip segment whose sliding velocity reaches zero has left its mode: the slip force
         // `mu N sign(v_r)` reverses there and a fixed-mode flow chatters across it in ever smaller
         // steps (one continuation flow took millions); the orbit has gained a stick phase.
-        if self.slip_sign != 0.0 && self.s.slip_velocity(&state_of(st.y1)) * self.slip_sign <= 0.0 {
+        if self.slip_sign != 0.0 && vr1 * self.slip_sign <= 0.0 {
             self.slip_reversed = true;
             return Control::Stop;
         }
