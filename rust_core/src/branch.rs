@@ -286,6 +286,9 @@ pub enum BranchError {
     /// The parameter cannot be continued.
     #[error("parameter = {0:?} cannot be continued: must be a real model parameter other than torsion_sign ({1})")]
     Parameter(String, String),
+    /// A special point the model cannot have (a stick point without the switch law).
+    #[error("{0}")]
+    Kind(String),
 }
 
 fn check(name: &'static str, value: f64, ok: bool, range: &str) -> Result<(), BranchError> {
@@ -373,6 +376,12 @@ pub fn branch(
     let (status, reason) = match first {
         Ok(node) => follow::follow(&mut ctx, node, (lo, hi), &mut points),
         Err(f) => (f.status, format!("the first orbit did not converge: {}", f.reason)),
+    };
+    let reason = if ctx.opts.hopf_amplitude < opts.hopf_amplitude && !points.is_empty() {
+        let (a, a0) = (ctx.opts.hopf_amplitude, opts.hopf_amplitude);
+        format!("{reason} (first orbit at hopf_amplitude = {a:.0e}: Newton did not converge from {a0:.0e})")
+    } else {
+        reason
     };
     Ok(Branch {
         parameter: name.to_string(),
