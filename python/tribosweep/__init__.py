@@ -25,7 +25,7 @@ from ._codes import (
     labels,
 )
 from ._core import InvalidArgumentError, TribosweepError
-from ._curves import fold_curve, grazing_curve
+from ._curves import fold_curve, grazing_curve, stick_curve
 from ._frequency import describing_function, follow_cycle, hopf_load, linear_stability, periodic_orbit
 from ._hopf import (
     CRITICALITY_NAMES,
@@ -89,5 +89,6 @@ __all__ = [
     "relative_wear_rate",
     "simulate",
     "sliding_branch",
+    "stick_curve",
     "sweep",
 ]

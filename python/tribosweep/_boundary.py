@@ -1,4 +1,5 @@
-"""Stability boundaries over a normal load x arm length box, as curves: Hopf, fold of cycles, grazing.
+"""Stability boundaries over a normal load x arm length box, as curves: Hopf, fold of cycles, grazing,
+and (switch law) the onset of sticking.
 
 One Dataset with each kind of curve on its own dimension, the form a sweep stores them in and
 ``tribosweep boundary`` writes:
@@ -9,9 +10,11 @@ One Dataset with each kind of curve on its own dimension, the form a sweep store
   of the cycles born there (smooth, or a grazing where the branch turns back): where the saddle
   cycle around stable sliding ends;
 - ``grazing_*`` on ``grazing_point``: :func:`tribosweep.grazing_curve` from each Hopf curve, where
-  those cycles first touch contact loss (the pin first leaves the disk).
+  those cycles first touch contact loss (the pin first leaves the disk);
+- ``stick_*`` on ``stick_point`` (switch law only): :func:`tribosweep.stick_curve` from each Hopf
+  curve, where those cycles' slip first reaches the stick band (they gain a stick phase).
 
-The fold and grazing curves are computed slice by slice over the arm lengths that the Hopf curve
+The fold, grazing and stick curves are computed slice by slice over the arm lengths that the Hopf curve
 spans in the box (``slices`` values), each slice from its own Hopf point; a curve whose point
 leaves the load window between two slices ends at the last slice inside.
 """
@@ -34,17 +37,21 @@ HOPF_VARS: dict[str, str] = {
     "frequency": "hopf_frequency", "l1": "hopf_l1", "criticality": "hopf_criticality", "point_type": "hopf_point_type",
     "status": "hopf_status",
 }  # fmt: skip
-#: Variables of a fold or grazing curve stored on ``<kind>_point`` as ``<kind>_<name>``.
+#: Variables of a fold, grazing or stick curve stored on ``<kind>_point`` as ``<kind>_<name>``.
 CURVE_VARS: tuple[str, ...] = ("normal_load", "arm_length", "hopf_normal_load", "period", "A1", "min_gap",
-                               "stable", "point_type", "flags")  # fmt: skip
+                               "min_slip_velocity", "stable", "point_type", "flags")  # fmt: skip
 #: The kinds of curve, in drawing order.
-CURVE_KINDS: tuple[str, ...] = ("hopf", "fold", "grazing")
+CURVE_KINDS: tuple[str, ...] = ("hopf", "fold", "grazing", "stick")
+#: Kinds that need the switch friction law (the only one with a stick band).
+SWITCH_ONLY: tuple[str, ...] = ("stick",)
 _KEEP = ("units", "long_name", "flag_values", "flag_meanings", "flag_masks")
 _WHAT = {
     "fold": "first fold of the cycles born at the Hopf curve (smooth, or a grazing where the branch turns back): "
             "the saddle cycle around stable sliding ends there",
     "grazing": "first grazing of the cycles born at the Hopf curve: the orbit first touches contact loss (the pin "
                "first leaves the disk)",
+    "stick": "where the slip of the cycles born at the Hopf curve first reaches the stick band: they gain a stick "
+             "phase (the onset of stick-slip)",
 }  # fmt: skip
 
 
@@ -83,7 +90,14 @@ def _inside_ends(arms: np.ndarray, loads: np.ndarray, x_lo: float, x_hi: float) 
     return ends[0], ends[1]
 
 
-def _curve_kinds(curves) -> tuple[str, ...]:
+def default_kinds(model: SliderModel) -> tuple[str, ...]:
+    """Every kind of curve the model can have: the stick curve under the switch law only."""
+    return tuple(k for k in CURVE_KINDS if k not in SWITCH_ONLY or model.friction_law == "switch")
+
+
+def _curve_kinds(curves, model: SliderModel) -> tuple[str, ...]:
+    if curves is None:
+        return default_kinds(model)
     if isinstance(curves, str):
         curves = (curves,)
     try:
@@ -93,6 +107,9 @@ def _curve_kinds(curves) -> tuple[str, ...]:
     bad = [k for k in kinds if k not in CURVE_KINDS]
     if bad or not kinds:
         raise ValueError(f"curves = {curves!r} is not valid: must be a non-empty subset of {CURVE_KINDS}")
+    if model.friction_law != "switch" and (need := [k for k in kinds if k in SWITCH_ONLY]):
+        raise ValueError(f"curves = {curves!r}: {need[0]!r} needs friction_law='switch' (only the switch law has a "
+                         f"stick band), and model.friction_law = {model.friction_law!r}")  # fmt: skip
     return tuple(k for k in CURVE_KINDS if k in kinds)
 
 
@@ -108,11 +125,11 @@ def boundary_curves(
     normal_load: tuple[float, float] = (10.0, 150.0),
     arm_length: tuple[float, float] = (0.05, 0.127),
     *,
-    curves=CURVE_KINDS,
+    curves=None,
     slices: int = 12,
     threads: int | None = None,
 ) -> xr.Dataset:
-    """The Hopf, fold-of-cycles and grazing curves crossing a normal load x arm length box.
+    """The Hopf, fold-of-cycles, grazing and (switch law) stick curves crossing a normal load x arm length box.
 
     Parameters
     ----------
@@ -120,28 +137,30 @@ def boundary_curves(
         Everything but the load and the arm length; its natural frequencies are those at the seed
         arm length 0.072 m (as in :func:`apparatus_model` and :func:`sweep`). The contact law
         matters for the fold (a unilateral branch turns back at grazing); the grazing curve is
-        followed with the bilateral law, on which the grazing orbit is the same.
+        followed with the bilateral law, on which the grazing orbit is the same. The stick curve
+        needs ``friction_law="switch"``.
     normal_load, arm_length : (float, float)
         The box [N], [m]: ``0 < low < high``.
-    curves : sequence of str
-        Which curves: any of ``"hopf"``, ``"fold"``, ``"grazing"`` (the fold and grazing curves are
-        started from the Hopf curves, which are computed in any case).
+    curves : sequence of str or None
+        Which curves: any of ``"hopf"``, ``"fold"``, ``"grazing"``, ``"stick"`` (the others are
+        started from the Hopf curves, which are computed in any case). None: all that the model
+        can have (``"stick"`` under the switch law only).
     slices : int
-        Arm lengths per Hopf curve at which the fold and grazing points are located (>= 2), evenly
-        over the arm lengths the Hopf curve spans in the box.
+        Arm lengths per Hopf curve at which the fold, grazing and stick points are located (>= 2),
+        evenly over the arm lengths the Hopf curve spans in the box.
     threads : int or None
-        Threads for the continuations (None: one per core). The fold and grazing curves run at
-        once on half each, and each curve's slices in parallel; the curves are the same bit for
-        bit whatever the count.
+        Threads for the continuations (None: one per core). The fold, grazing and stick curves run
+        at once, each on its share of the threads (at least one), and each curve's slices in
+        parallel; the curves are the same bit for bit whatever the count.
 
     Returns
     -------
     xarray.Dataset
-        ``hopf_*`` on ``hopf_point`` (``HOPF_VARS``); ``fold_*`` on ``fold_point`` and
-        ``grazing_*`` on ``grazing_point`` (``CURVE_VARS``, with ``<kind>_curve_index``: the Hopf
-        curve it starts from). A curve kind with no point in the box has no variables. Attributes
-        ``hopf_curves``, ``fold_curves``, ``grazing_curves`` say what was found (or why not), and
-        ``<kind>_curve_call`` the exact call that reproduces each fold and grazing curve.
+        ``hopf_*`` on ``hopf_point`` (``HOPF_VARS``); ``fold_*`` on ``fold_point``,
+        ``grazing_*`` on ``grazing_point`` and ``stick_*`` on ``stick_point`` (``CURVE_VARS``, with
+        ``<kind>_curve_index``: the Hopf curve it starts from). A curve kind with no point in the
+        box has no variables. Attributes ``hopf_curves``, ``<kind>_curves`` say what was found (or
+        why not), and ``<kind>_curve_call`` the exact call that reproduces each curve.
 
     Raises
     ------
@@ -160,7 +179,7 @@ def boundary_curves(
         raise ValueError(f"model = {model!r} must be a tribosweep.SliderModel")
     x_lo, x_hi = _check_box("normal_load", normal_load)
     y_lo, y_hi = _check_box("arm_length", arm_length)
-    kinds = _curve_kinds(curves)
+    kinds = _curve_kinds(curves, model)
     if isinstance(slices, bool) or not isinstance(slices, (int, np.integer)) or not 2 <= slices <= 1000:
         raise ValueError(f"slices = {slices!r} is out of range: must be an integer in [2, 1000]")
     threads = _checks.threads(threads)
@@ -176,13 +195,15 @@ def boundary_curves(
         out.attrs[f"hopf_curve_{k}"] = hopf.attrs[k]
     todo = [k for k in kinds if k != "hopf"]
     workers = _curves._workers(threads)
-    if workers >= 2 and len(todo) == 2:
-        # The two kinds at once, each on half the threads: independent, so the same bits.
-        # Signals reach the main thread only: on Ctrl-C (or an error) here, the other kind's thread
-        # stops at its next branch instead of running its curve to the end.
+    if workers >= 2 and len(todo) >= 2:
+        # The kinds at once, each on its share of the threads (at least one; the odd ones to the
+        # first kinds): independent, so the same bits. Signals reach the main thread only: on
+        # Ctrl-C (or an error) here, the other kinds' threads stop at their next branch instead of
+        # running their curves to the end.
         stop = threading.Event()
-        with concurrent.futures.ThreadPoolExecutor(max_workers=2) as pool:
-            share = (workers - workers // 2, workers // 2)  # an odd thread to the first kind
+        with concurrent.futures.ThreadPoolExecutor(max_workers=len(todo)) as pool:
+            q, r = divmod(workers, len(todo))
+            share = [max(1, q + (i < r)) for i in range(len(todo))]
             runs = [pool.submit(_kind_curves, k, model, hopf, (x_lo, x_hi), (y_lo, y_hi), slices, w, stop)
                     for k, w in zip(todo, share)]  # fmt: skip
             try:
@@ -212,7 +233,7 @@ def _kind_curves(kind: str, model, hopf, box_x, box_y, slices: int, threads: int
     ``stop`` set: ends at the next branch (``_curves.Stopped``)."""
     (x_lo, x_hi), (y_lo, y_hi) = box_x, box_y
     parts, notes, calls, attrs = [], [], [], {}
-    func = _curves.fold_curve if kind == "fold" else _curves.grazing_curve
+    func = {"fold": _curves.fold_curve, "grazing": _curves.grazing_curve, "stick": _curves.stick_curve}[kind]
     for c in range(int(hopf.sizes.get("hopf_curve", 0))):
         on = hopf.curve.values == c
         arms, loads = hopf.arm_length.values[on], hopf.normal_load.values[on]
@@ -224,7 +245,7 @@ def _kind_curves(kind: str, model, hopf, box_x, box_y, slices: int, threads: int
         start = float(loads[np.argmin(arms)])
         calls.append(f"tribosweep.{func.__name__}(model, x=('normal_load', {x_lo!r}, {x_hi!r}), "
                      f"y=('arm_length', {a!r}, {b!r}), n={int(slices)}, from_hopf={start!r})")  # fmt: skip
-        # func's own work (`fold_curve` or `grazing_curve`), with the stop event.
+        # func's own work (`fold_curve`, `grazing_curve` or `stick_curve`), with the stop event.
         ds = _curves._curve(kind, model, ("normal_load", x_lo, x_hi), ("arm_length", a, b), int(slices), None, start,
                             None, None, {}, threads, stop)  # fmt: skip
         notes.append(f"from Hopf curve {c}: {ds.attrs['reason']}")

@@ -2,8 +2,8 @@
 
 ``tribosweep branch`` follows a branch of periodic orbits in one parameter from a Hopf point of
 steady sliding and writes the branch Dataset (CF netCDF) and its bifurcation diagram (PNG).
-``tribosweep boundary`` traces the Hopf, fold-of-cycles and grazing curves over a normal load x arm
-length box and writes them (CF netCDF) with a map of them (PNG). Bad input raises ``ValueError``
+``tribosweep boundary`` traces the Hopf, fold-of-cycles, grazing and (switch law) stick curves over a
+normal load x arm length box and writes them (CF netCDF) with a map of them (PNG). Bad input raises ``ValueError``
 (one line naming the argument, its value and the valid range), which the CLI turns into exit status 2.
 """
 
@@ -365,11 +365,13 @@ def add_boundary_arguments(p: argparse.ArgumentParser) -> None:
     box.add_argument("--mu", type=lambda t: _number(t, "--mu"), metavar="MU", help="friction coefficient [1]")
     add_model_arguments(p, contact=True)
     p.add_argument("--curves", type=_curves_arg, metavar="LIST",
-                   help="which curves, comma-separated: hopf,fold,grazing (default all three)")  # fmt: skip
+                   help="which curves, comma-separated: hopf,fold,grazing,stick (default all the model can "
+                        "have: stick under --friction-law switch only)")  # fmt: skip
     p.add_argument("--slices", type=_slices_arg, metavar="N",
-                   help="arm lengths per Hopf curve where the fold and grazing points are located (default 12)")
+                   help="arm lengths per Hopf curve where the fold, grazing and stick points are located "
+                        "(default 12)")
     p.add_argument("--threads", type=_threads_arg, metavar="N",
-                   help="threads for the fold and grazing continuations (default: all cores; the curves are the "
+                   help="threads for the fold, grazing and stick continuations (default: all cores; the curves are the "
                    "same on any number)")  # fmt: skip
     p.add_argument("-o", "--output", metavar="FILE", help="netCDF output file (default boundary.nc)")
     p.add_argument("--plot", metavar="PNG", help="map of the curves (default: the output's name with .png)")
@@ -446,7 +448,7 @@ def growth_grid(model, normal_load: tuple[float, float], arm_length: tuple[float
 
 
 def run_boundary(args: argparse.Namespace) -> int:
-    """``tribosweep boundary``: the Hopf, fold and grazing curves of a normal load x arm length box."""
+    """``tribosweep boundary``: the Hopf, fold, grazing and stick curves of a normal load x arm length box."""
     from ._boundary import CURVE_KINDS, boundary_curves
     from .plot import boundary_map
 
@@ -456,7 +458,7 @@ def run_boundary(args: argparse.Namespace) -> int:
     for name, (lo, _) in (("--normal-load", loads), ("--arm-length", arms)):
         if not lo > 0:
             raise ValueError(f"{name} = {lo:g}:... is out of range: must be > 0")
-    curves = args.curves if args.curves is not None else cfg.get("curves", list(CURVE_KINDS))
+    curves = args.curves if args.curves is not None else cfg.get("curves")
     slices = args.slices if args.slices is not None else cfg.get("slices", 12)
     model, _ = _model(args, cfg, ("sliding_speed", "mu"))
     output = _pick(args, cfg, "output", "boundary.nc")

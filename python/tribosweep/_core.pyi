@@ -220,7 +220,7 @@ def special_curve(
     values: dict[str, float],
     contact: _ContactName,
     friction_law: _FrictionLawName,
-    kind: Literal["fold", "grazing"],
+    kind: Literal["fold", "grazing", "stick"],
     x: str,
     x_value: float,
     x_lo: float,

@@ -1,4 +1,5 @@
-"""Two-parameter curves of special points of periodic orbits: folds of cycles and grazing.
+"""Two-parameter curves of special points of periodic orbits: folds of cycles, grazing, and the
+onset of sticking (the switch law's cycles first reaching the stick band).
 
 Slice by slice: at each value of the second parameter the one-parameter branch
 (:mod:`tribosweep._branch`) locates the special point in the first. Model fields are sliced in the
@@ -70,7 +71,12 @@ def _curve(kind: str, model, x, y, n, orbit, from_hopf, start, direction, option
         raise ValueError(f"n = {n!r} is out of range: must be an integer in [2, 10000]")
     if (from_hopf is None) == (orbit is None):
         raise ValueError("give exactly one of from_hopf and orbit")
+    if kind == "stick" and model.friction_law != "switch":
+        raise ValueError(f"model.friction_law = {model.friction_law!r}: a stick curve needs friction_law='switch' "
+                         "(only the switch law has a stick band)")  # fmt: skip
     opts = _options(options)
+    if model.friction_law == "switch":
+        opts.setdefault("max_points", SWITCH_MAX_POINTS)
     if yn == "arm_length":
         if orbit is not None:
             return _arm_orbit_curve(kind, model, (xn, x_lo, x_hi), (y_lo, y_hi), n, orbit, start, direction, opts)
@@ -120,6 +126,14 @@ def _curve(kind: str, model, x, y, n, orbit, from_hopf, start, direction, option
     ds[yn] = (("curve_point",), merged["y"], {"units": PARAM_UNITS[yn], "long_name": f"{yn}: {PARAM_LONG_NAMES[yn]}"})
     return ds
 
+
+#: Under the switch law a curve's branches end at this many points unless ``max_points`` is given
+#: (the branch's own default is 1000). On the way to sticking the cycle's motion along the friction direction
+#: grows to about ``V / omega`` (0.2 m/s at 400 rad/s: 5e-4 m, some 50 times the static
+#: compression that scales the state in the arclength), so the steps sit at ``ds_max``: at 12.7 cm
+#: arm and 0.2 m/s the branch from the Hopf point (26.8 N) was at 17.3 N after 1000 points, with
+#: the smallest sliding velocity down to 0.013 of 0.2 m/s (0.65 s).
+SWITCH_MAX_POINTS: int = 5000
 
 #: Bisections of the arm length where a curve leaves the window between two slices (see :func:`_arm_curve`).
 _ARM_END_BISECTIONS: int = 4
@@ -548,3 +562,28 @@ def grazing_curve(model: SliderModel, x, y, *, n: int = 11, orbit=None, from_hop
     Slice by slice as :func:`fold_curve` (see there), stopping at the first grazing point in ``x``.
     """
     return _curve("grazing", model, x, y, n, orbit, from_hopf, start, direction, options, threads)
+
+
+def stick_curve(model: SliderModel, x, y, *, n: int = 11, orbit=None, from_hopf=None, start=None, direction=None,
+                threads: int | None = None, **options) -> xr.Dataset:  # fmt: skip
+    """The onset of stick-slip in two parameters: where the cycle's slip first reaches the stick band.
+
+    Switch law only (``friction_law="switch"``). Slice by slice as :func:`fold_curve` (see there),
+    stopping at the first stick point in ``x``: the branch's ``min_slip_velocity`` (the smallest
+    ``|v_r|`` in sliding contact over the cycle) falls to the band's half-width ``stick_band``.
+    Past it the cycle gains a stick phase, a sliding bifurcation. The stick phase is of finite
+    length at once (the force that holds the touching cycle in the band is the kinetic friction,
+    below the static bound), so the stick-slip cycle past it is no small change of the pure-slip
+    one, and continuation ends there: the curve bounds the pure-slip vibration of the family born
+    at the Hopf point. Without
+    ``max_points`` in ``options`` the slices' branches run to :data:`SWITCH_MAX_POINTS` points.
+
+    Examples
+    --------
+    >>> import tribosweep as ts
+    >>> m = ts.SliderModel(contact="unilateral", friction_law="switch", mu_static=0.3, sliding_speed=0.2)
+    >>> ds = ts.stick_curve(m, x=("normal_load", 10, 150), y=("arm_length", 0.07, 0.09), n=2, from_hopf=True)
+    >>> ds.sizes["curve_point"], [round(float(v), 2) for v in ds.normal_load]
+    (2, [28.85, 22.54])
+    """
+    return _curve("stick", model, x, y, n, orbit, from_hopf, start, direction, options, threads)

@@ -126,6 +126,8 @@ _CURVE_STYLE: dict[str, tuple[dict, str]] = {
                 "grazing: the saddle cycle\nfirst leaves the disk"),
     "fold": ({"color": "k", "lw": 1.1, "ls": (0, (3, 2)), "marker": "s", "ms": 2.5},
              "fold of cycles: the\nsaddle cycle ends"),
+    "stick": ({"color": "#6a3d9a", "lw": 1.6, "ls": "-.", "marker": "^", "ms": 3.5},
+              "stick: the cycle from the\nHopf curve first sticks"),
 }  # fmt: skip
 
 
@@ -139,7 +141,7 @@ def _curve_line(kind: str) -> dict:
 
 
 def _draw_curves(ax, ds: xr.Dataset, x: str, y: str) -> set[str]:
-    """Draw the stored fold and grazing curves (one polyline per Hopf curve they start from); return legend keys."""
+    """Draw the stored fold, grazing and stick curves (one polyline per Hopf curve they start from); return legend keys."""
     keys = set()
     for kind in _CURVE_STYLE:
         if f"{kind}_{x}" not in ds or f"{kind}_{y}" not in ds:
@@ -154,7 +156,7 @@ def _draw_curves(ax, ds: xr.Dataset, x: str, y: str) -> set[str]:
 
 
 def _curve_handles(present: set[str]) -> list:
-    """Legend entries of the fold and grazing curves drawn."""
+    """Legend entries of the fold, grazing and stick curves drawn."""
     from matplotlib.lines import Line2D
 
     return [Line2D([], [], label=label, **_curve_line(kind))
@@ -468,7 +470,7 @@ def boundary_map(ds: xr.Dataset, *, growth: xr.DataArray | None = None, title: s
     Returns
     -------
     matplotlib.figure.Figure
-        The Hopf curves (by criticality), the fold and grazing curves, the contact law's
+        The Hopf curves (by criticality), the fold, grazing and stick curves, the contact law's
         identified load range, and a legend of what is drawn.
     """
     Figure, Patch = _matplotlib()

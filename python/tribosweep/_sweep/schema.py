@@ -364,7 +364,8 @@ def boundary_vars(plan: Plan) -> tuple[dict, dict]:
     unilateral contact law and a strategy that computes cycles (not ``linear``, which maps
     eigenvalues only), the fold and grazing curves of the cycles born there (``fold_*`` on
     ``fold_point``, ``grazing_*`` on ``grazing_point``); for the bilateral law, the grazing curve
-    only (past it its cycles leave the law's validity). Returns the variables and attributes (what
+    only (past it its cycles leave the law's validity); under the switch friction law also the
+    stick curve (``stick_*`` on ``stick_point``), where those cycles first reach the stick band. Returns the variables and attributes (what
     was found, the continuation's tolerances, the calls that reproduce each curve, or why no curve
     is stored); a failure is recorded, never raised.
     """
@@ -382,6 +383,8 @@ def boundary_vars(plan: Plan) -> tuple[dict, dict]:
     if plan.strategy == "linear":
         reason = "not computed: strategy linear maps eigenvalues only (tribosweep boundary computes them)"
         skipped = {"fold_curves": reason, "grazing_curves": reason}
+        if model.friction_law == "switch":
+            skipped["stick_curves"] = reason
     elif model.contact != "unilateral":
         # The grazing curve is where the bilateral law's cycles open the contact and leave its
         # validity: stored. A fold past it would be a fold of orbits outside the law's validity.
@@ -390,6 +393,9 @@ def boundary_vars(plan: Plan) -> tuple[dict, dict]:
                                   "contact, outside the law's validity (tribosweep boundary computes them)"}
     else:
         curves += ["fold", "grazing"]
+    if plan.strategy != "linear" and model.friction_law == "switch":
+        # Where the cycles born at the Hopf curve first reach the stick band: the onset of stick-slip.
+        curves += ["stick"]
     box = {"normal_load": (float(axes["normal_load"][0]), float(axes["normal_load"][-1])),
            "arm_length": (float(axes["arm_length"][0]), float(axes["arm_length"][-1]))}  # fmt: skip
     try:

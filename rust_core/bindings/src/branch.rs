@@ -193,8 +193,8 @@ fn branch<'py>(
     Ok(d)
 }
 
-/// A two-parameter curve of folds (`kind = "fold"`, smooth or where a grazing turns the branch)
-/// or of grazing points (`"grazing"`), slice by slice over the values `ys` of `y` (see
+/// A two-parameter curve of folds (`kind = "fold"`, smooth or where a grazing turns the branch),
+/// of grazing points (`"grazing"`) or of the switch law's stick points (`"stick"`), slice by slice over the values `ys` of `y` (see
 /// `tribosweep_core::branch::curve`). Dict of arrays over curve points (`y` and the located
 /// branch points, `parameter` being `x`) plus `status`, `reason`, `n_flows`, `n_rhs`.
 #[pyfunction]
@@ -224,7 +224,8 @@ fn special_curve<'py>(
     let kind = match kind {
         "fold" => CurveKind::Fold,
         "grazing" => CurveKind::Grazing,
-        _ => return Err(err(format!("kind = {kind:?} is not valid: must be 'fold' or 'grazing'"))),
+        "stick" => CurveKind::Stick,
+        _ => return Err(err(format!("kind = {kind:?} is not valid: must be 'fold', 'grazing' or 'stick'"))),
     };
     let ys = ys.as_slice()?.to_vec();
     let (xn, yn) = (x.to_string(), y.to_string());

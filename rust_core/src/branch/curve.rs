@@ -1,4 +1,4 @@
-//! Two-parameter curves of folds of cycles and of grazing, slice by slice.
+//! Two-parameter curves of folds of cycles, of grazing and of the onset of sticking, slice by slice.
 //!
 //! For each value `y_j` of the second parameter the special point is located in the first
 //! parameter `x` by the one-parameter continuation itself ([`super::branch`] with `stop_at`), from
@@ -14,7 +14,7 @@
 //! there with its reason), and a slice costs a short branch.
 
 use super::{branch, Branch, BranchError, BranchOptions, BranchPoint, PointType, Start};
-use crate::model::Params;
+use crate::model::{FrictionLaw, Params};
 use crate::ode::Stats;
 use crate::status::Status;
 
@@ -25,6 +25,8 @@ pub enum CurveKind {
     Fold,
     /// Grazing (the orbit first touches contact loss).
     Grazing,
+    /// Switch law: the cycle's slip first reaches the stick band (the onset of stick-slip).
+    Stick,
 }
 
 impl CurveKind {
@@ -32,6 +34,7 @@ impl CurveKind {
         match self {
             CurveKind::Fold => PointType::Fold,
             CurveKind::Grazing => PointType::Grazing,
+            CurveKind::Stick => PointType::Stick,
         }
     }
 }
@@ -114,6 +117,12 @@ pub fn special_curve(
     if y == x {
         return Err(BranchError::Parameter(y.to_string(), "the two parameters must differ".into()));
     }
+    if kind == CurveKind::Stick && p.friction_law != FrictionLaw::Switch {
+        let law = p.friction_law;
+        return Err(BranchError::Kind(format!(
+            "kind = Stick needs friction_law = Switch, not {law:?}: only the switch law has a stick band"
+        )));
+    }
     let mut q = *p;
     q.set(y, y0)?;
     if kind == CurveKind::Grazing {
@@ -177,8 +186,14 @@ pub fn special_curve(
             let mut qb = q;
             qb.set(y, yb)?;
             let mut dir = if a.dp_ds >= 0.0 { 1.0 } else { -1.0 };
-            // An anchor already past the grazing point at the new y: head back to it.
-            if kind == CurveKind::Grazing && (end.min_gap > 0.0) != (a.min_gap > 0.0) {
+            // An anchor already past the grazing (stick) point at the new y: head back to it.
+            let band = q.stick_band;
+            let past = match kind {
+                CurveKind::Grazing => (end.min_gap > 0.0) != (a.min_gap > 0.0),
+                CurveKind::Stick => (end.min_slip_velocity < band) != (a.min_slip_velocity < band),
+                CurveKind::Fold => false,
+            };
+            if past {
                 dir = -dir;
             }
             let start = Start::Orbit { state0: end.state0, period: end.period, direction: dir };

@@ -1,0 +1,128 @@
+"""The onset of stick-slip as a boundary curve (switch law), and branches from Hopf points where
+the family of cycles bends hard.
+
+At 0.2 m/s with the Stribeck switch law (mu_static 0.3 down to mu = 0.215 at V) the cycles born
+at the Hopf curve grow as the load falls, until their slip first reaches the stick band: the stick
+curve. Its points are checked against an independent scipy integration of the switch law
+(:class:`tribosweep.bench.reference_switch.SwitchReference`) and against the one-parameter branch;
+the first orbits of a hard-bending branch against the Hopf normal form (``hopf_cycle_guess``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import xarray as xr
+
+import tribosweep as ts
+from tribosweep import _core, cli
+from tribosweep._boundary import default_kinds
+from tribosweep.bench.reference_switch import SwitchReference
+
+BASE = ts.SliderModel(contact="unilateral", friction_law="switch", mu_static=0.3, sliding_speed=0.2)
+X = ("normal_load", 10.0, 150.0)
+
+
+@pytest.fixture(scope="module")
+def curve():
+    return ts.stick_curve(BASE, x=X, y=("arm_length", 0.07, 0.09), n=2, from_hopf=True, threads=2)
+
+
+def test_a_hard_bending_branch_starts_from_its_hopf_point_at_a_smaller_amplitude():
+    """At 5 cm the branch bends so hard (0.025 N of load for A1 = 2.3e-8 m) that the first orbit
+    guessed at hopf_amplitude = 0.02 is out of Newton's reach (a step of 1.2 scaled units); the
+    start now tries a tenth of it. Its first orbits are the normal form's cycle: A1 against
+    ``hopf_cycle_guess`` differs by O(|p - p_H|) (the next term), so error / |p - p_H| is the
+    same at every point near the Hopf point (seen 6.5e-3 per N, from 1.6e-4 at 0.025 N)."""
+    m = ts.apparatus_model(84.46, 0.05, 0.2, base=BASE)
+    sb = ts.sliding_branch(m, X)
+    (hp,) = np.flatnonzero((sb.is_hopf.values == 1) & (sb.hopf_status.values == 0))
+    h = float(sb.hopf_normal_load[hp])
+    b = ts.branch(m, "normal_load", 10.0, from_hopf=h, stop_at="stick")
+    assert ts.STATUS_NAMES[int(b.status)] == "success"
+    assert "first orbit at hopf_amplitude = 2e-3: Newton did not converge from 2e-2" in b.attrs["reason"]
+    p, a1 = b.parameter.values, b.A1.values
+    slope = []
+    for j in (1, 4, 8, 16):
+        g = ts.hopf_cycle_guess(sb, float(p[j]), hopf=int(hp))
+        assert abs(g["period"] / float(b.period[j]) - 1) < 1e-8
+        slope.append(abs(g["amplitude"] / a1[j] - 1) / (h - p[j]))
+    assert 0 < h - p[1] < 0.05 and h - p[16] > 0.1
+    assert max(slope) / min(slope) < 1.05, slope
+    # The branch ends where its cycle reaches the stick band (at 34.78 N).
+    assert ts.BRANCH_POINT_TYPE_NAMES[int(b.point_type[-1])] == "stick" and 34.7 < float(p[-1]) < 34.9
+
+
+def test_stick_curve_points_are_where_scipy_sees_the_slip_touch_the_band(curve):
+    """Each point's orbit, integrated over its period by scipy (DOP853 at rtol 1e-12, the switch
+    law written from the equations; the pin stays on the disk, so the bilateral reference holds):
+    it closes (1e-11 of each component's range seen), and its sliding velocity comes down to the
+    band's half-width, 1e-6 m/s: the curve locates min_slip_velocity to 1e-2 of it (1.00004e-6
+    seen), and scipy's sampled minimum (4,001 samples a period: at most 1e-7 m/s above the true
+    one here, 4e-9 seen) agrees. The reference runs with half the band, so that its slip goes on
+    whichever side of the band's edge the location left the orbit (by 4e-11 m/s)."""
+    assert curve.sizes["curve_point"] == 2 and curve.attrs["reason"] == "2 of 2 arm lengths located their stick point"
+    assert curve.attrs["continuation_max_points"] == 5000
+    eta = BASE.stick_band
+    for i in range(2):
+        assert ts.BRANCH_POINT_TYPE_NAMES[int(curve.point_type[i])] == "stick"
+        assert abs(float(curve.min_slip_velocity[i]) / eta - 1) < 1e-2 and float(curve.min_gap[i]) > 0
+        m = ts.apparatus_model(float(curve.normal_load[i]), float(curve.arm_length[i]), 0.2, base=BASE)
+        y0, period = curve.state0.values[i], float(curve.period[i])
+        ref = SwitchReference(m.values() | {"stick_band": 0.5 * eta})
+        t = np.linspace(0.0, period, 4001)
+        z, w, arm = abs(m.static_point()[0]), m.omega_torsion, m.moment_arm
+        sizes = np.array([z, z * w, z, z * w, z / arm, z / arm * w])
+        y, switches = ref.solve(y0, period, t, rtol=1e-12, atol=1e-13 * sizes)
+        assert switches == []
+        scale = np.abs(y).max(axis=0)
+        assert (np.abs(y[-1] - y0) / scale < 1e-9).all(), np.abs(y[-1] - y0) / scale
+        v_r = m.sliding_speed - (y[:, 3] + m.torsion_sign * m.moment_arm * y[:, 5])
+        assert -1e-10 < v_r.min() - float(curve.min_slip_velocity[i]) < 1e-7, v_r.min()
+        # The hopf load the slice started from, and the stick point on the low side of it (the
+        # cycles are born unstable and grow as the load falls).
+        assert float(curve.normal_load[i]) < float(curve.hopf_normal_load[i]) and not bool(curve.stable[i])
+
+
+def test_a_stick_curve_point_is_the_one_parameter_branch_s_stick_point(curve):
+    arm = float(curve.arm_length[1])
+    m = BASE.replace(**ts.arm_frequencies(arm, BASE))
+    b = ts.branch(m, "normal_load", 10.0, from_hopf=float(curve.hopf_normal_load[1]), bounds=(10.0, 150.0),
+                  stop_at="stick", max_points=5000)  # fmt: skip
+    assert float(b.parameter[-1]) == float(curve.normal_load[1])
+
+
+def test_boundary_command_draws_the_stick_curve(tmp_path, capsys, saved_figures):
+    nc = tmp_path / "st.nc"
+    code = cli.main(["boundary", "--curves", "hopf,stick", "--friction-law", "switch", "--model", "mu_static=0.3",
+                     "--sliding-speed", "0.2", "--arm-length", "0.07:0.09", "--slices", "2", "--threads", "2", "-o",
+                     str(nc)])  # fmt: skip
+    out = capsys.readouterr()
+    assert code == 0, out.err
+    assert "stick: 2 stick point(s) in the box" in out.out
+    with xr.open_dataset(nc) as ds:
+        assert ds.stick_normal_load.dims == ("stick_point",) and ds.stick_normal_load.attrs["units"] == "N"
+        assert ds.stick_min_slip_velocity.attrs["units"] == "m s-1"
+        assert ds.attrs["stick_curve_call"].startswith("tribosweep.stick_curve(model, x=('normal_load', 10.0, 150.0)")
+        # The Hopf curve spans the whole arm window here: the same slices as the fixture's curve.
+        got = ds.stick_normal_load.values
+    ref = ts.stick_curve(BASE, x=X, y=("arm_length", 0.07, 0.09), n=2, from_hopf=True)
+    np.testing.assert_allclose(got, ref.normal_load.values, rtol=1e-12)
+    fig = saved_figures["st.png"]
+    texts = [t.get_text() for leg in fig.legends for t in leg.get_texts()]
+    assert "stick: the cycle from the\nHopf curve first sticks" in texts
+    (line,) = [ln for ln in fig.axes[0].lines if ln.get_marker() == "^"]
+    np.testing.assert_array_equal(line.get_xdata(), got)
+
+
+def test_stick_curves_need_the_switch_law():
+    assert default_kinds(BASE) == ("hopf", "fold", "grazing", "stick")
+    assert default_kinds(BASE.replace(friction_law="coulomb")) == ("hopf", "fold", "grazing")
+    with pytest.raises(ValueError, match=r"model.friction_law = 'coulomb': a stick curve needs friction_law='switch'"):
+        ts.stick_curve(BASE.replace(friction_law="coulomb"), x=X, y=("arm_length", 0.07, 0.09), from_hopf=True)
+    with pytest.raises(ValueError, match=r"'stick' needs friction_law='switch'.*model.friction_law = 'constant'"):
+        ts.boundary_curves(ts.SliderModel(), curves=("hopf", "stick"))
+    with pytest.raises(ValueError, match="kind = Stick needs friction_law = Switch, not Coulomb"):
+        _core.special_curve(BASE.values(), "unilateral", "coulomb", "stick", "normal_load", 30.0, 10.0, 150.0,
+                            "mu", np.array([0.215, 0.22]), hopf_omega=400.0)  # fmt: skip
+    assert cli.main(["boundary", "--curves", "hopf,stick"]) == 2
