@@ -31,9 +31,10 @@ def curve():
 def test_a_hard_bending_branch_starts_from_its_hopf_point_at_a_smaller_amplitude():
     """At 5 cm the branch bends so hard (0.025 N of load for A1 = 2.3e-8 m) that the first orbit
     guessed at hopf_amplitude = 0.02 is out of Newton's reach (a step of 1.2 scaled units); the
-    start now tries a tenth of it. Its first orbits are the normal form's cycle: A1 against
-    ``hopf_cycle_guess`` differs by O(|p - p_H|) (the next term), so error / |p - p_H| is the
-    same at every point near the Hopf point (seen 6.5e-3 per N, from 1.6e-4 at 0.025 N)."""
+    start now tries a tenth of it. Its first orbits are the normal form's cycle: against
+    ``hopf_cycle_guess`` A1 differs by O(|p - p_H|) (the next term) and the period by
+    O(|p - p_H|^2), so error / |p - p_H| and error / |p - p_H|^2 are the same at every point near
+    the Hopf point (seen 6.53e-3 and 3.8e-8 per N^2, to 2e-3, over 0.16-1.1 N from it)."""
     m = ts.apparatus_model(84.46, 0.05, 0.2, base=BASE)
     sb = ts.sliding_branch(m, X)
     (hp,) = np.flatnonzero((sb.is_hopf.values == 1) & (sb.hopf_status.values == 0))
@@ -42,13 +43,14 @@ def test_a_hard_bending_branch_starts_from_its_hopf_point_at_a_smaller_amplitude
     assert ts.STATUS_NAMES[int(b.status)] == "success"
     assert "first orbit at hopf_amplitude = 2e-3: Newton did not converge from 2e-2" in b.attrs["reason"]
     p, a1 = b.parameter.values, b.A1.values
-    slope = []
-    for j in (1, 4, 8, 16):
+    slope, curve = [], []
+    for j in (2, 4, 6, 8):
         g = ts.hopf_cycle_guess(sb, float(p[j]), hopf=int(hp))
-        assert abs(g["period"] / float(b.period[j]) - 1) < 1e-8
         slope.append(abs(g["amplitude"] / a1[j] - 1) / (h - p[j]))
-    assert 0 < h - p[1] < 0.05 and h - p[16] > 0.1
+        curve.append(abs(g["period"] / float(b.period[j]) - 1) / (h - p[j]) ** 2)
+    assert 0 < h - p[1] < 0.05 and 0.1 < h - p[2] and h - p[8] > 0.5
     assert max(slope) / min(slope) < 1.05, slope
+    assert max(curve) / min(curve) < 1.1, curve
     # The branch ends where its cycle reaches the stick band (at 34.78 N).
     assert ts.BRANCH_POINT_TYPE_NAMES[int(b.point_type[-1])] == "stick" and 34.7 < float(p[-1]) < 34.9
 
@@ -62,7 +64,6 @@ def test_stick_curve_points_are_where_scipy_sees_the_slip_touch_the_band(curve):
     one here, 4e-9 seen) agrees. The reference runs with half the band, so that its slip goes on
     whichever side of the band's edge the location left the orbit (by 4e-11 m/s)."""
     assert curve.sizes["curve_point"] == 2 and curve.attrs["reason"] == "2 of 2 arm lengths located their stick point"
-    assert curve.attrs["continuation_max_points"] == 5000
     eta = BASE.stick_band
     for i in range(2):
         assert ts.BRANCH_POINT_TYPE_NAMES[int(curve.point_type[i])] == "stick"
@@ -88,7 +89,7 @@ def test_a_stick_curve_point_is_the_one_parameter_branch_s_stick_point(curve):
     arm = float(curve.arm_length[1])
     m = BASE.replace(**ts.arm_frequencies(arm, BASE))
     b = ts.branch(m, "normal_load", 10.0, from_hopf=float(curve.hopf_normal_load[1]), bounds=(10.0, 150.0),
-                  stop_at="stick", max_points=5000)  # fmt: skip
+                  stop_at="stick")  # fmt: skip
     assert float(b.parameter[-1]) == float(curve.normal_load[1])
 
 
@@ -126,3 +127,20 @@ def test_stick_curves_need_the_switch_law():
         _core.special_curve(BASE.values(), "unilateral", "coulomb", "stick", "normal_load", 30.0, 10.0, 150.0,
                             "mu", np.array([0.215, 0.22]), hopf_omega=400.0)  # fmt: skip
     assert cli.main(["boundary", "--curves", "hopf,stick"]) == 2
+
+
+def test_near_the_stick_point_no_orbit_flow_creeps_along_zero_slip():
+    """Newton's trial orbits near the stick point dip their slip through zero. On the law's own
+    field the force reverses there, pushes v_r back, and the flow crept along v_r = 0 (a Filippov
+    sliding motion, two steps in three rejected) to its budget of 50,000 steps: at 7.1 cm, 8 such
+    flows made 90 % of the branch's 5.4M right-hand sides (44,405 per flow). A slip segment now
+    flows on its direction's field continued past zero (``Slider::with_slip_sign``) and ends where
+    its slip reaches zero, also inside a step (seen 1,057 per flow; an orbit period takes about
+    100 steps of 12 stages with its variational equations at rtol 1e-11 on the stick-slip scale)."""
+    m = BASE.replace(**ts.arm_frequencies(0.071, BASE))
+    sb = ts.sliding_branch(m, X)
+    (hp,) = np.flatnonzero((sb.is_hopf.values == 1) & (sb.hopf_status.values == 0))
+    b = ts.branch(m, "normal_load", 10.0, from_hopf=float(sb.hopf_normal_load[hp]), bounds=(10.0, 150.0),
+                  stop_at="stick")  # fmt: skip
+    assert ts.BRANCH_POINT_TYPE_NAMES[int(b.point_type[-1])] == "stick" and 28.2 < float(b.parameter[-1]) < 28.4
+    assert b.attrs["n_rhs"] / b.attrs["n_flows"] < 3000, (b.attrs["n_rhs"], b.attrs["n_flows"])

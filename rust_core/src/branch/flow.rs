@@ -58,6 +58,16 @@ impl Model {
         (self.plus.rhs(x, mode) - self.minus.rhs(x, mode)) * self.inv_dp
     }
 
+    /// The three sliders with the switch law's slip sign fixed ([`Slider::with_slip_sign`]).
+    pub fn with_slip_sign(&self, sign: f64) -> Model {
+        Model {
+            s: self.s.with_slip_sign(sign),
+            plus: self.plus.with_slip_sign(sign),
+            minus: self.minus.with_slip_sign(sign),
+            inv_dp: self.inv_dp,
+        }
+    }
+
     /// `dh/dp` of event `index` at `x`.
     pub fn dhdp(&self, x: &State, mode: ContactMode, index: usize) -> f64 {
         let (mut gp, mut gm) = ([0.0; MAX_EVENTS], [0.0; MAX_EVENTS]);
@@ -323,6 +333,12 @@ impl SegObs<'_> {
     fn extreme(&mut self, y: &Aug, t: f64, which: usize, up: bool) {
         let x = state_of(y);
         if which == 2 {
+            // A minimum of the slip inside a step that reaches zero: the slip force reverses
+            // there, though both step ends slip the same way (the flow's field is continued past
+            // zero, `Slider::with_slip_sign`).
+            if self.slip_sign != 0.0 && self.s.slip_velocity(&x) * self.slip_sign <= 0.0 {
+                self.slip_reversed = true;
+            }
             self.slip_at(&x);
             return;
         }
@@ -399,7 +415,7 @@ impl Observer<48, ContactMode> for SegObs<'_> {
         // A slip segment whose sliding velocity reaches zero has left its mode: the slip force
         // `mu N sign(v_r)` reverses there and a fixed-mode flow chatters across it in ever smaller
         // steps (one continuation flow took millions); the orbit has gained a stick phase.
-        if self.slip_sign != 0.0 && vr1 * self.slip_sign <= 0.0 {
+        if self.slip_reversed || (self.slip_sign != 0.0 && vr1 * self.slip_sign <= 0.0) {
             self.slip_reversed = true;
             return Control::Stop;
         }
@@ -452,6 +468,14 @@ pub(crate) fn segment(
     let (t_off, dt, n) = samples.unwrap_or((0.0, 0.0, 0));
     let slip = m.s.p.friction_law == FrictionLaw::Switch && mode == ContactMode::Contact;
     let slip_sign = if slip { m.s.slip_velocity(y0).signum() } else { 0.0 };
+    // The slip field of the segment's direction, continued past v_r = 0 (`with_slip_sign`).
+    let signed;
+    let m = if slip {
+        signed = m.with_slip_sign(slip_sign);
+        &signed
+    } else {
+        m
+    };
     let mut obs = SegObs { s: &m.s, mode, t_off, dt, n, z, w, diverged: false, slip_sign, slip_reversed: false };
     if tau == 0.0 {
         return Ok(Segment { y: *y0, phi: Jacobian::identity(), psi: State::zeros(), watch: obs.w });

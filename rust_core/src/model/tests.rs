@@ -181,6 +181,36 @@ fn switch_modes_and_slip_friction() {
 }
 
 #[test]
+fn switch_slip_field_of_one_direction_is_the_law_on_its_side_and_smooth_across_zero() {
+    let s = switch_slider();
+    for sign in [1.0, -1.0] {
+        let f = s.with_slip_sign(sign);
+        // On its own side, the law's field and Jacobian bit for bit.
+        for v in [3e-3, 1e-7] {
+            let y = state_with_slip(&s, sign * v, 2e-6, 1e-3);
+            assert_eq!(f.rhs(&y, ContactMode::Contact), s.rhs(&y, ContactMode::Contact), "v = {v}");
+            assert_eq!(f.jacobian(&y, ContactMode::Contact), s.jacobian(&y, ContactMode::Contact));
+        }
+        // Across zero (+-1e-9 m/s): the law's force jumps by 2 mu_s N; the continued one has no jump, and its
+        // Jacobian is the central difference of its field on both sides (analytic, 1e-6 relative).
+        let force = |sl: &Slider, v: f64| sl.forces(&state_with_slip(&s, v, 0.0, 0.0), ContactMode::Contact).friction;
+        let h = 1e-9;
+        let jump = |sl: &Slider| (force(sl, h) - force(sl, -h)).abs();
+        let normal = s.forces(&state_with_slip(&s, h, 0.0, 0.0), ContactMode::Contact).normal;
+        assert!(close(jump(&s), 2.0 * s.p.mu_static * normal, 1e-6), "{} {normal}", jump(&s));
+        assert!(jump(&f) < 1e-6 * jump(&s), "{}", jump(&f)); // O(h): the slope times 2h
+        for v in [-2e-4, 2e-4] {
+            let y = state_with_slip(&s, sign * v, 0.0, 0.0);
+            let j = f.jacobian(&y, ContactMode::Contact);
+            let mut dy = State::zeros();
+            dy[idx::XD] = 1e-7;
+            let fd = (f.rhs(&(y + dy), ContactMode::Contact) - f.rhs(&(y - dy), ContactMode::Contact)) / 2e-7;
+            assert!(close(fd[idx::XD], j[(idx::XD, idx::XD)], 1e-6), "{} {}", fd[idx::XD], j[(idx::XD, idx::XD)]);
+        }
+    }
+}
+
+#[test]
 fn switch_events_fire_at_the_band_edges() {
     use crate::ode::{integrate, Control, Method, Observer, Options};
     // Free stick-slip from a pre-loaded spring: record every event with its v_r and modes.
