@@ -137,6 +137,9 @@ def _curve_line(kind: str) -> dict:
     style = dict(_CURVE_STYLE[kind][0])
     if kind == "grazing":
         style["path_effects"] = [patheffects.Stroke(linewidth=4.0, foreground="k"), patheffects.Normal()]
+    elif kind == "stick":
+        # A white halo: the line crosses the regime map's stick-slip cells, of a similar hue.
+        style["path_effects"] = [patheffects.Stroke(linewidth=3.4, foreground="white"), patheffects.Normal()]
     return style
 
 
