@@ -127,6 +127,8 @@ def test_stick_curves_need_the_switch_law():
         _core.special_curve(BASE.values(), "unilateral", "coulomb", "stick", "normal_load", 30.0, 10.0, 150.0,
                             "mu", np.array([0.215, 0.22]), hopf_omega=400.0)  # fmt: skip
     assert cli.main(["boundary", "--curves", "hopf,stick"]) == 2
+    with pytest.raises(ValueError, match=r"stop_at = 'stick' needs friction_law='switch'.*= 'constant'"):
+        ts.branch(ts.SliderModel(), "normal_load", 150.0, from_hopf=True, stop_at="stick")
 
 
 def test_near_the_stick_point_no_orbit_flow_creeps_along_zero_slip():
@@ -144,3 +146,25 @@ def test_near_the_stick_point_no_orbit_flow_creeps_along_zero_slip():
                   stop_at="stick")  # fmt: skip
     assert ts.BRANCH_POINT_TYPE_NAMES[int(b.point_type[-1])] == "stick" and 28.2 < float(b.parameter[-1]) < 28.4
     assert b.attrs["n_rhs"] / b.attrs["n_flows"] < 3000, (b.attrs["n_rhs"], b.attrs["n_flows"])
+
+
+def test_a_switch_law_load_arm_sweep_stores_its_stick_curve(tmp_path):
+    """A normal load x arm length sweep under the switch law stores the stick curve with the Hopf,
+    fold and grazing curves (``stick_*`` on ``stick_point``), as its recorded call computes it;
+    under the tanh law it has none and says nothing of one."""
+    path = tmp_path / "sw.nc"
+    m = BASE.replace(sliding_speed=0.46)  # the sweep's own axis sets the speed
+    ts.sweep(m, normal_load=[10.0, 150.0], arm_length=[0.07, 0.09], sliding_speed=[0.2], census=False, progress=False,
+             threads=2, output=path).close()  # fmt: skip
+    with xr.open_dataset(path) as ds:
+        assert ds.stick_normal_load.dims == ("stick_point",) and ds.sizes["stick_point"] == 12
+        call = ds.attrs["stick_curve_call"]
+        assert call.startswith("tribosweep.stick_curve(model, x=('normal_load', 10.0, 150.0), y=('arm_length', 0.07, 0.09)")
+        api = ts.stick_curve(BASE, x=X, y=("arm_length", 0.07, 0.09), n=12,
+                             from_hopf=float(call.split("from_hopf=")[1].rstrip(")")))  # fmt: skip
+        np.testing.assert_allclose(ds.stick_normal_load.values, api.normal_load.values, rtol=1e-12)
+        # The fixture's two slices are this curve's ends.
+        assert abs(float(ds.stick_normal_load[0]) - 28.851) < 1e-3 and abs(float(ds.stick_normal_load[-1]) - 22.543) < 1e-3
+    tanh = ts.sweep(BASE.replace(friction_law="coulomb"), normal_load=[10.0, 150.0], arm_length=[0.07, 0.09],
+                    sliding_speed=[0.2], strategy="linear", progress=False)  # fmt: skip
+    assert "stick_normal_load" not in tanh and "stick_curves" not in tanh.attrs
