@@ -8,6 +8,8 @@ Every chart comes from the public API, on grids small enough to run in a minute 
 - ``basin_fraction.png``: the census's basin fractions of that sweep, one panel per attractor;
 - ``bifurcation.png``: the seed's unilateral cycles against the load (``ts.branch`` from the bouncing
   cycle both ways and from the Hopf point, drawn by ``ts.bifurcation_diagram``);
+- ``stick_onset.png``: the regime map of a switch-law (stick-slip as a switch) sweep at 0.2 m/s with the
+  curves it stores: the Hopf curve, and the stick curve where the cycles born there first stick;
 - ``work_precision.png``: error against wall time per trajectory of the three Rust integrators and
   scipy on the report's seed scene (``tribosweep.bench``; timings are this machine's);
 - ``sweep_settings.png``: the issue-10 Stribeck sweep's points/s against its agreement with a
@@ -32,6 +34,12 @@ import tribosweep as ts
 from tribosweep.plot import regime_map, variable_map
 
 HERE = pathlib.Path(__file__).resolve().parent
+STICK_ONSET = (
+    "Regime map of the switch friction law (stick-slip as a switch, mu_static 0.3) at 0.2 m/s, 15 loads x 8 arm "
+    "lengths, no census, with the curves the sweep stores: the Hopf curve, the stick curve (purple: where the "
+    "cycles born at the Hopf curve first reach the stick band, the onset of their stick-slip) and, on 5.8-6.7 cm, "
+    "the grazing and fold of those cycles; steady sliding is unstable over the whole box"
+)
 
 
 def sweeps() -> tuple:
@@ -84,6 +92,14 @@ def bifurcation():
     return fig, (up, down)
 
 
+def stick_onset():
+    """A switch-law sweep at 0.2 m/s over the default box (no census) and the curves it stores."""
+    model = ts.SliderModel(friction_law="switch", mu_static=0.3)
+    ds = ts.sweep(model, normal_load=np.linspace(10, 150, 15), arm_length=np.linspace(0.05, 0.127, 8),
+                  sliding_speed=[0.2], census=False, t_max=20.0, progress=False)  # fmt: skip
+    return regime_map(ds)
+
+
 def work_precision():
     from tribosweep.bench.charts import plot_work_precision
     from tribosweep.bench.workprecision import BenchConfig, measure
@@ -133,6 +149,7 @@ def main(argv=None) -> int:
     save(fig, "bifurcation.png", "The seed's bouncing cycle against the load (ts.branch both ways from the seed, "
          "ts.bifurcation_diagram): stable between its Neimark-Sacker points, it turns at folds at 140.6 and 19 N "
          "and ends at the subcritical Hopf point (24.9 N)")
+    save(stick_onset(), "stick_onset.png", STICK_ONSET)
     if not a.skip_bench:
         save(work_precision(), "work_precision.png",
              "Work-precision of the Rust integrators and scipy on the report's seed scene (bilateral, 0.5 s from "
