@@ -75,7 +75,6 @@ pub(super) fn first_from_hopf(
 ) -> Result<Node, Failure> {
     let j = s.jacobian(&State::zeros(), ContactMode::Contact);
     let v = critical_vector(&j, omega).ok_or_else(|| fail(Status::NotConverged, "no critical eigenvector".into()))?;
-    ctx.sizes = hopf_sizes(&ctx.sizes, &v, s.z_st.abs());
     let seq = Seq::contact();
     let t = 2.0 * PI / omega;
     let p = ctx.base.get(ctx.name).unwrap_or(f64::NAN);
@@ -134,26 +133,6 @@ pub(super) fn first_from_hopf(
         flags: 0,
     });
     Ok(first)
-}
-
-/// The scales of a branch from a Hopf point: the friction-direction components (`x`, `phi` and
-/// their rates) at least as large as the critical mode's own when `z` moves by `|z_st|` (`v`
-/// scaled to `v_z = 1`); `z` and `zd` keep theirs.
-///
-/// The characteristic sizes scale `x` by `|z_st|`, as `z`. On a mode whose friction-direction
-/// motion is larger than its normal motion the scaled orbit, and with it the arclength, was then
-/// that many times longer, and the steps sat at `ds_max`: the seed's bilateral branch from its
-/// Hopf point took 589 orbits to 150 N (164 with these scales), its unilateral one reached only
-/// 127.9 N in 1000 (the whole family, to 10 N, in 418), and a Stribeck branch of the friction mode
-/// 400-1000 orbits to its stick point (4.2 times fewer flows over a stick curve's 12 slices). The
-/// absolute tolerances of the flows and the Newton tolerance follow the same scales: each
-/// component is held to the same accuracy relative to its motion on the mode.
-fn hopf_sizes(sizes: &State, v: &SVector<C64, 6>, z_st: f64) -> State {
-    let mut out = *sizes;
-    for i in [idx::X, idx::XD, idx::PHI, idx::PHID] {
-        out[i] = out[i].max(v[i].norm() * z_st);
-    }
-    out
 }
 
 /// Eigenvector of `j` for the eigenvalue nearest `i omega`, scaled so that `v_z = 1` (inverse
