@@ -75,6 +75,8 @@ def _curve(kind: str, model, x, y, n, orbit, from_hopf, start, direction, option
         raise ValueError(f"model.friction_law = {model.friction_law!r}: a stick curve needs friction_law='switch' "
                          "(only the switch law has a stick band)")  # fmt: skip
     opts = _options(options)
+    if model.friction_law == "switch":
+        opts.setdefault("max_points", SWITCH_MAX_POINTS)
     if yn == "arm_length":
         if orbit is not None:
             return _arm_orbit_curve(kind, model, (xn, x_lo, x_hi), (y_lo, y_hi), n, orbit, start, direction, opts)
@@ -124,6 +126,16 @@ def _curve(kind: str, model, x, y, n, orbit, from_hopf, start, direction, option
     ds[yn] = (("curve_point",), merged["y"], {"units": PARAM_UNITS[yn], "long_name": f"{yn}: {PARAM_LONG_NAMES[yn]}"})
     return ds
 
+
+#: Under the switch law a curve's branches end at this many points unless ``max_points`` is given
+#: (the branch's own default is 1000). On the way to sticking the cycle's motion along the friction
+#: direction grows to about ``V / omega`` (0.2 m/s at 400 rad/s: 5e-4 m, some 50 times the static
+#: compression that scales the state in the arclength), so the steps sit at ``ds_max``: at 12.7 cm
+#: arm and 0.2 m/s the branch from the Hopf point (26.8 N) was at 17.3 N after 1000 points, with
+#: the smallest sliding velocity down to 0.013 of 0.2 m/s. (Scaling the friction direction by the
+#: critical mode's motion made such branches 10x shorter, but their steps then stepped over close
+#: pairs of special points: a fold 0.006 N past a grazing at 6.05 cm.)
+SWITCH_MAX_POINTS: int = 5000
 
 #: Bisections of the arm length where a curve leaves the window between two slices (see :func:`_arm_curve`).
 _ARM_END_BISECTIONS: int = 4
@@ -565,7 +577,8 @@ def stick_curve(model: SliderModel, x, y, *, n: int = 11, orbit=None, from_hopf=
     length at once (the force that holds the touching cycle in the band is the kinetic friction,
     below the static bound), so the stick-slip cycle past it is no small change of the pure-slip
     one, and continuation ends there: the curve bounds the pure-slip vibration of the family born
-    at the Hopf point.
+    at the Hopf point. Without ``max_points`` in ``options`` the slices' branches run to
+    :data:`SWITCH_MAX_POINTS` points.
 
     Examples
     --------
