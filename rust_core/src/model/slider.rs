@@ -78,7 +78,7 @@ impl Slider {
     /// there: the reversed force pushes `v_r` back, the accepted steps crept up to zero from above
     /// and never crossed (a Filippov sliding motion), and the flow ran to its step budget, 50,000
     /// steps, two in three rejected. Near the switch law's stick curve at 0.2 m/s such flows were
-    /// 90 % of a branch's work. On the continued field the flow crosses zero in a step, and the
+    /// 85 % of a branch's work. On the continued field the flow crosses zero in a step, and the
     /// flow's watch ends it there.
     pub fn with_slip_sign(mut self, sign: f64) -> Self {
         self.slip_sign = sign;
