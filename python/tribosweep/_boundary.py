@@ -107,9 +107,9 @@ def _curve_kinds(curves, model: SliderModel) -> tuple[str, ...]:
     bad = [k for k in kinds if k not in CURVE_KINDS]
     if bad or not kinds:
         raise ValueError(f"curves = {curves!r} is not valid: must be a non-empty subset of {CURVE_KINDS}")
-    if model.friction_law != "switch" and (need := [k for k in kinds if k in SWITCH_ONLY]):
-        raise ValueError(f"curves = {curves!r}: {need[0]!r} needs friction_law='switch' (only the switch law has a "
-                         f"stick band), and model.friction_law = {model.friction_law!r}")  # fmt: skip
+    for k in kinds:
+        if k in SWITCH_ONLY:
+            _checks.switch_law(f"curves = {curves!r}: {k!r}", model.friction_law)
     return tuple(k for k in CURVE_KINDS if k in kinds)
 
 

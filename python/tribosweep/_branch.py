@@ -228,9 +228,8 @@ def branch(
     opts = _options(options)
     if stop_at is not None and stop_at not in POINT_TYPE_NAMES:
         raise ValueError(f"stop_at = {stop_at!r} is not valid: must be one of {POINT_TYPE_NAMES}")
-    if stop_at == "stick" and model.friction_law != "switch":
-        raise ValueError(f"stop_at = 'stick' needs friction_law='switch' (only the switch law has a stick band), "
-                         f"and model.friction_law = {model.friction_law!r}")  # fmt: skip
+    if stop_at == "stick":
+        _checks.switch_law("stop_at = 'stick'", model.friction_law)
     if (from_hopf is None) == (orbit is None):
         raise ValueError("give exactly one of from_hopf and orbit")
     if start is not None:

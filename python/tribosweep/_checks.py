@@ -136,3 +136,11 @@ def block(name: str, value) -> int:
             f"{name} = {value!r} is out of range: must be an integer in [0, {MAX_BLOCK}] (sections per block; 0: off)"
         )
     return int(value)
+
+
+def switch_law(what: str, friction_law: str) -> None:
+    """``what`` (a stick curve, a stop at a stick point) needs the switch friction law, the only one
+    with a stick band: a ValueError naming both otherwise."""
+    if friction_law != "switch":
+        raise ValueError(f"{what} needs friction_law='switch' (only the switch law has a stick band), and "
+                         f"model.friction_law = {friction_law!r}")  # fmt: skip

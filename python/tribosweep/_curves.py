@@ -71,9 +71,8 @@ def _curve(kind: str, model, x, y, n, orbit, from_hopf, start, direction, option
         raise ValueError(f"n = {n!r} is out of range: must be an integer in [2, 10000]")
     if (from_hopf is None) == (orbit is None):
         raise ValueError("give exactly one of from_hopf and orbit")
-    if kind == "stick" and model.friction_law != "switch":
-        raise ValueError(f"model.friction_law = {model.friction_law!r}: a stick curve needs friction_law='switch' "
-                         "(only the switch law has a stick band)")  # fmt: skip
+    if kind == "stick":
+        _checks.switch_law("a stick curve", model.friction_law)
     opts = _options(options)
     if model.friction_law == "switch":
         opts.setdefault("max_points", SWITCH_MAX_POINTS)

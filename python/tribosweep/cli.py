@@ -402,8 +402,10 @@ def describe(ds, path: str | None = None) -> str:
             bs = np.asarray(ds.basin_stability.values).ravel()[k > 0]
             lines.append(f"attractor census: {int((k > 0).sum())} points, {int(k.max())} disturbances each; basin "
                          f"stability median {np.median(bs):.2f} (min {bs.min():.2f}, max {bs.max():.2f})")  # fmt: skip
+    from ._boundary import CURVE_KINDS
+
     curves = []
-    for kind in ("hopf", "fold", "grazing", "stick"):  # the stored boundary curves (a load x arm sweep)
+    for kind in CURVE_KINDS:  # the stored boundary curves (a load x arm sweep)
         if f"{kind}_normal_load" in ds and ds[f"{kind}_normal_load"].size:
             load, arm = ds[f"{kind}_normal_load"].values, ds[f"{kind}_arm_length"].values
             curves.append(f"{kind} {load.size} points ({load.min():.4g} .. {load.max():.4g} N, arm length "
