@@ -151,7 +151,10 @@ def boundary_curves(
     threads : int or None
         Threads for the continuations (None: one per core). The fold, grazing and stick curves run
         at once, each on its share of the threads (at least one), and each curve's slices in
-        parallel; the curves are the same bit for bit whatever the count.
+        parallel; the curves are the same bit for bit whatever the count. Under the switch law the
+        fold curve reads its points off the stick curve's branches (each runs to its stick point,
+        past the first fold), so those two run one after the other on both their shares: the
+        points are those of their own calls, to the last bit.
 
     Returns
     -------
@@ -194,26 +197,29 @@ def boundary_curves(
     for k in ("continuation_tolerance", "polyline_tolerance", "continuation_step_min", "continuation_step_max"):
         out.attrs[f"hopf_curve_{k}"] = hopf.attrs[k]
     todo = [k for k in kinds if k != "hopf"]
+    groups = _groups(todo, model)
     workers = _curves._workers(threads)
+    box = ((x_lo, x_hi), (y_lo, y_hi))
     if workers >= 2 and len(todo) >= 2:
-        # The kinds at once, each on its share of the threads (at least one; the odd ones to the
-        # first kinds): independent, so the same bits. Signals reach the main thread only: on
-        # Ctrl-C (or an error) here, the other kinds' threads stop at their next branch instead of
-        # running their curves to the end.
+        # The groups at once, each on its kinds' shares of the threads (at least one a kind; the
+        # odd ones to the first kinds): independent, so the same bits. Signals reach the main
+        # thread only: on Ctrl-C (or an error) here, the other groups' threads stop at their next
+        # branch instead of running their curves to the end.
         stop = threading.Event()
-        with concurrent.futures.ThreadPoolExecutor(max_workers=len(todo)) as pool:
-            q, r = divmod(workers, len(todo))
-            share = [max(1, q + (i < r)) for i in range(len(todo))]
-            runs = [pool.submit(_kind_curves, k, model, hopf, (x_lo, x_hi), (y_lo, y_hi), slices, w, stop)
-                    for k, w in zip(todo, share)]  # fmt: skip
+        q, r = divmod(workers, len(todo))
+        share = dict(zip(todo, (max(1, q + (i < r)) for i in range(len(todo)))))
+        with concurrent.futures.ThreadPoolExecutor(max_workers=len(groups)) as pool:
+            runs = [pool.submit(_group_curves, g, model, hopf, box, slices, sum(share[k] for k in g), stop)
+                    for g in groups]  # fmt: skip
             try:
-                done = [_curves._result(r) for r in runs]
+                done = {k: v for run in runs for k, v in _curves._result(run).items()}
             except BaseException:
                 stop.set()
                 raise
     else:
-        done = [_kind_curves(k, model, hopf, (x_lo, x_hi), (y_lo, y_hi), slices, workers) for k in todo]
-    for kind, (parts, notes, calls, attrs) in zip(todo, done):
+        done = {k: v for g in groups for k, v in _group_curves(g, model, hopf, box, slices, workers).items()}
+    for kind in todo:
+        parts, notes, calls, attrs = done[kind]
         out.attrs |= attrs
         n_pts = sum(p.sizes[f"{kind}_point"] for p in parts)
         if n_pts:
@@ -228,9 +234,24 @@ def boundary_curves(
     return out
 
 
-def _kind_curves(kind: str, model, hopf, box_x, box_y, slices: int, threads: int, stop=None):
+def _groups(todo: list[str], model: SliderModel) -> list[tuple[str, ...]]:
+    """The curve kinds in groups that run together. Under the switch law the fold and stick curves
+    form one, the stick curve first: every branch from a Hopf point runs to its stick point, and the
+    fold curve reads its points off those branches (:class:`_curves.SharedBranches`)."""
+    if model.friction_law == "switch" and "fold" in todo and "stick" in todo:
+        return [("stick", "fold")] + [(k,) for k in todo if k not in ("fold", "stick")]
+    return [(k,) for k in todo]
+
+
+def _group_curves(group: tuple[str, ...], model, hopf, box, slices: int, threads: int, stop=None) -> dict:
+    """:func:`_kind_curves` of each kind of ``group`` in turn, on the group's threads, sharing branches."""
+    shared = _curves.SharedBranches() if len(group) > 1 else None
+    return {k: _kind_curves(k, model, hopf, *box, slices, threads, stop, shared) for k in group}
+
+
+def _kind_curves(kind: str, model, hopf, box_x, box_y, slices: int, threads: int, stop=None, shared=None):
     """The ``kind`` curves from each Hopf curve of ``hopf``: (parts, notes, calls, attributes).
-    ``stop`` set: ends at the next branch (``_curves.Stopped``)."""
+    ``stop`` set: ends at the next branch (``_curves.Stopped``); ``shared``: see :func:`_group_curves`."""
     (x_lo, x_hi), (y_lo, y_hi) = box_x, box_y
     parts, notes, calls, attrs = [], [], [], {}
     func = {"fold": _curves.fold_curve, "grazing": _curves.grazing_curve, "stick": _curves.stick_curve}[kind]
@@ -247,7 +268,7 @@ def _kind_curves(kind: str, model, hopf, box_x, box_y, slices: int, threads: int
                      f"y=('arm_length', {a!r}, {b!r}), n={int(slices)}, from_hopf={start!r})")  # fmt: skip
         # func's own work (`fold_curve`, `grazing_curve` or `stick_curve`), with the stop event.
         ds = _curves._curve(kind, model, ("normal_load", x_lo, x_hi), ("arm_length", a, b), int(slices), None, start,
-                            None, None, {}, threads, stop)  # fmt: skip
+                            None, None, {}, threads, stop, shared)  # fmt: skip
         notes.append(f"from Hopf curve {c}: {ds.attrs['reason']}")
         sub = xr.Dataset({f"{kind}_{v}": _stored(ds, v, f"{kind}_point", f"{kind} curve") for v in CURVE_VARS})
         sub[f"{kind}_curve_index"] = xr.DataArray(

@@ -53,6 +53,31 @@ class Stopped(Exception):
     """A curve's computation was stopped by its caller's ``stop`` event (the caller raises its own error)."""
 
 
+class SharedBranches:
+    """One branch per slice for the fold and stick curves of one switch-law box.
+
+    Under the switch law every branch from a Hopf point ends at its first stick point, and up to
+    its end a branch does not depend on the point type it is asked to stop at (``stop_at``): the
+    fold curve's branch is the stick curve's, cut at its first fold. :func:`_arm_curve` for
+    ``"stick"`` stores each branch it runs here, keyed by (arm length, Hopf value, Hopf frequency);
+    for ``"fold"`` it reads the first fold off a stored branch (the point its own branch would
+    locate, to the last bit) and runs its own branch only where none is stored: another Hopf point,
+    or the arm lengths of its own end bisections. So the stick curve must run first.
+    """
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._runs: dict[tuple[float, float, float], dict] = {}
+
+    def put(self, key: tuple[float, float, float], out: dict) -> None:
+        with self._lock:
+            self._runs[key] = out
+
+    def get(self, key: tuple[float, float, float]) -> dict | None:
+        with self._lock:
+            return self._runs.get(key)
+
+
 def _workers(threads: int | None) -> int:
     """Threads for independent continuations: ``threads``, or one per core the process may use."""
     if threads is not None:
@@ -61,7 +86,7 @@ def _workers(threads: int | None) -> int:
 
 
 def _curve(kind: str, model, x, y, n, orbit, from_hopf, start, direction, options, threads=None,
-           stop: threading.Event | None = None) -> xr.Dataset:  # fmt: skip
+           stop: threading.Event | None = None, shared: SharedBranches | None = None) -> xr.Dataset:  # fmt: skip
     model = _model(model)
     threads = _checks.threads(threads)
     (xn, x_lo, x_hi), (yn, y_lo, y_hi) = _axis(model, x, "x"), _axis(model, y, "y", arm=True)
@@ -79,7 +104,8 @@ def _curve(kind: str, model, x, y, n, orbit, from_hopf, start, direction, option
     if yn == "arm_length":
         if orbit is not None:
             return _arm_orbit_curve(kind, model, (xn, x_lo, x_hi), (y_lo, y_hi), n, orbit, start, direction, opts)
-        return _arm_curve(kind, model, (xn, x_lo, x_hi), (y_lo, y_hi), n, from_hopf, start, opts, threads, stop)
+        return _arm_curve(kind, model, (xn, x_lo, x_hi), (y_lo, y_hi), n, from_hopf, start, opts, threads, stop,
+                          shared)  # fmt: skip
     y_model = float(getattr(model, yn))
     if not y_lo <= y_model <= y_hi:
         raise ValueError(f"y = {y!r}: the model's {yn} = {y_model} (where the start orbit is) must lie within it")
@@ -208,7 +234,7 @@ def _slices_in_order(ys, hopfs, target: float, run, take, workers: int) -> list[
 
 
 def _arm_curve(kind: str, model: SliderModel, xspec, yspan, n: int, from_hopf, start, opts, threads=None,
-               stop: threading.Event | None = None) -> xr.Dataset:  # fmt: skip
+               stop: threading.Event | None = None, shared: SharedBranches | None = None) -> xr.Dataset:  # fmt: skip
     """:func:`fold_curve` / :func:`grazing_curve` over the arm length: each slice from its own Hopf point.
 
     The arm length moves the three natural frequencies at once (``arm_frequencies``, the model's
@@ -225,7 +251,9 @@ def _arm_curve(kind: str, model: SliderModel, xspec, yspan, n: int, from_hopf, s
     are known for certain: each slice's is guessed as if every earlier slice found its point, and a
     slice whose guess proves wrong once the earlier results are in runs again with the right one. So
     the curve is the one the slices give in order, bit for bit, whatever the thread count. ``stop``
-    set (by another thread) ends the curve at its next branch with :class:`Stopped`.
+    set (by another thread) ends the curve at its next branch with :class:`Stopped`. ``shared``
+    (switch law, fold and stick curves of one box): the stick curve's branches, which the fold curve
+    reads its points off (:class:`SharedBranches`); work counts only the branches a curve runs itself.
     """
     from ._hopf import sliding_branch
 
@@ -251,21 +279,30 @@ def _arm_curve(kind: str, model: SliderModel, xspec, yspan, n: int, from_hopf, s
     def branch_from(yv: float, h: float, omega: float) -> dict:
         if stop is not None and stop.is_set():
             raise Stopped
+        key = (float(yv), float(h), float(omega))
+        if shared is not None and kind == "fold" and (out := shared.get(key)) is not None:
+            return out | {"n_flows": 0, "n_rhs": 0}  # the stick curve's work
         m = at(yv)
-        return _core.branch(m.replace(**{xn: h}).values(), contact, m.friction_law, xn, h, x_lo, x_hi,
-                            hopf_omega=omega, options=opts, stop_at=kind)  # fmt: skip
+        out = _core.branch(m.replace(**{xn: h}).values(), contact, m.friction_law, xn, h, x_lo, x_hi,
+                           hopf_omega=omega, options=opts, stop_at=kind)  # fmt: skip
+        if shared is not None and kind == "stick":
+            shared.put(key, out)
+        return out
 
     def take(yv: float, h: float, out: dict) -> tuple[dict | None, str]:
-        """A slice's branch result as its ``kind`` point, or None and why not; counts its work."""
+        """A slice's branch result as its first ``kind`` point, or None and why not; counts its work.
+        (A branch of its own stops there; one shared with the stick curve goes on to its stick point.)"""
         work["n_flows"] += int(out["n_flows"])
         work["n_rhs"] += int(out["n_rhs"])
-        last = int(out["point_type"][-1]) if len(out["point_type"]) else -1
-        hit = last == POINT_TYPE_NAMES.index(kind) or (
-            kind == "fold" and last == POINT_TYPE_NAMES.index("grazing") and int(out["flags"][-1]) & turns)
-        if not hit:
+        types = np.asarray(out["point_type"])
+        hits = types == POINT_TYPE_NAMES.index(kind)
+        if kind == "fold":
+            hits |= (types == POINT_TYPE_NAMES.index("grazing")) & ((np.asarray(out["flags"]) & turns) != 0)
+        if not hits.any():
             work["status"] = max(work["status"], int(out["status"]))
             return None, str(out["reason"])
-        return {k: out[k][-1] for k in _RAW_KEYS} | {"y": float(yv), "hopf": h}, ""
+        i = int(np.argmax(hits))
+        return {k: out[k][i] for k in _RAW_KEYS} | {"y": float(yv), "hopf": h}, ""
 
     def slice_at(yv: float, near: float) -> tuple[dict | None, str]:
         """The ``kind`` point at arm length ``yv`` from the Hopf point nearest ``near``, or None and why not."""

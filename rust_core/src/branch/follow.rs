@@ -256,7 +256,10 @@ pub(super) fn follow(
         let mut specials = locate_all(ctx, &cur, &next, ds);
         specials.retain(|n| inside(n.point.parameter));
         specials.sort_by(|a, b| a.point.arclength.total_cmp(&b.point.arclength));
-        if let Some(i) = o.stop_at.and_then(|k| specials.iter().position(|n| n.point.point_type == k)) {
+        // (Stopping at a stick point is the branch's own end below, with its reason: the same
+        // branch and words whatever `stop_at`, so a fold's branch can be read off a stick's.)
+        let stop_at = o.stop_at.filter(|&k| k != PointType::Stick);
+        if let Some(i) = stop_at.and_then(|k| specials.iter().position(|n| n.point.point_type == k)) {
             points.extend(specials.iter().take(i + 1).map(|n| n.point));
             let k = POINT_TYPE_NAMES[specials[i].point.point_type as usize];
             let p = specials[i].point.parameter;
