@@ -175,28 +175,38 @@ def test_a_switch_law_load_arm_sweep_stores_its_stick_curve(tmp_path):
     assert "stick_normal_load" not in tanh and "stick_curves" not in tanh.attrs
 
 
-def test_the_fold_curve_reads_its_points_off_the_stick_curve_s_branches(monkeypatch):
+def test_the_fold_and_grazing_curves_read_their_points_off_the_stick_curve_s_branches(monkeypatch):
     """Under the switch law every branch from a Hopf point runs to its stick point, and up to there
     it does not depend on where it is asked to stop: ``boundary_curves`` runs one branch per slice
-    for the fold and stick curves (the stick curve's), and reads the first fold off it. The points
-    are those of the curves' own calls, each with its own branches, to the last bit."""
+    (the stick curve's) and reads the first fold off it; the grazing curve's bilateral branch is
+    that unilateral branch, bit for bit, wherever the latter has no grazing point. The points and
+    the reasons are those of the curves' own calls, each with its own branches, to the last bit."""
     calls = []
     branch = _core.branch
 
-    def counted(*args, **kwargs):
-        calls.append(kwargs.get("stop_at"))
-        return branch(*args, **kwargs)
+    def counted(values, contact, *args, **kwargs):
+        calls.append((contact, kwargs.get("stop_at")))
+        return branch(values, contact, *args, **kwargs)
 
     monkeypatch.setattr(_core, "branch", counted)
-    box = (0.059, 0.0655)  # a fold at each slice (none below 5.8 cm): no end bisections
-    ds = ts.boundary_curves(BASE, arm_length=box, curves=("fold", "stick"), slices=3, threads=2)
-    assert calls == ["stick"] * 3, calls
-    assert ds.sizes["fold_point"] == 3 and ds.sizes["stick_point"] == 3
+    # A fold (a grazing where the branch turns back) at each slice, none below 5.8 cm: no end
+    # bisections. Its unilateral branches graze, so the grazing curve runs its own.
+    box = (0.059, 0.0655)
+    ds = ts.boundary_curves(BASE, arm_length=box, slices=3, threads=2)
+    assert calls == [("unilateral", "stick")] * 3 + [("bilateral", "grazing")] * 3, calls
+    assert ds.sizes["fold_point"] == ds.sizes["grazing_point"] == ds.sizes["stick_point"] == 3
     start = float(ds.attrs["fold_curve_call"].split("from_hopf=")[1].rstrip(")"))
     calls.clear()
-    for kind, func in (("fold", ts.fold_curve), ("stick", ts.stick_curve)):
+    for kind, func in (("fold", ts.fold_curve), ("grazing", ts.grazing_curve), ("stick", ts.stick_curve)):
         own = func(BASE, x=X, y=("arm_length", *box), n=3, from_hopf=start, threads=2)
         for v in ("normal_load", "A1", "period", "min_gap", "min_slip_velocity"):
             np.testing.assert_array_equal(ds[f"{kind}_{v}"].values, own[v].values)
-    assert calls == ["fold"] * 3 + ["stick"] * 3, calls
-    assert {ts.BRANCH_POINT_TYPE_NAMES[int(t)] for t in ds.fold_point_type.values} <= {"fold", "grazing"}
+    assert [c[1] for c in calls] == ["fold"] * 3 + ["grazing"] * 3 + ["stick"] * 3, calls
+    # At 7-9 cm the cycles stick before they graze: no branch of the grazing curve's own.
+    calls.clear()
+    ds = ts.boundary_curves(BASE, arm_length=(0.07, 0.09), curves=("grazing", "stick"), slices=2, threads=2)
+    assert calls == [("unilateral", "stick")] * 2, calls
+    assert "grazing_point" not in ds.sizes and ds.sizes["stick_point"] == 2
+    own = ts.grazing_curve(BASE, x=X, y=("arm_length", 0.07, 0.09), n=2, from_hopf=True)
+    assert own.sizes["curve_point"] == 0 and "reaches the stick band" in own.attrs["reason"]
+    assert ds.attrs["grazing_curves"].endswith("from Hopf curve 0: " + own.attrs["reason"])

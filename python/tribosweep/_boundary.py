@@ -153,7 +153,8 @@ def boundary_curves(
         at once, each on its share of the threads (at least one), and each curve's slices in
         parallel; the curves are the same bit for bit whatever the count. Under the switch law the
         fold curve reads its points off the stick curve's branches (each runs to its stick point,
-        past the first fold), so those two run one after the other on both their shares: the
+        past the first fold), and so does the grazing curve where that branch keeps the contact
+        closed to its end; the stick curve runs first on all their shares, then the others: the
         points are those of their own calls, to the last bit.
 
     Returns
@@ -235,18 +236,30 @@ def boundary_curves(
 
 
 def _groups(todo: list[str], model: SliderModel) -> list[tuple[str, ...]]:
-    """The curve kinds in groups that run together. Under the switch law the fold and stick curves
-    form one, the stick curve first: every branch from a Hopf point runs to its stick point, and the
-    fold curve reads its points off those branches (:class:`_curves.SharedBranches`)."""
-    if model.friction_law == "switch" and "fold" in todo and "stick" in todo:
-        return [("stick", "fold")] + [(k,) for k in todo if k not in ("fold", "stick")]
+    """The curve kinds in groups that run together. Under the switch law the stick curve and the
+    others form one, the stick curve first: every branch from a Hopf point runs to its stick point,
+    and the fold and grazing curves read their points off those branches where they are theirs
+    (:class:`_curves.SharedBranches`)."""
+    if model.friction_law == "switch" and "stick" in todo:
+        return [("stick",) + tuple(k for k in todo if k != "stick")]
     return [(k,) for k in todo]
 
 
 def _group_curves(group: tuple[str, ...], model, hopf, box, slices: int, threads: int, stop=None) -> dict:
-    """:func:`_kind_curves` of each kind of ``group`` in turn, on the group's threads, sharing branches."""
-    shared = _curves.SharedBranches() if len(group) > 1 else None
-    return {k: _kind_curves(k, model, hopf, *box, slices, threads, stop, shared) for k in group}
+    """:func:`_kind_curves` of each kind of ``group`` on the group's threads: the first kind, then
+    the others at once on shares of them, reading the first's branches (see :func:`_groups`)."""
+    first, rest = group[0], group[1:]
+    shared = _curves.SharedBranches(model.contact) if rest else None
+    done = {first: _kind_curves(first, model, hopf, *box, slices, threads, stop, shared)}
+    if threads >= 2 and len(rest) >= 2:
+        q, r = divmod(threads, len(rest))
+        with concurrent.futures.ThreadPoolExecutor(max_workers=len(rest)) as pool:
+            runs = [pool.submit(_kind_curves, k, model, hopf, *box, slices, max(1, q + (i < r)), stop, shared)
+                    for i, k in enumerate(rest)]  # fmt: skip
+            done |= {k: _curves._result(run) for k, run in zip(rest, runs)}
+    else:
+        done |= {k: _kind_curves(k, model, hopf, *box, slices, threads, stop, shared) for k in rest}
+    return done
 
 
 def _kind_curves(kind: str, model, hopf, box_x, box_y, slices: int, threads: int, stop=None, shared=None):

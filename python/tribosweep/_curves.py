@@ -54,20 +54,36 @@ class Stopped(Exception):
 
 
 class SharedBranches:
-    """One branch per slice for the fold and stick curves of one switch-law box.
+    """One branch per slice for the fold, grazing and stick curves of one switch-law box.
 
     Under the switch law every branch from a Hopf point ends at its first stick point, and up to
     its end a branch does not depend on the point type it is asked to stop at (``stop_at``): the
     fold curve's branch is the stick curve's, cut at its first fold. :func:`_arm_curve` for
     ``"stick"`` stores each branch it runs here, keyed by (arm length, Hopf value, Hopf frequency);
-    for ``"fold"`` it reads the first fold off a stored branch (the point its own branch would
-    locate, to the last bit) and runs its own branch only where none is stored: another Hopf point,
-    or the arm lengths of its own end bisections. So the stick curve must run first.
+    for ``"fold"`` and ``"grazing"`` it reads the first point of its kind off a stored branch (the
+    point its own branch would locate, to the last bit) where :meth:`holds` says so, and runs its
+    own branch elsewhere: another Hopf point, or the arm lengths of its own end bisections. So the
+    stick curve must run first.
+
+    The grazing curve follows its branches with the bilateral law (:func:`grazing_curve`). A
+    unilateral branch is the bilateral one, bit for bit, for as long as it keeps the contact closed
+    (it flows the same contact segment, and the bilateral law's test for a grazing, ``min_gap``
+    changing sign between two orbits, stays quiet while every orbit is valid): so a unilateral
+    branch with no grazing point is the bilateral branch, which ends where it ends, with no grazing
+    point and the same reason. One with a grazing point is not (it changes its mode sequence
+    there), and the grazing curve runs its own.
     """
 
-    def __init__(self) -> None:
+    def __init__(self, contact: str) -> None:
         self._lock = threading.Lock()
         self._runs: dict[tuple[float, float, float], dict] = {}
+        self._contact = contact
+
+    def holds(self, kind: str, out: dict) -> bool:
+        """Whether ``kind``'s own branch would be the stored branch ``out`` up to its first ``kind`` point."""
+        if kind == "fold" or self._contact == "bilateral":
+            return True
+        return not (np.asarray(out["point_type"]) == POINT_TYPE_NAMES.index("grazing")).any()
 
     def put(self, key: tuple[float, float, float], out: dict) -> None:
         with self._lock:
@@ -280,7 +296,7 @@ def _arm_curve(kind: str, model: SliderModel, xspec, yspan, n: int, from_hopf, s
         if stop is not None and stop.is_set():
             raise Stopped
         key = (float(yv), float(h), float(omega))
-        if shared is not None and kind == "fold" and (out := shared.get(key)) is not None:
+        if shared is not None and kind != "stick" and (out := shared.get(key)) is not None and shared.holds(kind, out):
             return out | {"n_flows": 0, "n_rhs": 0}  # the stick curve's work
         m = at(yv)
         out = _core.branch(m.replace(**{xn: h}).values(), contact, m.friction_law, xn, h, x_lo, x_hi,
