@@ -285,6 +285,7 @@ def _arm_curve(kind: str, model: SliderModel, xspec, yspan, n: int, from_hopf, s
     contact = "bilateral" if kind == "grazing" else model.contact
     turns = 1 << BRANCH_FLAG_NAMES.index("parameter_turns")
     work = {"status": 0, "n_flows": 0, "n_rhs": 0}
+    counting = threading.Lock()
 
     def hopf_points(yv: float) -> tuple[np.ndarray, np.ndarray]:
         """The Hopf points of ``x`` in the window at arm length ``yv`` and their frequencies."""
@@ -307,15 +308,18 @@ def _arm_curve(kind: str, model: SliderModel, xspec, yspan, n: int, from_hopf, s
 
     def take(yv: float, h: float, out: dict) -> tuple[dict | None, str]:
         """A slice's branch result as its first ``kind`` point, or None and why not; counts its work.
-        (A branch of its own stops there; one shared with the stick curve goes on to its stick point.)"""
-        work["n_flows"] += int(out["n_flows"])
-        work["n_rhs"] += int(out["n_rhs"])
+        (A branch of its own stops there; one shared with the stick curve goes on to its stick point.)
+        The ends' bisections call it from their threads: the counts are sums and maxima, in any order."""
         types = np.asarray(out["point_type"])
         hits = types == POINT_TYPE_NAMES.index(kind)
         if kind == "fold":
             hits |= (types == POINT_TYPE_NAMES.index("grazing")) & ((np.asarray(out["flags"]) & turns) != 0)
+        with counting:
+            work["n_flows"] += int(out["n_flows"])
+            work["n_rhs"] += int(out["n_rhs"])
+            if not hits.any():
+                work["status"] = max(work["status"], int(out["status"]))
         if not hits.any():
-            work["status"] = max(work["status"], int(out["status"]))
             return None, str(out["reason"])
         i = int(np.argmax(hits))
         return {k: out[k][i] for k in _RAW_KEYS} | {"y": float(yv), "hopf": h}, ""
@@ -328,14 +332,12 @@ def _arm_curve(kind: str, model: SliderModel, xspec, yspan, n: int, from_hopf, s
         h, omega = _nearest(hopfs, near)
         return take(yv, h, branch_from(yv, h, omega))
 
-    slices = _slices_in_order(ys, [hopf_points(yv) for yv in ys], target, branch_from, take, _workers(threads))
-    # Where the curve leaves the window between two slices (a slice without a point next to one
-    # with), bisect the arm length ENDS times: the curve reaches to 1/2^ENDS of a slice from its end.
-    ends = []
-    for (ya, pa, _), (yb, pb, _) in zip(slices[:-1], slices[1:]):
-        if (pa is None) == (pb is None):
-            continue
-        (y_in, p_in), y_out = ((ya, pa), yb) if pa is not None else ((yb, pb), ya)
+    workers = _workers(threads)
+    slices = _slices_in_order(ys, [hopf_points(yv) for yv in ys], target, branch_from, take, workers)
+
+    def bisect_end(y_in: float, p_in: dict, y_out: float) -> list[dict]:
+        """The points found bisecting ENDS times between a slice with a point and one without."""
+        got = []
         for _ in range(_ARM_END_BISECTIONS):
             ym = 0.5 * (y_in + y_out)
             pm, _ = slice_at(ym, p_in["hopf"])
@@ -343,7 +345,22 @@ def _arm_curve(kind: str, model: SliderModel, xspec, yspan, n: int, from_hopf, s
                 y_out = ym
             else:
                 y_in, p_in = ym, pm
-                ends.append(pm)
+                got.append(pm)
+        return got
+
+    # Where the curve leaves the window between two slices (a slice without a point next to one
+    # with), bisect the arm length ENDS times: the curve reaches to 1/2^ENDS of a slice from its end.
+    # Each end's bisections depend on nothing but its two slices: the ends run at once.
+    chains = []
+    for (ya, pa, _), (yb, pb, _) in zip(slices[:-1], slices[1:]):
+        if (pa is None) != (pb is None):
+            chains.append((ya, pa, yb) if pa is not None else (yb, pb, ya))
+    with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, min(workers, len(chains)))) as pool:
+        runs = [pool.submit(bisect_end, *c) for c in chains]
+        try:
+            ends = [pt for run in runs for pt in _result(run)]
+        finally:
+            pool.shutdown(wait=True, cancel_futures=True)
     found = sorted([pt for _, pt, _ in slices if pt is not None] + ends, key=lambda f: f["y"])
     gaps = [f"{yv:.6g} ({why})" for yv, pt, why in slices if pt is None]
     reason = f"{n - len(gaps)} of {n} arm lengths located their {kind} point"
