@@ -179,8 +179,9 @@ def test_the_fold_and_grazing_curves_read_their_points_off_the_stick_curve_s_bra
     """Under the switch law every branch from a Hopf point runs to its stick point, and up to there
     it does not depend on where it is asked to stop: ``boundary_curves`` runs one branch per slice
     (the stick curve's) and reads the first fold off it; the grazing curve's bilateral branch is
-    that unilateral branch, bit for bit, wherever the latter has no grazing point. The points and
-    the reasons are those of the curves' own calls, each with its own branches, to the last bit."""
+    that unilateral branch, bit for bit, wherever the latter has no grazing point (and the other
+    way round at their end bisections). The points and the reasons are those of the curves' own
+    calls, each with its own branches, to the last bit."""
     calls = []
     branch = _core.branch
 
@@ -191,11 +192,13 @@ def test_the_fold_and_grazing_curves_read_their_points_off_the_stick_curve_s_bra
     monkeypatch.setattr(_core, "branch", counted)
     # Folds (grazings where the branch turns back) on 5.8-6.7 cm only: at the middle slice; the
     # curves' two ends are bisected at once, 4 times each. The middle slice's unilateral branch
-    # grazes, so the grazing curve runs its own there; the outer ones stick first.
+    # grazes, so the grazing curve runs its own there; the outer ones stick first. The fold and
+    # grazing curves bisect the same arm lengths and share the branches that never graze (which
+    # curve runs one depends on the threads' timing, how many do not): 8 + 8 of 1 + 8 + 8.
     box = (0.057, 0.068)
     ds = ts.boundary_curves(BASE, arm_length=box, slices=3, threads=2)
     assert calls[:3] == [("unilateral", "stick")] * 3, calls
-    assert sorted(calls[3:]) == [("bilateral", "grazing")] * 9 + [("unilateral", "fold")] * 8, calls
+    assert len(calls) == 3 + 16 and set(calls[3:]) <= {("bilateral", "grazing"), ("unilateral", "fold")}, calls
     assert ds.sizes["fold_point"] > 1 and ds.sizes["grazing_point"] > 1 and ds.sizes["stick_point"] == 3
     start = float(ds.attrs["fold_curve_call"].split("from_hopf=")[1].rstrip(")"))
     calls.clear()

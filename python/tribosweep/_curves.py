@@ -53,45 +53,88 @@ class Stopped(Exception):
     """A curve's computation was stopped by its caller's ``stop`` event (the caller raises its own error)."""
 
 
+def _first_hit(kind: str, out: dict) -> int | None:
+    """Index of the first ``kind`` point of a raw branch (a fold: smooth, or a grazing where the
+    branch turns back), or None."""
+    types = np.asarray(out["point_type"])
+    hits = types == POINT_TYPE_NAMES.index(kind)
+    if kind == "fold":
+        turns = 1 << BRANCH_FLAG_NAMES.index("parameter_turns")
+        hits |= (types == POINT_TYPE_NAMES.index("grazing")) & ((np.asarray(out["flags"]) & turns) != 0)
+    return int(np.argmax(hits)) if hits.any() else None
+
+
 class SharedBranches:
-    """One branch per slice for the fold, grazing and stick curves of one switch-law box.
+    """One branch per arm length and Hopf point for the fold, grazing and stick curves of one
+    switch-law box.
 
     Under the switch law every branch from a Hopf point ends at its first stick point, and up to
-    its end a branch does not depend on the point type it is asked to stop at (``stop_at``): the
-    fold curve's branch is the stick curve's, cut at its first fold. :func:`_arm_curve` for
-    ``"stick"`` stores each branch it runs here, keyed by (arm length, Hopf value, Hopf frequency);
-    for ``"fold"`` and ``"grazing"`` it reads the first point of its kind off a stored branch (the
-    point its own branch would locate, to the last bit) where :meth:`holds` says so, and runs its
-    own branch elsewhere: another Hopf point, or the arm lengths of its own end bisections. So the
-    stick curve must run first.
+    its end a branch does not depend on the point type it is asked to stop at (``stop_at``), but
+    for being cut there: the fold curve's branch is the stick curve's, cut at its first fold.
+    :func:`_arm_curve` asks here for each branch it needs, keyed by (arm length, Hopf value, Hopf
+    frequency) (:meth:`fetch`): the first kind to ask runs its own and stores it, a kind that asks
+    while it runs waits for it, and a kind reads its first point off a stored branch where
+    :meth:`holds` says that is the point its own branch would locate, to the last bit; elsewhere
+    it runs its own. The stick curve runs first: the fold and grazing curves read their slices off
+    its branches, and each other's end bisections where the two end at the same arm lengths.
 
     The grazing curve follows its branches with the bilateral law (:func:`grazing_curve`). A
     unilateral branch is the bilateral one, bit for bit, for as long as it keeps the contact closed
     (it flows the same contact segment, and the bilateral law's test for a grazing, ``min_gap``
-    changing sign between two orbits, stays quiet while every orbit is valid): so a unilateral
-    branch with no grazing point is the bilateral branch, which ends where it ends, with no grazing
-    point and the same reason. One with a grazing point is not (it changes its mode sequence
-    there), and the grazing curve runs its own.
+    changing sign between two orbits, stays quiet while every orbit is valid): so a branch of either
+    law with no grazing point is the other's, which ends where it ends, with the same reason. One
+    with a grazing point is not (the unilateral law changes its mode sequence there).
     """
 
     def __init__(self, contact: str) -> None:
         self._lock = threading.Lock()
-        self._runs: dict[tuple[float, float, float], dict] = {}
+        self._runs: dict[tuple[float, float, float], tuple[str, dict]] = {}
+        self._pending: dict[tuple[float, float, float], concurrent.futures.Future] = {}
         self._contact = contact
 
-    def holds(self, kind: str, out: dict) -> bool:
-        """Whether ``kind``'s own branch would be the stored branch ``out`` up to its first ``kind`` point."""
-        if kind == "fold" or self._contact == "bilateral":
-            return True
-        return not (np.asarray(out["point_type"]) == POINT_TYPE_NAMES.index("grazing")).any()
+    def _law(self, kind: str) -> str:
+        return "bilateral" if kind == "grazing" else self._contact
 
-    def put(self, key: tuple[float, float, float], out: dict) -> None:
-        with self._lock:
-            self._runs[key] = out
+    def holds(self, kind: str, src: str, out: dict) -> bool:
+        """Whether ``kind``'s own branch is ``out`` (``src``'s, stopped at its first ``src`` point)
+        up to ``kind``'s first point, or to its end where it has none."""
+        grazes = bool((np.asarray(out["point_type"]) == POINT_TYPE_NAMES.index("grazing")).any())
+        if grazes and self._law(src) != self._law(kind):
+            return False
+        # A stop at a stick point is the branch's own end; any other stop cut it short there.
+        cut = src != "stick" and _first_hit(src, out) is not None
+        return not cut or _first_hit(kind, out) is not None
 
-    def get(self, key: tuple[float, float, float]) -> dict | None:
+    def fetch(self, kind: str, key: tuple[float, float, float], run):
+        """``kind``'s branch at ``key``: read off the one stored (or running) there where it
+        :meth:`holds`, else ``run()`` (stored if first). Read ones count no work (their kind did)."""
         with self._lock:
-            return self._runs.get(key)
+            got = self._runs.get(key)
+            fut = None if got is not None else self._pending.get(key)
+            first = got is None and fut is None
+            if first:
+                fut = self._pending[key] = concurrent.futures.Future()
+        if got is None and not first:
+            try:
+                got = _result(fut)
+            except Exception:  # noqa: BLE001 - its kind failed or was stopped: run our own
+                got = None
+        if got is not None and self.holds(kind, *got):
+            return got[1] | {"n_flows": 0, "n_rhs": 0}
+        try:
+            out = run()
+        except BaseException as e:
+            if first:
+                with self._lock:
+                    del self._pending[key]
+                fut.set_exception(e)
+            raise
+        if first:
+            with self._lock:
+                self._runs[key] = (kind, out)
+                del self._pending[key]
+            fut.set_result((kind, out))
+        return out
 
 
 def _workers(threads: int | None) -> int:
@@ -283,7 +326,6 @@ def _arm_curve(kind: str, model: SliderModel, xspec, yspan, n: int, from_hopf, s
     ys = np.linspace(*yspan, n)
     at = _arm_models(model, xn, yspan, ys)
     contact = "bilateral" if kind == "grazing" else model.contact
-    turns = 1 << BRANCH_FLAG_NAMES.index("parameter_turns")
     work = {"status": 0, "n_flows": 0, "n_rhs": 0}
     counting = threading.Lock()
 
@@ -294,34 +336,27 @@ def _arm_curve(kind: str, model: SliderModel, xspec, yspan, n: int, from_hopf, s
         return sb[f"hopf_{xn}"].values[ok], sb.hopf_frequency.values[ok]
 
     def branch_from(yv: float, h: float, omega: float) -> dict:
-        if stop is not None and stop.is_set():
-            raise Stopped
-        key = (float(yv), float(h), float(omega))
-        if shared is not None and kind != "stick" and (out := shared.get(key)) is not None and shared.holds(kind, out):
-            return out | {"n_flows": 0, "n_rhs": 0}  # the stick curve's work
-        m = at(yv)
-        out = _core.branch(m.replace(**{xn: h}).values(), contact, m.friction_law, xn, h, x_lo, x_hi,
-                           hopf_omega=omega, options=opts, stop_at=kind)  # fmt: skip
-        if shared is not None and kind == "stick":
-            shared.put(key, out)
-        return out
+        def own() -> dict:
+            if stop is not None and stop.is_set():
+                raise Stopped
+            m = at(yv)
+            return _core.branch(m.replace(**{xn: h}).values(), contact, m.friction_law, xn, h, x_lo, x_hi,
+                                hopf_omega=omega, options=opts, stop_at=kind)  # fmt: skip
+
+        return own() if shared is None else shared.fetch(kind, (float(yv), float(h), float(omega)), own)
 
     def take(yv: float, h: float, out: dict) -> tuple[dict | None, str]:
         """A slice's branch result as its first ``kind`` point, or None and why not; counts its work.
         (A branch of its own stops there; one shared with the stick curve goes on to its stick point.)
         The ends' bisections call it from their threads: the counts are sums and maxima, in any order."""
-        types = np.asarray(out["point_type"])
-        hits = types == POINT_TYPE_NAMES.index(kind)
-        if kind == "fold":
-            hits |= (types == POINT_TYPE_NAMES.index("grazing")) & ((np.asarray(out["flags"]) & turns) != 0)
+        i = _first_hit(kind, out)
         with counting:
             work["n_flows"] += int(out["n_flows"])
             work["n_rhs"] += int(out["n_rhs"])
-            if not hits.any():
+            if i is None:
                 work["status"] = max(work["status"], int(out["status"]))
-        if not hits.any():
+        if i is None:
             return None, str(out["reason"])
-        i = int(np.argmax(hits))
         return {k: out[k][i] for k in _RAW_KEYS} | {"y": float(yv), "hopf": h}, ""
 
     def slice_at(yv: float, near: float) -> tuple[dict | None, str]:
