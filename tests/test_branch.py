@@ -208,7 +208,7 @@ def test_a_switch_law_branch_ends_at_the_located_point_where_its_cycle_reaches_s
     assert ts.STATUS_NAMES[int(out["status"])] == "success"
     assert "reaches the stick band" in str(out["reason"]) and "gains a stick phase" in str(out["reason"])
     p, kinds = np.asarray(out["parameter"]), np.asarray(out["point_type"])
-    assert p.size > 100 and 25.2 < p[-1] < 25.4 and ts.BRANCH_POINT_TYPE_NAMES[int(kinds[-1])] == "stick"
+    assert p.size > 20 and 25.2 < p[-1] < 25.4 and ts.BRANCH_POINT_TYPE_NAMES[int(kinds[-1])] == "stick"
     assert not np.isin(kinds[:-1], [ts.BRANCH_POINT_TYPE_NAMES.index("stick")]).any()
     # Each flow within the budget (50,000 steps of DOP853's 12 stages, with event location).
     assert int(out["n_rhs"]) < int(out["n_flows"]) * 50_000 * 16
@@ -218,15 +218,16 @@ def test_a_switch_law_branch_ends_at_the_located_point_where_its_cycle_reaches_s
     assert abs(got[-1] / bil.stick_band - 1) < 1e-2  # located: 1.00003e-6 against the band's 1e-6
     # The branch's min_slip_velocity (located at the extremes of v_r on the dense output) against
     # an independent simulation's sampled minimum (2,001 samples a period: at most 2.4e-7 m/s above
-    # the true one at this curvature): at the stick point and 50 points before, 2 cm/s clear.
-    for j in (-1, -50):
+    # the true one at this curvature): at the stick point and at the last orbit 1 cm/s clear.
+    clear = int(np.flatnonzero(got > 1e-2)[-1])
+    assert clear < p.size - 2
+    for j in (-1, clear):
         at = bil.replace(normal_load=float(p[j]))
         period = float(np.asarray(out["period"])[j])
         run = ts.simulate(at, period, y0=np.asarray(out["state0"])[j], rtol=1e-11, t_eval=np.linspace(0, period, 2001))
         low = float(np.min(at.sliding_speed - (run.x_dot.values + at.torsion_sign * at.moment_arm
                                                * run.phi_dot.values)))  # fmt: skip
         assert -1e-12 <= low - got[j] < 5e-7, (j, low, got[j])
-    assert got[-50] > 1e-2
     # No orbit of the branch slips inside the band (the flag for those: none here).
     in_band = 1 << ts.BRANCH_FLAG_NAMES.index("slip_in_stick_band")
     flagged = (np.asarray(out["flags"]) & in_band) != 0

@@ -34,7 +34,7 @@ def test_a_hard_bending_branch_starts_from_its_hopf_point_at_a_smaller_amplitude
     start now tries a tenth of it. Its first orbits are the normal form's cycle: against
     ``hopf_cycle_guess`` A1 differs by O(|p - p_H|) (the next term) and the period by
     O(|p - p_H|^2), so error / |p - p_H| and error / |p - p_H|^2 are the same at every point near
-    the Hopf point (seen 6.53e-3 per N and 3.8e-8 per N^2, over 0.03-1 N from it)."""
+    the Hopf point (seen 6.52-6.54e-3 per N and 3.81-3.90e-8 per N^2, over 0.05-1.06 N from it)."""
     m = ts.apparatus_model(84.46, 0.05, 0.2, base=BASE)
     sb = ts.sliding_branch(m, X)
     (hp,) = np.flatnonzero((sb.is_hopf.values == 1) & (sb.hopf_status.values == 0))
@@ -45,9 +45,9 @@ def test_a_hard_bending_branch_starts_from_its_hopf_point_at_a_smaller_amplitude
     p, a1 = b.parameter.values, b.A1.values
     assert 0 < h - p[1] < 0.05
     slope, curve = [], []
-    for target in (0.03, 0.1, 0.3, 1.0):  # the first orbit at least this far from the Hopf point [N]
-        j = int(np.argmax(h - p >= target))
-        assert target <= h - p[j] < 1.5 * target
+    near = np.flatnonzero((h - p >= 0.03) & (h - p <= 1.2))  # the orbits 0.03-1.2 N from the Hopf point
+    assert near.size >= 4 and (h - p[near[-1]]) / (h - p[near[0]]) > 10, h - p[:12]
+    for j in near:
         g = ts.hopf_cycle_guess(sb, float(p[j]), hopf=int(hp))
         slope.append(abs(g["amplitude"] / a1[j] - 1) / (h - p[j]))
         curve.append(abs(g["period"] / float(b.period[j]) - 1) / (h - p[j]) ** 2)
@@ -194,11 +194,13 @@ def test_the_fold_and_grazing_curves_read_their_points_off_the_stick_curve_s_bra
     # curves' two ends are bisected at once, 4 times each. The middle slice's unilateral branch
     # grazes, so the grazing curve runs its own there; the outer ones stick first. The fold and
     # grazing curves bisect the same arm lengths and share the branches that never graze (which
-    # curve runs one depends on the threads' timing, how many do not): 8 + 8 of 1 + 8 + 8.
+    # curve runs one depends on the threads' timing): 16 of their 1 + 8 + 8 + 3 (17-19 where a
+    # stick branch failed on the critical mode's scales and ran again on the static ones, whose
+    # points a fold branch stopped before the failure does not share).
     box = (0.057, 0.068)
     ds = ts.boundary_curves(BASE, arm_length=box, slices=3, threads=2)
     assert calls[:3] == [("unilateral", "stick")] * 3, calls
-    assert len(calls) == 3 + 16 and set(calls[3:]) <= {("bilateral", "grazing"), ("unilateral", "fold")}, calls
+    assert 16 <= len(calls) - 3 <= 19 and set(calls[3:]) <= {("bilateral", "grazing"), ("unilateral", "fold")}, calls
     assert ds.sizes["fold_point"] > 1 and ds.sizes["grazing_point"] > 1 and ds.sizes["stick_point"] == 3
     start = float(ds.attrs["fold_curve_call"].split("from_hopf=")[1].rstrip(")"))
     calls.clear()
@@ -208,3 +210,29 @@ def test_the_fold_and_grazing_curves_read_their_points_off_the_stick_curve_s_bra
             np.testing.assert_array_equal(ds[f"{kind}_{v}"].values, own[v].values)
         assert ds.attrs[f"{kind}_curves"].endswith("from Hopf curve 0: " + own.attrs["reason"])
     assert [c[1] for c in calls] == ["fold"] * 11 + ["grazing"] * 11 + ["stick"] * 3, calls
+
+
+def test_a_branch_through_a_cascade_of_grazings_reaches_its_stick_point_whatever_the_last_bits():
+    """At 6.25 cm the branch from the Hopf point passes some 40 special points (grazings, folds,
+    period doublings, Neimark-Sacker pairs) before its stick point at 30.74 N. On the critical
+    mode's scales its longer steps take another way through that cascade, where a change of mode
+    sequence at 34.45 N failed with the inputs moved by one ulp; the branch then runs again on the
+    static scales (``static_scales``, and its reason says why). Moved by -1, 0 and +1 ulp, every
+    input: the same stick point each time, to 1e-6 N."""
+    from conftest import moved
+
+    m = BASE.replace(**ts.arm_frequencies(0.0625, BASE))
+    sb = ts.sliding_branch(m, X)
+    (hp,) = np.flatnonzero((sb.is_hopf.values == 1) & (sb.hopf_status.values == 0))
+    h, om = float(sb.hopf_normal_load[hp]), float(sb.hopf_frequency[hp])
+    ends = []
+    for k in (-1, 0, 1):
+        values = {n: (float(moved(v, k)) if isinstance(v, float) and v != 0.0 and n != "torsion_sign" else v)
+                  for n, v in m.replace(normal_load=h).values().items()}  # fmt: skip
+        out = _core.branch(values, "unilateral", "switch", "normal_load", h, 10.0, 150.0, hopf_omega=om,
+                           options={"max_points": 5000.0}, stop_at="stick")  # fmt: skip
+        assert ts.STATUS_NAMES[int(out["status"])] == "success", out["reason"]
+        assert ts.BRANCH_POINT_TYPE_NAMES[int(out["point_type"][-1])] == "stick", out["reason"]
+        assert ("on the static scales" in out["reason"]) == bool(out["static_scales"])
+        ends.append(float(out["parameter"][-1]))
+    assert max(ends) - min(ends) < 1e-6 and abs(ends[1] - 30.7407) < 1e-3, ends

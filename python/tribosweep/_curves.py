@@ -98,6 +98,10 @@ class SharedBranches:
     def holds(self, kind: str, src: str, out: dict) -> bool:
         """Whether ``kind``'s own branch is ``out`` (``src``'s, stopped at its first ``src`` point)
         up to ``kind``'s first point, or to its end where it has none."""
+        if out.get("static_scales") and kind != src:
+            # Run again on the static scales after a failure further on (``_core.branch``): a
+            # branch stopped before that failure keeps the critical mode's scales.
+            return False
         grazes = bool((np.asarray(out["point_type"]) == POINT_TYPE_NAMES.index("grazing")).any())
         if grazes and self._law(src) != self._law(kind):
             return False

@@ -261,6 +261,9 @@ pub struct Branch {
     pub p_ref: f64,
     /// Period scale [s].
     pub t_ref: f64,
+    /// From a Hopf point: the branch on the critical mode's scales failed, and these points are
+    /// those of the run again on the static scales (see [`branch`]).
+    pub static_scales: bool,
 }
 
 /// Where a branch starts.
@@ -369,14 +372,31 @@ pub fn branch(
     let mut ctx =
         Ctx { base: q, name, opts: *opts, sizes: scales(&s0), t_ref: t0, p_ref, stats: Stats::default(), n_flows: 0 };
     let mut points = Vec::new();
-    let first = match start {
-        Start::Orbit { state0, period, direction } => follow::first_from_orbit(&mut ctx, &state0, period, direction),
-        Start::Hopf { omega } => follow::first_from_hopf(&mut ctx, &s0, omega, &mut points),
+    let run = |ctx: &mut Ctx<'_>, points: &mut Vec<BranchPoint>, mode_scales: bool| {
+        let first = match start {
+            Start::Orbit { state0, period, direction } => follow::first_from_orbit(ctx, &state0, period, direction),
+            Start::Hopf { omega } => follow::first_from_hopf(ctx, &s0, omega, mode_scales, points),
+        };
+        match first {
+            Ok(node) => follow::follow(ctx, node, (lo, hi), points),
+            Err(f) => (f.status, format!("the first orbit did not converge: {}", f.reason)),
+        }
     };
-    let (status, reason) = match first {
-        Ok(node) => follow::follow(&mut ctx, node, (lo, hi), &mut points),
-        Err(f) => (f.status, format!("the first orbit did not converge: {}", f.reason)),
-    };
+    let (mut status, mut reason) = run(&mut ctx, &mut points, true);
+    let static_scales = matches!(start, Start::Hopf { .. }) && !matches!(status, Status::Success | Status::NotComputed);
+    if static_scales {
+        // The critical mode's scales take longer steps; where the branch then fails (a mode
+        // sequence change that does not converge, in a cascade of grazings), it runs again from
+        // the Hopf point on the static scales, whose shorter steps take the other way through.
+        let (p_end, why) = (points.last().map_or(f64::NAN, |b| b.parameter), reason.clone());
+        points.clear();
+        ctx.opts = *opts;
+        ctx.sizes = scales(&s0);
+        (status, reason) = run(&mut ctx, &mut points, false);
+        reason = format!(
+            "{reason} (on the static scales: on the critical mode's the branch ended at {name} = {p_end:.10e}: {why})"
+        );
+    }
     let reason = if ctx.opts.hopf_amplitude < opts.hopf_amplitude && !points.is_empty() {
         let (a, a0) = (ctx.opts.hopf_amplitude, opts.hopf_amplitude);
         format!("{reason} (first orbit at hopf_amplitude = {a:.0e}: Newton did not converge from {a0:.0e})")
@@ -392,5 +412,6 @@ pub fn branch(
         n_flows: ctx.n_flows,
         p_ref: ctx.p_ref,
         t_ref: ctx.t_ref,
+        static_scales,
     })
 }

@@ -190,6 +190,7 @@ fn branch<'py>(
     d.set_item("n_rhs", b.stats.n_rhs)?;
     d.set_item("p_ref", b.p_ref)?;
     d.set_item("t_ref", b.t_ref)?;
+    d.set_item("static_scales", b.static_scales)?;
     Ok(d)
 }
 

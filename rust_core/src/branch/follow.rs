@@ -71,10 +71,14 @@ pub(super) fn first_from_hopf(
     ctx: &mut Ctx<'_>,
     s: &Slider,
     omega: f64,
+    mode_scales: bool,
     points: &mut Vec<BranchPoint>,
 ) -> Result<Node, Failure> {
     let j = s.jacobian(&State::zeros(), ContactMode::Contact);
     let v = critical_vector(&j, omega).ok_or_else(|| fail(Status::NotConverged, "no critical eigenvector".into()))?;
+    if mode_scales {
+        ctx.sizes = hopf_sizes(&ctx.sizes, &v, s.z_st.abs());
+    }
     let seq = Seq::contact();
     let t = 2.0 * PI / omega;
     let p = ctx.base.get(ctx.name).unwrap_or(f64::NAN);
@@ -133,6 +137,25 @@ pub(super) fn first_from_hopf(
         flags: 0,
     });
     Ok(first)
+}
+
+/// The scales of a branch from a Hopf point: the friction-direction components (`x`, `phi` and
+/// their rates) at least as large as the critical mode's own when `z` moves by `|z_st|` (`v`
+/// scaled to `v_z = 1`); `z` and `zd` keep theirs.
+///
+/// The characteristic sizes scale `x` by `|z_st|`, as `z`. On a mode whose friction-direction
+/// motion is larger than its normal motion the scaled orbit, and with it the arclength, was then
+/// that many times longer, and the steps sat at `ds_max`: a Stribeck branch of the friction mode
+/// took 400-1000 orbits to its stick point. The absolute tolerances of the flows and the Newton
+/// tolerance follow the same scales: each component is held to the same accuracy relative to its
+/// motion on the mode. Longer steps alone stepped over close special points; the steps are held
+/// back by the test functions they move ([`step_cap`], [`too_far`]).
+fn hopf_sizes(sizes: &State, v: &SVector<C64, 6>, z_st: f64) -> State {
+    let mut out = *sizes;
+    for i in [idx::X, idx::XD, idx::PHI, idx::PHID] {
+        out[i] = out[i].max(v[i].norm() * z_st);
+    }
+    out
 }
 
 /// Eigenvector of `j` for the eigenvalue nearest `i omega`, scaled so that `v_z = 1` (inverse
@@ -202,7 +225,9 @@ pub(super) fn follow(
         let mut next = node(ctx, e, tangent, cur.point.arclength + ds);
         let turn = cur.tangent.dot(&next.tangent).clamp(-1.0, 1.0).acos();
         let jump = (&next.e.xi - &pred).norm();
-        if turn > o.max_turn || jump > 0.5 * ds {
+        let rough = turn > o.max_turn || jump > 0.5 * ds;
+        let steep = !rough && ds * 0.5 >= o.ds_min && valid(ctx, &next.e) && too_far(ctx, &cur, &next);
+        if rough || steep {
             if ds * 0.5 >= o.ds_min {
                 ds *= 0.5;
                 continue;
@@ -238,11 +263,19 @@ pub(super) fn follow(
                         return (Status::Success, format!("stopped at the first {kind} point, {name} = {p:.10e}"));
                     }
                     points.push(n.point);
+                    let arc = n.point.arclength - g.point.arclength;
+                    ds = o.ds.min(step_cap(ctx, &g, &n, arc)).max(o.ds_min);
                     cur = n;
-                    ds = o.ds;
                     continue;
                 }
-                Err(f) => return (f.status, f.reason),
+                Err(f) => {
+                    // A smaller step reaches the grazing closer, where the change may succeed.
+                    if ds * 0.5 >= o.ds_min {
+                        ds *= 0.5;
+                        continue;
+                    }
+                    return (f.status, f.reason);
+                }
             }
         }
         let amp = next.point.z_max - next.point.z_min;
@@ -297,9 +330,78 @@ pub(super) fn follow(
         } else {
             1.0
         };
-        ds = (ds * factor).clamp(o.ds_min, o.ds_max);
+        let cap = step_cap(ctx, &cur, &next, ds);
+        ds = (ds * factor).min(cap).clamp(o.ds_min, o.ds_max);
         cur = next;
     }
+}
+
+/// The test functions a step may move only by [`STEP_THETA`] times their distance from zero, plus
+/// a floor: `dp/ds` (folds), `ln |rho|` of the non-trivial multipliers by modulus, descending
+/// (period doublings, Neimark-Sacker and branch points), the stick margin `(min |v_r| - eta) /
+/// eta`, the bilateral gap and the unilateral validity margin in their scales (grazing), and the
+/// amplitude in `|z_st|` (the end at steady sliding). Special points are detected between
+/// consecutive orbits, so two of them inside one step (a test function out and back across zero)
+/// are not seen: a test function that must cross zero and come back within a step must change
+/// there by more than its distance from zero, and these bounds keep each step's change below
+/// that, at the rate the last step saw ([`step_cap`]) and, where a step proves steeper, by
+/// halving it ([`too_far`]). On the issue-10 switch-law box (0.2 m/s, 12 slices) this found
+/// every special point of the branches the unscaled dense steps found, and a period doubling
+/// 1e-4 N from a fold that they missed.
+const NW: usize = 10;
+/// See [`NW`].
+const STEP_THETA: f64 = 0.5;
+fn watched(ctx: &Ctx<'_>, n: &Node) -> [f64; NW] {
+    let ip = n.e.seq.ip();
+    let mut out = [f64::NAN; NW];
+    out[0] = n.tangent[ip];
+    if let Some(sp) = n.spec {
+        let mut l: Vec<f64> = (0..6).filter(|&k| k != sp.trivial).map(|k| sp.rho[k].norm().ln()).collect();
+        l.sort_by(|a, b| b.total_cmp(a));
+        out[1..6].copy_from_slice(&l);
+    }
+    let band = n.e.model.s.p.stick_band;
+    if ctx.base.friction_law == FrictionLaw::Switch {
+        out[6] = (n.point.min_slip_velocity - band) / band;
+    }
+    if ctx.base.contact == ContactModel::Bilateral {
+        out[7] = n.point.min_gap / ctx.sizes[idx::Z];
+    } else {
+        out[8] = -ctx.violations(&n.e).iter().filter(|v| v.is_finite()).fold(f64::NEG_INFINITY, |a, &b| a.max(b));
+    }
+    out[9] = (n.point.z_max - n.point.z_min) / ctx.sizes[idx::Z];
+    out
+}
+
+fn floors(ctx: &Ctx<'_>) -> [f64; NW] {
+    let m = 0.005;
+    [0.02, m, m, m, m, m, 0.05, 0.01, 0.01, 0.5 * ctx.opts.hopf_amplitude]
+}
+
+/// Whether the step from `cur` to `next` moved a watched test function by more than `theta`
+/// times its smaller distance from zero at the two ends, plus its floor.
+fn too_far(ctx: &Ctx<'_>, cur: &Node, next: &Node) -> bool {
+    let theta = STEP_THETA;
+    let (a, b, f) = (watched(ctx, cur), watched(ctx, next), floors(ctx));
+    (0..NW).any(|i| {
+        let d = (b[i] - a[i]).abs();
+        d.is_finite() && d > theta * a[i].abs().min(b[i].abs()) + f[i]
+    })
+}
+
+/// The largest next step that moves no watched test function by more than `theta` times its
+/// distance from zero (plus a floor), at its rate over the last step.
+fn step_cap(ctx: &Ctx<'_>, cur: &Node, next: &Node, ds: f64) -> f64 {
+    let theta = STEP_THETA;
+    let (a, b, f) = (watched(ctx, cur), watched(ctx, next), floors(ctx));
+    let mut cap = f64::INFINITY;
+    for i in 0..NW {
+        let d = (b[i] - a[i]).abs();
+        if d.is_finite() && d > 0.0 && b[i].is_finite() {
+            cap = cap.min(ds * (theta * b[i].abs() + f[i]) / d);
+        }
+    }
+    cap
 }
 
 /// The last point, exactly on `bound`.

@@ -281,7 +281,16 @@ fn leave(ctx: &mut Ctx<'_>, g: &Node, xi: &Xi, seq: &Seq, change: &Change) -> Re
         }
         let cn = c.normalize();
         let mut last = fail(Status::NotConverged, "no step".into());
-        for eps in [0.0625 * ctx.opts.ds, 0.25 * ctx.opts.ds, ctx.opts.ds] {
+        let ip = seq.ip();
+        // Smallest first, from a thousandth of `ds`: a fold can follow a grazing within 4e-4 N
+        // (at 6.66 cm on the issue-10 switch-law box), and a first step past it hides both the
+        // turn and the fold. A first orbit whose tangent points back against the step it took in
+        // the parameter has passed a fold: smaller steps, down to ds / 1024.
+        let mut tries = vec![0.001 * ctx.opts.ds, 0.0625 * ctx.opts.ds, 0.25 * ctx.opts.ds, ctx.opts.ds];
+        let mut k = 0;
+        while k < tries.len() {
+            let eps = tries[k];
+            k += 1;
             let mut guess = xi.clone();
             for &n in &new {
                 guess[n] += eps / new.len() as f64;
@@ -293,6 +302,10 @@ fn leave(ctx: &mut Ctx<'_>, g: &Node, xi: &Xi, seq: &Seq, change: &Change) -> Re
             match ctx.correct(&guess, seq, &cn, &anchor) {
                 Ok(e) if valid(ctx, &e) && e.monitors.tau_min.0 > 0.0 => {
                     let tan = ctx.tangent(&e.jac, &cn).unwrap_or_else(|| cn.clone());
+                    if (e.xi[ip] - xi[ip]) * tan[ip] < 0.0 && eps > ctx.opts.ds / 1024.0 {
+                        tries.insert(k, 0.25 * eps);
+                        continue;
+                    }
                     let s = g.point.arclength + (&e.xi - xi).norm();
                     return Ok(node(ctx, e, tan, s));
                 }
