@@ -218,11 +218,11 @@ def _curve(kind: str, model, x, y, n, orbit, from_hopf, start, direction, option
 #: Under the switch law a curve's branches end at this many points unless ``max_points`` is given
 #: (the branch's own default is 1000). On the way to sticking the cycle's motion along the friction
 #: direction grows to about ``V / omega`` (0.2 m/s at 400 rad/s: 5e-4 m, some 50 times the static
-#: compression that scales the state in the arclength), so the steps sit at ``ds_max``: at 12.7 cm
-#: arm and 0.2 m/s the branch from the Hopf point (26.8 N) was at 17.3 N after 1000 points, with
-#: the smallest sliding velocity down to 0.013 of 0.2 m/s. (Scaling the friction direction by the
-#: critical mode's motion made such branches 10x shorter, but their steps then stepped over close
-#: pairs of special points: a fold 0.006 N past a grazing at 6.05 cm.)
+#: compression); on the static scales a branch took 400-1000 orbits to its stick point, and 1000
+#: ended the 6.4 and 12.7 cm slices of the issue-10 box before it. Branches from a Hopf point now
+#: scale the friction direction by the critical mode's motion (52-63 orbits where nothing happens on
+#: the way, 240-870 through the cascades of special points at 6-6.6 cm), but one that
+#: fails runs again on the static scales, which this bound must let finish.
 SWITCH_MAX_POINTS: int = 5000
 
 #: Bisections of the arm length where a curve leaves the window between two slices (see :func:`_arm_curve`).

@@ -5,8 +5,9 @@
 //! **The problem** (`solve.rs`). An orbit is a sequence of fixed-mode segments (one in contact
 //! for the bilateral law and for a unilateral orbit that never leaves the disk; flights, contacts
 //! and detachments otherwise). Unknowns `u = (y0 without zd, tau_1..tau_K, p)`, scaled: state
-//! components by the slider's characteristic sizes, durations by the starting period, `p` by its
-//! starting magnitude. Equations: the switching condition at the end of each segment but the
+//! components by the slider's characteristic sizes (from a Hopf point, the friction-direction
+//! ones at least the critical mode's: `follow::hopf_sizes`), durations by the starting period, `p`
+//! by its starting magnitude. Equations: the switching condition at the end of each segment but the
 //! last, periodicity `y_K - y0 = 0` with the phase condition `zd(0) = 0` built in (as in
 //! [`crate::shooting`]), and the pseudo-arclength row `tau . (u - u_pred) = 0`. One segment is
 //! plain shooting with the monodromy matrix `[Phi - I | f | dy/dp]` as Newton's matrix; with
