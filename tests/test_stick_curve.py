@@ -42,6 +42,7 @@ def test_a_hard_bending_branch_starts_from_its_hopf_point_at_a_smaller_amplitude
     b = ts.branch(m, "normal_load", 10.0, from_hopf=h, stop_at="stick")
     assert ts.STATUS_NAMES[int(b.status)] == "success"
     assert "first orbit at hopf_amplitude = 2e-3: Newton did not converge from 2e-2" in b.attrs["reason"]
+    assert b.attrs["static_scales"] == 0 and "the critical mode's own motion" in b.attrs["arclength_scales"]
     p, a1 = b.parameter.values, b.A1.values
     assert 0 < h - p[1] < 0.05
     slope, curve = [], []

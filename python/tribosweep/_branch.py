@@ -265,11 +265,18 @@ def branch(
              "bounds_high": hi, "start": value, "started_from": "hopf" if from_hopf is not None else "orbit",
              "contact": model.contact, "friction_law": model.friction_law, "reason": str(out["reason"]),
              "n_flows": int(out["n_flows"]), "n_rhs": int(out["n_rhs"]),
-             "arclength_scales": f"state by the characteristic sizes, period by {out['t_ref']:.9e} s, parameter by "
-                                 f"{out['p_ref']:.9e} {PARAM_UNITS[parameter]}"}  # fmt: skip
+             "arclength_scales": (f"state by the characteristic sizes{_MODE_SCALES if from_hopf is not None and not out['static_scales'] else ''}, period "
+                                  f"by {out['t_ref']:.9e} s, parameter by {out['p_ref']:.9e} {PARAM_UNITS[parameter]}"),
+             "static_scales": int(bool(out["static_scales"]))}  # fmt: skip
     attrs |= {f"continuation_{k}": (int(v) if k in _INT_OPTIONS else v) for k, v in settings.items()}
     attrs |= {f"model_{k}": v for k, v in model.values().items() if k != parameter}
     return _dataset(out, "branch_point", parameter, attrs)
+
+
+#: How a branch from a Hopf point scales the state (``_core.branch``; ``static_scales`` = 1: it ran
+#: again on the characteristic sizes alone after failing on these).
+_MODE_SCALES = (" (x, phi and their rates at least the critical mode's own motion when z moves by |z_st|; "
+                "static_scales = 0)")
 
 
 def _dataset(out: dict, dim: str, parameter: str, attrs: dict) -> xr.Dataset:

@@ -345,12 +345,16 @@ pub(super) fn follow(
 /// are not seen: a test function that must cross zero and come back within a step must change
 /// there by more than its distance from zero, and these bounds keep each step's change below
 /// that, at the rate the last step saw ([`step_cap`]) and, where a step proves steeper, by
-/// halving it ([`too_far`]). On the issue-10 switch-law box (0.2 m/s, 12 slices) this found
-/// every special point of the branches the unscaled dense steps found, and a period doubling
-/// 1e-4 N from a fold that they missed.
+/// halving it ([`too_far`]). Against the static scales' short steps on 33 branches (the issue-10
+/// switch law at 0.2 and 0.5 m/s, the constant and tanh laws): the same special points on 30,
+/// further on two that those steps ended at `max_points`, and in one cascade of some 40 special
+/// points (6.25 cm) a period doubling 1e-4 N from a fold that they missed and another way
+/// through its grazings to the same stick point.
 const NW: usize = 10;
 /// See [`NW`].
 const STEP_THETA: f64 = 0.5;
+
+/// The watched test functions of a node (see [`NW`]); NaN where one does not apply.
 fn watched(ctx: &Ctx<'_>, n: &Node) -> [f64; NW] {
     let ip = n.e.seq.ip();
     let mut out = [f64::NAN; NW];
@@ -373,6 +377,7 @@ fn watched(ctx: &Ctx<'_>, n: &Node) -> [f64; NW] {
     out
 }
 
+/// The floors of the watched functions' allowed change (the amplitude's: half the first orbit's).
 fn floors(ctx: &Ctx<'_>) -> [f64; NW] {
     let m = 0.005;
     [0.02, m, m, m, m, m, 0.05, 0.01, 0.01, 0.5 * ctx.opts.hopf_amplitude]
