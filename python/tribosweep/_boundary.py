@@ -150,12 +150,13 @@ def boundary_curves(
         evenly over the arm lengths the Hopf curve spans in the box.
     threads : int or None
         Threads for the continuations (None: one per core). The fold, grazing and stick curves run
-        at once, each on its share of the threads (at least one), and each curve's slices in
-        parallel; the curves are the same bit for bit whatever the count. Under the switch law the
+        at once and each curve's slices in parallel, with at most ``threads`` branches running at
+        any time, so a curve that ends early leaves its cores to the others; the curves are the
+        same bit for bit whatever the count. Under the switch law the
         fold curve reads its points off the stick curve's branches (each runs to its stick point,
         past the first fold), and so does the grazing curve where that branch keeps the contact
-        closed to its end; the stick curve runs first on all their shares, then the others: the
-        points are those of their own calls, to the last bit.
+        closed to its end; the stick curve runs first, then the others: the points are those of
+        their own calls, to the last bit.
 
     Returns
     -------
@@ -202,16 +203,16 @@ def boundary_curves(
     workers = _curves._workers(threads)
     box = ((x_lo, x_hi), (y_lo, y_hi))
     if workers >= 2 and len(todo) >= 2:
-        # The groups at once, each on its kinds' shares of the threads (at least one a kind; the
-        # odd ones to the first kinds): independent, so the same bits. Signals reach the main
-        # thread only: on Ctrl-C (or an error) here, the other groups' threads stop at their next
-        # branch instead of running their curves to the end.
+        # The groups at once, each with the threads for all its slices, and at most `workers`
+        # branches running at any time (`slots`): a curve whose branches end early leaves its cores
+        # to the others (the tanh law's grazing branches took 7.9 s on its one thread while the
+        # fold curve's thread idled after 0.7 s). Independent, so the same bits. Signals reach the
+        # main thread only: on Ctrl-C (or an error) here, the other groups' threads stop at their
+        # next branch instead of running their curves to the end.
         stop = threading.Event()
-        q, r = divmod(workers, len(todo))
-        share = dict(zip(todo, (max(1, q + (i < r)) for i in range(len(todo)))))
+        slots = threading.BoundedSemaphore(workers)
         with concurrent.futures.ThreadPoolExecutor(max_workers=len(groups)) as pool:
-            runs = [pool.submit(_group_curves, g, model, hopf, box, slices, sum(share[k] for k in g), stop)
-                    for g in groups]  # fmt: skip
+            runs = [pool.submit(_group_curves, g, model, hopf, box, slices, workers, stop, slots) for g in groups]
             try:
                 done = {k: v for run in runs for k, v in _curves._result(run).items()}
             except BaseException:
@@ -245,24 +246,25 @@ def _groups(todo: list[str], model: SliderModel) -> list[tuple[str, ...]]:
     return [(k,) for k in todo]
 
 
-def _group_curves(group: tuple[str, ...], model, hopf, box, slices: int, threads: int, stop=None) -> dict:
-    """:func:`_kind_curves` of each kind of ``group`` on the group's threads: the first kind, then
-    the others at once on shares of them, reading the first's branches (see :func:`_groups`)."""
+def _group_curves(group: tuple[str, ...], model, hopf, box, slices: int, threads: int, stop=None,
+                  slots=None) -> dict:  # fmt: skip
+    """:func:`_kind_curves` of each kind of ``group`` on ``threads`` threads: the first kind, then
+    the others at once, reading the first's branches (see :func:`_groups`); ``slots`` bounds the
+    branches running at once across all groups."""
     first, rest = group[0], group[1:]
     shared = _curves.SharedBranches(model.contact) if rest else None
-    done = {first: _kind_curves(first, model, hopf, *box, slices, threads, stop, shared)}
+    done = {first: _kind_curves(first, model, hopf, *box, slices, threads, stop, shared, slots)}
     if threads >= 2 and len(rest) >= 2:
-        q, r = divmod(threads, len(rest))
         with concurrent.futures.ThreadPoolExecutor(max_workers=len(rest)) as pool:
-            runs = [pool.submit(_kind_curves, k, model, hopf, *box, slices, max(1, q + (i < r)), stop, shared)
-                    for i, k in enumerate(rest)]  # fmt: skip
+            runs = [pool.submit(_kind_curves, k, model, hopf, *box, slices, threads, stop, shared, slots) for k in rest]
             done |= {k: _curves._result(run) for k, run in zip(rest, runs)}
     else:
-        done |= {k: _kind_curves(k, model, hopf, *box, slices, threads, stop, shared) for k in rest}
+        done |= {k: _kind_curves(k, model, hopf, *box, slices, threads, stop, shared, slots) for k in rest}
     return done
 
 
-def _kind_curves(kind: str, model, hopf, box_x, box_y, slices: int, threads: int, stop=None, shared=None):
+def _kind_curves(kind: str, model, hopf, box_x, box_y, slices: int, threads: int, stop=None, shared=None,
+                 slots=None):  # fmt: skip
     """The ``kind`` curves from each Hopf curve of ``hopf``: (parts, notes, calls, attributes).
     ``stop`` set: ends at the next branch (``_curves.Stopped``); ``shared``: see :func:`_group_curves`."""
     (x_lo, x_hi), (y_lo, y_hi) = box_x, box_y
@@ -281,7 +283,7 @@ def _kind_curves(kind: str, model, hopf, box_x, box_y, slices: int, threads: int
                      f"y=('arm_length', {a!r}, {b!r}), n={int(slices)}, from_hopf={start!r})")  # fmt: skip
         # func's own work (`fold_curve`, `grazing_curve` or `stick_curve`), with the stop event.
         ds = _curves._curve(kind, model, ("normal_load", x_lo, x_hi), ("arm_length", a, b), int(slices), None, start,
-                            None, None, {}, threads, stop, shared)  # fmt: skip
+                            None, None, {}, threads, stop, shared, slots)  # fmt: skip
         notes.append(f"from Hopf curve {c}: {ds.attrs['reason']}")
         sub = xr.Dataset({f"{kind}_{v}": _stored(ds, v, f"{kind}_point", f"{kind} curve") for v in CURVE_VARS})
         sub[f"{kind}_curve_index"] = xr.DataArray(

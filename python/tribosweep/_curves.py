@@ -10,6 +10,7 @@ three natural frequencies at once through the apparatus model, is sliced here.
 from __future__ import annotations
 
 import concurrent.futures
+import contextlib
 import os
 import threading
 from collections.abc import Mapping
@@ -149,7 +150,8 @@ def _workers(threads: int | None) -> int:
 
 
 def _curve(kind: str, model, x, y, n, orbit, from_hopf, start, direction, options, threads=None,
-           stop: threading.Event | None = None, shared: SharedBranches | None = None) -> xr.Dataset:  # fmt: skip
+           stop: threading.Event | None = None, shared: SharedBranches | None = None,
+           slots: threading.Semaphore | None = None) -> xr.Dataset:  # fmt: skip
     model = _model(model)
     threads = _checks.threads(threads)
     (xn, x_lo, x_hi), (yn, y_lo, y_hi) = _axis(model, x, "x"), _axis(model, y, "y", arm=True)
@@ -168,7 +170,7 @@ def _curve(kind: str, model, x, y, n, orbit, from_hopf, start, direction, option
         if orbit is not None:
             return _arm_orbit_curve(kind, model, (xn, x_lo, x_hi), (y_lo, y_hi), n, orbit, start, direction, opts)
         return _arm_curve(kind, model, (xn, x_lo, x_hi), (y_lo, y_hi), n, from_hopf, start, opts, threads, stop,
-                          shared)  # fmt: skip
+                          shared, slots)  # fmt: skip
     y_model = float(getattr(model, yn))
     if not y_lo <= y_model <= y_hi:
         raise ValueError(f"y = {y!r}: the model's {yn} = {y_model} (where the start orbit is) must lie within it")
@@ -297,7 +299,8 @@ def _slices_in_order(ys, hopfs, target: float, run, take, workers: int) -> list[
 
 
 def _arm_curve(kind: str, model: SliderModel, xspec, yspan, n: int, from_hopf, start, opts, threads=None,
-               stop: threading.Event | None = None, shared: SharedBranches | None = None) -> xr.Dataset:  # fmt: skip
+               stop: threading.Event | None = None, shared: SharedBranches | None = None,
+               slots: threading.Semaphore | None = None) -> xr.Dataset:  # fmt: skip
     """:func:`fold_curve` / :func:`grazing_curve` over the arm length: each slice from its own Hopf point.
 
     The arm length moves the three natural frequencies at once (``arm_frequencies``, the model's
@@ -317,6 +320,7 @@ def _arm_curve(kind: str, model: SliderModel, xspec, yspan, n: int, from_hopf, s
     set (by another thread) ends the curve at its next branch with :class:`Stopped`. ``shared``
     (switch law, fold and stick curves of one box): the stick curve's branches, which the fold curve
     reads its points off (:class:`SharedBranches`); work counts only the branches a curve runs itself.
+    ``slots``: at most that many branches run at once, across the curves that share it.
     """
     from ._hopf import sliding_branch
 
@@ -344,8 +348,11 @@ def _arm_curve(kind: str, model: SliderModel, xspec, yspan, n: int, from_hopf, s
             if stop is not None and stop.is_set():
                 raise Stopped
             m = at(yv)
-            return _core.branch(m.replace(**{xn: h}).values(), contact, m.friction_law, xn, h, x_lo, x_hi,
-                                hopf_omega=omega, options=opts, stop_at=kind)  # fmt: skip
+            with slots if slots is not None else contextlib.nullcontext():
+                if stop is not None and stop.is_set():
+                    raise Stopped
+                return _core.branch(m.replace(**{xn: h}).values(), contact, m.friction_law, xn, h, x_lo, x_hi,
+                                    hopf_omega=omega, options=opts, stop_at=kind)  # fmt: skip
 
         return own() if shared is None else shared.fetch(kind, (float(yv), float(h), float(omega)), own)
 
