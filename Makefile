@@ -5,7 +5,7 @@ BIN    := $(VENV)/bin
 # Two cores on CI: build and test with both.
 export CARGO_BUILD_JOBS ?= 2
 
-.PHONY: run test test-rust test-python install install-test lint bench bench-quick bench-pybasin clean
+.PHONY: run test test-rust test-python install install-test lint bench bench-quick bench-pybasin device-carry clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -66,5 +66,9 @@ bench-pybasin:
 bench-quick: install-test
 	$(BIN)/tribosweep bench --quick --out bench_out
 
+# This build and its runtime dependencies as wheels, for a bench on a machine with no package index.
+device-carry: install-test
+	bash benches/device_carry.sh
+
 clean:
-	rm -rf target $(VENV) out bench_out
+	rm -rf target $(VENV) out bench_out .device-carry
