@@ -318,8 +318,8 @@ def _arm_curve(kind: str, model: SliderModel, xspec, yspan, n: int, from_hopf, s
     slice whose guess proves wrong once the earlier results are in runs again with the right one. So
     the curve is the one the slices give in order, bit for bit, whatever the thread count. ``stop``
     set (by another thread) ends the curve at its next branch with :class:`Stopped`. ``shared``
-    (switch law, fold and stick curves of one box): the stick curve's branches, which the fold curve
-    reads its points off (:class:`SharedBranches`); work counts only the branches a curve runs itself.
+    (switch law, the curves of one box): the branches the curves lend each other, the stick curve's
+    first (:class:`SharedBranches`); work counts only the branches a curve runs itself.
     ``slots``: at most that many branches run at once, across the curves that share it.
     """
     from ._hopf import sliding_branch
