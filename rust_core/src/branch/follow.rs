@@ -383,30 +383,26 @@ fn floors(ctx: &Ctx<'_>) -> [f64; NW] {
     [0.02, m, m, m, m, m, 0.05, 0.01, 0.01, 0.5 * ctx.opts.hopf_amplitude]
 }
 
-/// Whether the step from `cur` to `next` moved a watched test function by more than `theta`
-/// times its smaller distance from zero at the two ends, plus its floor.
-fn too_far(ctx: &Ctx<'_>, cur: &Node, next: &Node) -> bool {
-    let theta = STEP_THETA;
+/// Each watched test function's change over the step from `cur` to `next`, its distances from
+/// zero at both ends, and its floor (NaN changes where one does not apply).
+fn changes(ctx: &Ctx<'_>, cur: &Node, next: &Node) -> [(f64, f64, f64, f64); NW] {
     let (a, b, f) = (watched(ctx, cur), watched(ctx, next), floors(ctx));
-    (0..NW).any(|i| {
-        let d = (b[i] - a[i]).abs();
-        d.is_finite() && d > theta * a[i].abs().min(b[i].abs()) + f[i]
-    })
+    std::array::from_fn(|i| ((b[i] - a[i]).abs(), a[i].abs(), b[i].abs(), f[i]))
 }
 
-/// The largest next step that moves no watched test function by more than `theta` times its
-/// distance from zero (plus a floor), at its rate over the last step.
+/// Whether the step from `cur` to `next` moved a watched test function by more than
+/// [`STEP_THETA`] times its smaller distance from zero at the two ends, plus its floor.
+fn too_far(ctx: &Ctx<'_>, cur: &Node, next: &Node) -> bool {
+    changes(ctx, cur, next).iter().any(|&(d, a, b, f)| d.is_finite() && d > STEP_THETA * a.min(b) + f)
+}
+
+/// The largest next step that moves no watched test function by more than [`STEP_THETA`] times
+/// its distance from zero (plus its floor), at its rate over the last step (`ds` long).
 fn step_cap(ctx: &Ctx<'_>, cur: &Node, next: &Node, ds: f64) -> f64 {
-    let theta = STEP_THETA;
-    let (a, b, f) = (watched(ctx, cur), watched(ctx, next), floors(ctx));
-    let mut cap = f64::INFINITY;
-    for i in 0..NW {
-        let d = (b[i] - a[i]).abs();
-        if d.is_finite() && d > 0.0 && b[i].is_finite() {
-            cap = cap.min(ds * (theta * b[i].abs() + f[i]) / d);
-        }
-    }
-    cap
+    changes(ctx, cur, next)
+        .iter()
+        .filter(|&&(d, ..)| d.is_finite() && d > 0.0)
+        .fold(f64::INFINITY, |cap, &(d, _, b, f)| cap.min(ds * (STEP_THETA * b + f) / d))
 }
 
 /// The last point, exactly on `bound`.
