@@ -32,8 +32,7 @@ cat > "$OUT/run.sh" <<'RUNEOF'
 #!/usr/bin/env bash
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
-python3 -m pip install -q --no-index --find-links "$here/wheels" numpy pandas xarray netCDF4 cftime tqdm \
-    python-dateutil tzdata packaging certifi
+python3 -m pip install -q --no-index "$here"/wheels/*.whl
 export PYTHONPATH="$here/pkg${PYTHONPATH:+:$PYTHONPATH}"
 nproc; lscpu | grep -m1 "Model name" || true
 "$@"

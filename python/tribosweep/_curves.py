@@ -77,7 +77,8 @@ class SharedBranches:
     while it runs waits for it, and a kind reads its first point off a stored branch where
     :meth:`holds` says that is the point its own branch would locate, to the last bit; elsewhere
     it runs its own. The stick curve runs first: the fold and grazing curves read their slices off
-    its branches, and each other's end bisections where the two end at the same arm lengths.
+    its branches, and each other's end bisections where the two end at the same arm lengths. The
+    Hopf points of each arm length are found once for all the curves too (:meth:`hopf`).
 
     The grazing curve follows its branches with the bilateral law (:func:`grazing_curve`). A
     unilateral branch is the bilateral one, bit for bit, for as long as it keeps the contact closed
@@ -92,6 +93,17 @@ class SharedBranches:
         self._runs: dict[tuple[float, float, float], tuple[str, dict]] = {}
         self._pending: dict[tuple[float, float, float], concurrent.futures.Future] = {}
         self._contact = contact
+        self._hopf: dict[float, tuple[np.ndarray, np.ndarray]] = {}
+
+    def hopf(self, y: float, find):
+        """The Hopf points at arm length ``y``: ``find(y)``, once for all the curves."""
+        with self._lock:
+            got = self._hopf.get(y)
+        if got is None:
+            got = find(y)
+            with self._lock:
+                got = self._hopf.setdefault(y, got)
+        return got
 
     def _law(self, kind: str) -> str:
         return "bilateral" if kind == "grazing" else self._contact
@@ -337,11 +349,14 @@ def _arm_curve(kind: str, model: SliderModel, xspec, yspan, n: int, from_hopf, s
     work = {"status": 0, "n_flows": 0, "n_rhs": 0}
     counting = threading.Lock()
 
-    def hopf_points(yv: float) -> tuple[np.ndarray, np.ndarray]:
-        """The Hopf points of ``x`` in the window at arm length ``yv`` and their frequencies."""
+    def find_hopf(yv: float) -> tuple[np.ndarray, np.ndarray]:
         sb = sliding_branch(at(yv), (xn, x_lo, x_hi))
         ok = (sb.is_hopf.values == 1) & (sb.hopf_status.values == 0)
         return sb[f"hopf_{xn}"].values[ok], sb.hopf_frequency.values[ok]
+
+    def hopf_points(yv: float) -> tuple[np.ndarray, np.ndarray]:
+        """The Hopf points of ``x`` in the window at arm length ``yv`` and their frequencies."""
+        return find_hopf(yv) if shared is None else shared.hopf(float(yv), find_hopf)
 
     def branch_from(yv: float, h: float, omega: float) -> dict:
         def own() -> dict:
