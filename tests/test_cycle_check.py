@@ -10,6 +10,9 @@ phase, or a start close to a saddle) it repeats too, on a cycle that is no stead
 - Failure detected: transients started near the bilateral seed's saddle cycle stop on it; the
   check finds it unstable and the run goes on to the state it really reaches.
 - A shooting failure leaves the transient's cycle, flagged and explained.
+- A run that reaches ``t_max`` on a slow approach (its newest section nearly repeating) is shot
+  from there: the stable cycle it approaches is its outcome, at the rate its slowest multiplier
+  gives; intermittent motion stays irregular.
 """
 
 import numpy as np
@@ -286,3 +289,69 @@ def test_a_stop_is_within_periodic_tol_over_the_multiplier_gap_of_its_orbit():
         d = stops(law, **axes)
         s = summary(d, 1e-5)
         assert s["n"] >= 3 and s["within_3x"] == 1.0, (law, s)
+
+
+#: The switch-law Stribeck point at 10 N, 10.1 cm, 0.2 m/s (benches/bench_stribeck.py): a stable
+#: period-2 contact-loss cycle whose slowest multiplier is 0.9933 (x's light damping). Its
+#: transients settle after some seconds of chaotic motion, at a time that moves with the last bits
+#: (22-25 s from the default start at -2..+2 ulps of the inputs; the sweep's, 21.5 s at 0 ulps).
+SLOW_LAW = ts.SliderModel(contact="unilateral", friction_law="switch", mu_static=0.3, sliding_speed=0.2)
+SLOW = dict(normal_load=[10.0], arm_length=[0.10133333333333333], sliding_speed=[0.2])
+
+
+def test_a_run_unsettled_at_t_max_on_a_slow_approach_ends_on_the_stable_cycle_shooting_finds(monkeypatch):
+    m = ts.apparatus_model(10.0, SLOW["arm_length"][0], 0.2, base=SLOW_LAW)
+
+    def run(t_end, y0=None, check=True):
+        return ts.ensemble(m, t_end, {"normal_load": [10.0]}, y0=y0, steady=True, check_cycles=check)
+
+    done = run(60.0, check=False)
+    assert ts.labels(done.outcome).values[0] == "periodic"
+    assert np.isnan(done.nearest_residual.values[0]) and int(done.nearest_multiplicity[0]) == 0
+    # A start on the cycle's section with x moved by 0.3 of its amplitude: no chaotic phase, only
+    # the slow approach (it repeats at 15.4 s).
+    y0 = np.array([float(done[f"{v}_end"][0]) for v in STATE])
+    y0[2] += 0.3 * float(done.x1_amplitude[0])
+    assert 12.0 < float(run(60.0, y0, check=False).t_end[0]) < 20.0
+    times = np.array([4.0, 6.0, 8.0, 10.0])
+    runs = [run(t, y0, check=False) for t in times]
+    for ds in runs:
+        assert ts.labels(ds.outcome).values[0] == "unsettled"
+        # Its closest repetition is the cycle's: after 2 sections, over the cycle's period.
+        assert int(ds.nearest_multiplicity[0]) == 2
+        np.testing.assert_allclose(ds.nearest_period.values, 2 * np.pi / done.omega.values, rtol=1e-4)
+    r = np.array([float(ds.nearest_residual[0]) for ds in runs])
+    assert 1e-5 < r[-1] < _cycles.NEAREST_TOL and r[-1] < 0.1 * r[0]
+    # Analytic: a slow approach shrinks along the slowest Floquet mode, by |mu| = 0.9933 a period
+    # (a least-squares line through the residuals at 4-10 s: 0.9937).
+    per_period = np.exp(np.polyfit(times, np.log(r), 1)[0] * float(runs[-1].nearest_period[0]))
+    checked = run(10.0, y0)
+    reason = str(checked.reason.values[0])
+    mu = float(reason.split("largest multiplier ")[1].rstrip(")"))
+    assert abs(mu - 0.9933) < 5e-4, reason
+    assert abs(per_period - mu) < 1e-3, (per_period, mu)
+    # Shot from its newest section, it is the cycle a run to 60 s repeats on, verified and measured.
+    assert ts.labels(checked.outcome).values[0] == "periodic" and "a slow approach" in reason
+    assert ts.labels(checked.cycle_verified).values[0] == "verified"
+    # To the runs' accuracy (rtol 1e-8: 1.0e-9 apart in omega, 6e-8 in A1, as measured).
+    ref = run(60.0)
+    np.testing.assert_allclose(checked.omega.values, ref.omega.values, rtol=1e-7)
+    np.testing.assert_allclose(checked.z1_amplitude.values, ref.z1_amplitude.values, rtol=1e-5)
+    # Without the shooting it stays unsettled.
+    monkeypatch.setattr(_cycles, "NEAREST_TOL", 0.0)
+    assert ts.labels(run(10.0, y0).outcome).values[0] == "unsettled"
+
+
+def test_the_sweep_reports_a_slow_approach_as_its_cycle_and_intermittency_as_irregular():
+    # t_max = 16 s: the transient has not repeated yet (at 21.5 s), but its newest section has.
+    slow = ts.sweep(model=SLOW_LAW, census=False, t_max=16.0, threads=2, progress=False, **SLOW)
+    assert ts.labels(slow.regime).values.ravel()[0] == "contact_loss"
+    assert int(_first(slow, "cycle_verified")) == 1 and "a slow approach" in str(_first(slow, "reason"))
+    assert np.isnan(_first(slow, "irregular_ftle"))
+    # At 25.6 N, 0.4 m/s the motion is intermittent: laminar phases near a period-2 cycle, bursts
+    # every 4 s (unsettled at 200 s). At t_max it may be in a laminar phase, repeating to 1.6e-3;
+    # shooting from there finds no stable cycle (Newton does not converge), so it stays irregular.
+    burst = ts.sweep(model=SLOW_LAW, census=False, t_max=20.0, threads=2, progress=False, normal_load=[25.555555555555557],
+                     arm_length=SLOW["arm_length"], sliding_speed=[0.4])  # fmt: skip
+    assert ts.labels(burst.regime).values.ravel()[0] == "irregular"
+    assert "a slow approach" not in str(_first(burst, "reason"))

@@ -207,7 +207,10 @@ def ensemble(
         A periodic outcome is the run's stop, where its section state repeated to
         ``periodic_tol``: near a slowly attracting cycle about ``periodic_tol / (1 - |mu|)`` from
         it (0.7 % in A1 on the Stribeck sweep), near an unstable one (intermittent motion) not a
-        steady state at all. ``check_cycles=True`` checks each such stop as a sweep does.
+        steady state at all. ``check_cycles=True`` checks each such stop as a sweep does. A run
+        that reaches ``t_end`` unsettled reports its closest repetition (``nearest_residual``,
+        ``nearest_multiplicity``, ``nearest_period``): a slowly attracting cycle not yet worked
+        off shows as a residual a little above ``periodic_tol``.
     periodic_tol : float
         Relative repetition tolerance of the Poincare-section state that declares a cycle.
     decay_amplitude : float, m, optional
@@ -219,7 +222,10 @@ def ensemble(
         ``rtol``). A stable orbit is measured by a run started on it, so its quantities are the
         orbit's; from an unstable one the run goes on with the time it has left; a failed check
         leaves the stop, with a reason. Adds ``cycle_verified``. Without it a stop is reported as
-        it was (:func:`periodic_orbit` from ``(z_end, ...)`` and ``period`` converges one).
+        it was (:func:`periodic_orbit` from ``(z_end, ...)`` and ``period`` converges one). An
+        unsettled run whose closest repetition is within ``_cycles.NEAREST_TOL`` (1e-2) is shot
+        from too: a stable orbit of that period becomes its outcome, ``periodic``, with a reason
+        that says so (a slow approach).
 
     Returns
     -------
@@ -297,6 +303,14 @@ def ensemble(
         for k, (units, text) in summary_units.items():
             data[k] = (dims, out[k], {"units": units, "long_name": text})
         data["multiplicity"] = (dims, out["multiplicity"], {"units": "1", "long_name": "section crossings per period"})
+        # An unsettled run's closest repetition: a slowly attracting cycle shows as a small residual.
+        data["nearest_residual"] = (dims, out["nearest_residual"], {"units": "1", "long_name": (
+            "unsettled: the newest section state's smallest repetition residual after 1-8 sections, relative to "
+            "each component's amplitude (periodic_tol is its threshold)")})  # fmt: skip
+        data["nearest_multiplicity"] = (dims, out["nearest_multiplicity"], {
+            "units": "1", "long_name": "unsettled: section crossings of that closest repetition (0: none)"})
+        data["nearest_period"] = (dims, out["nearest_period"], {
+            "units": "s", "long_name": "unsettled: time over the crossings of that closest repetition"})
         if verified is not None:
             data["cycle_verified"] = (dims, np.where(out["outcome"] == _cycles.PERIODIC, verified, -1).astype(np.int8),
                                       flag_attrs(("no_cycle", "not_verified", "verified"), "whether shooting "

@@ -19,6 +19,7 @@ import time
 import numpy as np
 
 from .. import _cycles
+from .._cycles import slowest_multiplier
 from .._settings import DEFAULTS
 from .._sweep import stages
 from .._sweep import sweep as _sweep
@@ -29,15 +30,6 @@ LAWS = ("switch", "coulomb")
 #: A cycle whose A1 is below this fraction of its largest harmonic of z is left out of the
 #: comparison: its A1, a small part of its motion, carries the Fourier quadrature's own error.
 SMALL_A1 = 0.1
-
-
-def slowest_multiplier(moduli: np.ndarray) -> np.ndarray:
-    """Per orbit, the largest modulus after dropping the one closest to 1 (the trivial multiplier)."""
-    m = np.atleast_2d(np.asarray(moduli, dtype=np.float64))
-    trivial = np.argmin(np.abs(m - 1.0), axis=1)
-    keep = np.ones_like(m, dtype=bool)
-    keep[np.arange(m.shape[0]), trivial] = False
-    return np.where(keep, m, -np.inf).max(axis=1)
 
 
 def stops(law: str, threads: int = 2, **axes) -> dict:

@@ -14,7 +14,7 @@ use std::collections::HashMap;
 use tribosweep_core::model::{ContactModel, FrictionLaw, Params, Slider, State};
 use tribosweep_core::ode::{Method, Stats};
 use tribosweep_core::parallel::{par_fill, par_map};
-use tribosweep_core::steady::{RunResult, Summary, Tolerances};
+use tribosweep_core::steady::{Nearest, RunResult, Summary, Tolerances};
 use tribosweep_core::tidf::Variant;
 
 /// Most worker threads a call accepts (as the Python API's `_checks.MAX_THREADS`): far above any
@@ -336,6 +336,14 @@ pub(crate) fn summaries_into(d: &Bound<'_, PyDict>, out: &[(Summary, String)]) -
     }
     d.set_item("irregular_cells", cells.into_pyarray(py))?;
     d.set_item("irregular_cell_extent", extent.into_pyarray(py))?;
+    // Unsettled runs: the newest section state's closest repetition (NaN and 0 otherwise).
+    let near = |g: &dyn Fn(&Nearest) -> f64| f(&|s| s.nearest.as_ref().map_or(f64::NAN, g));
+    d.set_item("nearest_period", near(&|n| n.period))?;
+    d.set_item("nearest_residual", near(&|n| n.residual))?;
+    let mult = Array1::from_iter(out.iter().map(|o| o.0.nearest.map_or(0, |n| n.multiplicity)));
+    d.set_item("nearest_multiplicity", mult.into_pyarray(py))?;
+    let ny: Vec<State> = out.iter().map(|o| o.0.nearest.map_or(State::repeat(f64::NAN), |n| n.y)).collect();
+    d.set_item("nearest_y", states(ny.iter(), out.len()).into_pyarray(py))?;
     let stats: Vec<Stats> = out.iter().map(|o| o.0.stats).collect();
     stats_into(d, &stats)
 }

@@ -464,6 +464,26 @@ pub struct Summary {
     /// a block of its statistics, or [`RECUR_SECTIONS`] sections in a row in its cells) rather than
     /// three of its own blocks being stationary.
     pub matched_known: bool,
+    /// Unsettled only: the newest section state's closest repetition ([`Nearest`]; `None` with
+    /// fewer than two sections). A slowly attracting cycle that had not repeated to
+    /// `periodic_tol` by `t_max` shows here, a start for shooting.
+    pub nearest: Option<Nearest>,
+}
+
+/// The closest repetition of a run's newest section state among the `p = 1..=MAX_MULTIPLICITY`
+/// before it, measured as the repetition test does (each compared component's difference
+/// relative to its amplitude over the `p` sections); `p` reduced to its smallest divisor whose
+/// states repeat to [`REDUCE_TOL`], as for a found cycle.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Nearest {
+    /// The newest section state.
+    pub y: State,
+    /// Time over the `multiplicity` sections [s].
+    pub period: f64,
+    /// Sections per repetition.
+    pub multiplicity: u32,
+    /// The relative repetition residual at the smallest-residual `p` (before the reduction).
+    pub residual: f64,
 }
 
 impl Summary {
@@ -491,6 +511,7 @@ impl Summary {
             failure: None,
             fingerprint: None,
             matched_known: false,
+            nearest: None,
         }
     }
 
@@ -635,6 +656,7 @@ pub(crate) fn summarize(s: &Slider, r: &RunResult, w: &SectionWatcher, opts: &St
         sum.outcome = SteadyOutcome::Unsettled;
         sum.status = Status::NotConverged;
         sum.failure = Some(Failure::Unsettled { t_max: opts.t_max, periodic_tol: opts.periodic_tol });
+        sum.nearest = w.nearest();
     }
     sum
 }

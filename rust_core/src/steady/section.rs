@@ -322,6 +322,29 @@ impl SectionWatcher {
         self.check();
     }
 
+    /// The relative repetition residual of the newest section state against the one `d` crossings
+    /// back: the largest compared component's difference in units of what [`Self::repeats`]
+    /// allows per unit of `rel`.
+    fn residual(&self, d: usize) -> f64 {
+        let amp = (0..d).fold(State::zeros(), |m, k| m.sup(&self.get(k).peaks));
+        let (a, b) = (self.get(0), self.get(d));
+        self.comps.iter().map(|&c| (a.y[c] - b.y[c]).abs() / amp[c].max(1e-6 * self.sizes[c])).fold(0.0, f64::max)
+    }
+
+    /// The newest section state's closest repetition ([`super::Nearest`]; `None` before two
+    /// sections).
+    pub(super) fn nearest(&self) -> Option<super::Nearest> {
+        let top = MAX_MULTIPLICITY.min(self.n_seen.saturating_sub(1));
+        let (p, residual) =
+            (1..=top).map(|p| (p, self.residual(p))).fold(None, |best: Option<(usize, f64)>, (p, r)| match best {
+                Some((_, rb)) if rb <= r => best,
+                _ => Some((p, r)),
+            })?;
+        let d = (1..p).filter(|d| p % d == 0).find(|&d| self.repeats(d, REDUCE_TOL.max(self.tol))).unwrap_or(p);
+        let a = self.get(0);
+        Some(super::Nearest { y: a.y, period: a.t - self.get(d).t, multiplicity: d as u32, residual })
+    }
+
     /// Whether the newest section state equals the one `d` crossings back within `rel` relative
     /// to each component's amplitude (floored at a millionth of its characteristic size, so that a
     /// component that hardly moves does not demand the impossible).

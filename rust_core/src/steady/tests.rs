@@ -301,3 +301,27 @@ fn an_escape_in_free_flight_inside_the_disk_is_a_missed_event() {
     let text = f.to_string();
     assert!(text.contains("free flight inside the disk") && text.contains("a contact event was missed"), "{text}");
 }
+
+#[test]
+fn an_unsettled_run_reports_its_closest_repetition() {
+    let opts = SteadyOptions { watch_x: false, ..SteadyOptions::default() };
+    // One section: nothing to compare with.
+    assert_eq!(watcher(&opts, 1, two(0.99)).0.nearest(), None);
+    // Converging on a period-2 cycle at 0.99 per section, not yet repeated to 1e-5 after 200 and
+    // 300 sections: the closest repetition is after 2 sections (those after 4, 6, 8 reduce to
+    // it), over two section intervals, and its residual shrinks as 0.99^100 = 0.37 in between.
+    let (w200, n200) = watcher(&opts, 200, two(0.99));
+    let (w300, n300) = watcher(&opts, 300, two(0.99));
+    assert_eq!((n200, n300), (200, 300), "not settled");
+    let (a, b) = (w200.nearest().expect("sections"), w300.nearest().expect("sections"));
+    assert_eq!((a.multiplicity, b.multiplicity), (2, 2));
+    assert!((b.period - 0.02).abs() < 1e-12, "{}", b.period);
+    assert_eq!(b.y, two(0.99)(299));
+    let ratio = b.residual / a.residual;
+    assert!((0.2..0.6).contains(&ratio), "{} -> {}: {ratio}", a.residual, b.residual);
+    assert!(b.residual > opts.periodic_tol && b.residual < 1e-2, "{}", b.residual);
+    // Quasi-periodic motion repeats nowhere near as well: at best to 9 % (a near return of the
+    // golden-ratio phase after 8 sections), far above the 1e-2 from which a sweep shoots.
+    let far = watcher(&opts, 300, torus(1.0)).0.nearest().expect("sections").residual;
+    assert!(far > 0.05, "{far}");
+}
