@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 import tribosweep as ts
-from tribosweep import _core, _cycles
+from tribosweep import _census, _core, _cycles
 from tribosweep._codes import OUTCOME_NAMES, REGIME
 from tribosweep._settings import Steady, SweepSettings
 from tribosweep._sweep import stages
@@ -355,3 +355,43 @@ def test_the_sweep_reports_a_slow_approach_as_its_cycle_and_intermittency_as_irr
                      arm_length=SLOW["arm_length"], sliding_speed=[0.4])  # fmt: skip
     assert ts.labels(burst.regime).values.ravel()[0] == "irregular"
     assert "a slow approach" not in str(_first(burst, "reason"))
+
+
+def test_the_census_counts_a_sample_on_a_slow_approach_with_the_cycle_it_approaches(monkeypatch):
+    # Two samples of the slow point's census, started as above: one unsettled at t_max = 10 s,
+    # one run on until it repeats. The first is shot from its newest section and joins the second's
+    # cycle (one cluster) instead of counting as irregular motion.
+    m = ts.apparatus_model(10.0, SLOW["arm_length"][0], 0.2, base=SLOW_LAW)
+    base, names, vals = m.values(), ["normal_load"], np.array([[10.0]])
+
+    def steady(rows, starts, known, restart=None, t_max=10.0):
+        return _core.ensemble(base, "unilateral", "switch", names, vals[rows], np.atleast_2d(starts), t_max, "dop853",
+                              1e-6, threads=1, kind="steady", periodic_tol=1e-5, n_fourier=512, irregular_block=256,
+                              restart=restart)  # fmt: skip
+
+    def shoot(rows, y, p, z1, size):
+        return _cycles.shoot(base, "unilateral", "switch", names, vals[rows], y, p, z1, size, rtol=1e-9, tol=1e-8,
+                             threads=1)  # fmt: skip
+
+    done = ts.ensemble(m, 60.0, {"normal_load": [10.0]}, steady=True)
+    y0 = np.array([float(done[f"{v}_end"][0]) for v in STATE])
+    y0[2] += 0.3 * float(done.x1_amplitude[0])
+
+    def census_check():
+        runs = [_cycles.rows(steady([0], y0, None, t_max=t)) for t in (10.0, 60.0)]
+        res = {k: np.stack([r[k] for r in runs], axis=1) for k in runs[0]}
+        check = _cycles.CensusCheck(res, _census.CYCLE_TOL, steady, lambda: None, 10.0, 1e-9, 1e-8)
+        check.settle(shoot)
+        return res, check
+
+    res, check = census_check()
+    assert list(res["outcome"][0]) == [_cycles.PERIODIC, _cycles.PERIODIC]
+    assert "a slow approach" in res["reason"][0, 0] and res["reason"][0, 1] == ""
+    assert check.orbit[(0, 0)][0] and check.orbit[(0, 1)][0]  # both stable, verified
+    label, heads = _cycles.cluster(res["omega"][0], res["multiplicity"][0], res["z1_amplitude"][0], _census.CYCLE_TOL)
+    assert list(label) == [0, 0] and list(res["multiplicity"][0]) == [2, 2]
+    np.testing.assert_allclose(res["omega"][0, 0], done.omega.values[0], rtol=1e-6)
+    # Without it, the first sample stays unsettled: the census's irregular attractor.
+    monkeypatch.setattr(_cycles, "NEAREST_TOL", 0.0)
+    res, _ = census_check()
+    assert list(res["outcome"][0]) == [_cycles.UNSETTLED, _cycles.PERIODIC]

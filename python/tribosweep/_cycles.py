@@ -294,6 +294,8 @@ class CensusCheck:
     stable orbit is kept (:meth:`measure` measures the largest cluster's on its orbit); one whose
     shooting failed or landed on another orbit stays, not verified. Samples that still stop on
     cycles after :data:`CHECK_ROUNDS` checks of cycles they left are not decided (``unsettled``).
+    Samples unsettled at ``t_max`` on a slow approach join the stable cycle that shooting from
+    their newest section finds (:meth:`_slow_approach`), instead of counting as irregular motion.
     """
 
     def __init__(self, res: dict, cycle_tol: float, steady, known, t_max: float, rtol: float, tol: float):
@@ -309,6 +311,14 @@ class CensusCheck:
         return flat
 
     def settle(self, shoot) -> None:
+        """Checks the cycles (:meth:`_rounds`), then the samples left unsettled at ``t_max`` on a slow
+        approach (:meth:`_slow_approach`)."""
+        stuck = self._rounds(shoot)
+        self._slow_approach(shoot, stuck)
+
+    def _rounds(self, shoot) -> np.ndarray:
+        """The rounds of checks; returns the flat indices of the samples still stopping near unstable
+        cycles after the last (made ``unsettled``)."""
         res, m = self.res, self.res["outcome"].shape[0]
         went_on = np.zeros(0, dtype=np.int64)
         for _ in range(CHECK_ROUNDS):
@@ -321,7 +331,7 @@ class CensusCheck:
                         heads.append((i, per[h]))
                         members.append(per[label == c])
             if not heads:
-                return
+                return went_on[:0]
             pts = np.array([i for i, _ in heads])
             cols = np.array([s for _, s in heads])
             orbs = shoot(pts, res["y_end"][pts, cols], res["period"][pts, cols], res["z1_amplitude"][pts, cols],
@@ -332,12 +342,52 @@ class CensusCheck:
             go = [(heads[j][0], s, orbs["moduli"][j], orbs["period"][j]) for j in np.flatnonzero(orbs["unstable"])
                   for s in members[j]]  # fmt: skip
             if not go:
-                return
+                return went_on[:0]
             went_on = self._leave(go)
         # The samples that went on in the last round and stopped on a cycle again: not decided.
         again = went_on[self.flat("outcome")[went_on] == PERIODIC]
         self.flat("outcome")[again] = UNSETTLED
         self.flat("status")[again] = STATUS["not_converged"]
+        return again
+
+    def _slow_approach(self, shoot, stuck: np.ndarray) -> None:
+        """Samples unsettled at ``t_max`` whose newest section nearly repeated (:data:`NEAREST_TOL`;
+        not those in ``stuck``), shot from there in one call: each stable orbit is measured by a
+        run started on it (period, multiplicity, harmonics: what the census clusters by) and the
+        sample becomes ``periodic`` on it, as :func:`check` does for a sweep's transient."""
+        if "nearest_residual" not in self.res:
+            return
+        k = self.res["outcome"].shape[1]
+        ok = (self.flat("outcome") == UNSETTLED) & (self.flat("status") == STATUS["not_converged"])
+        ok &= self.flat("nearest_residual") <= NEAREST_TOL
+        ok[stuck] = False
+        flat = np.flatnonzero(ok)
+        if not flat.size:
+            return
+        pts = flat // k
+        nan = np.full(flat.size, np.nan)
+        orbs = shoot(pts, self.flat("nearest_y")[flat], self.flat("nearest_period")[flat], nan, nan)
+        self.flat("n_rhs")[flat] += orbs["n_rhs"].astype(self.res["n_rhs"].dtype)
+        good = np.flatnonzero(orbs["stable"])
+        if not good.size:
+            return
+        state0 = orbs["state0"][good]
+        r = rows(self.steady(pts[good], state0, None))
+        self.flat("n_rhs")[flat[good]] += r["n_rhs"].astype(self.res["n_rhs"].dtype)
+        mu = slowest_multiplier(orbs["moduli"][good])
+        done = r["outcome"] == PERIODIC
+        for key in CYCLE_KEYS:
+            if key in self.res:
+                self.flat(key)[flat[good][done]] = r[key][done]
+        for f, y, res_, m in zip(flat[good][done], state0[done], self.flat("nearest_residual")[flat[good][done]],
+                                 mu[done]):  # fmt: skip
+            self.flat("outcome")[f] = PERIODIC
+            self.flat("status")[f] = STATUS["success"]
+            self.flat("y_end")[f] = y
+            self.flat("reason")[f] = (f"a slow approach: no repetition to periodic_tol by t_max (its newest section "
+                                      f"repeated to {res_:.2g}); shooting from there converged on a stable cycle "
+                                      f"(largest multiplier {m:.4g})")  # fmt: skip
+            self.orbit[(int(f // k), int(f % k))] = (True, y)
 
     def _leave(self, go: list) -> np.ndarray:
         """Samples ``go`` (point, sample, moduli, period) go on from near their unstable cycles; returns
