@@ -388,10 +388,31 @@ def test_the_census_counts_a_sample_on_a_slow_approach_with_the_cycle_it_approac
     assert list(res["outcome"][0]) == [_cycles.PERIODIC, _cycles.PERIODIC]
     assert "a slow approach" in res["reason"][0, 0] and res["reason"][0, 1] == ""
     assert check.orbit[(0, 0)][0] and check.orbit[(0, 1)][0]  # both stable, verified
-    label, heads = _cycles.cluster(res["omega"][0], res["multiplicity"][0], res["z1_amplitude"][0], _census.CYCLE_TOL)
+    label, _ = _cycles.cluster_of(res, 0, np.arange(2), _census.CYCLE_TOL)
     assert list(label) == [0, 0] and list(res["multiplicity"][0]) == [2, 2]
     np.testing.assert_allclose(res["omega"][0, 0], done.omega.values[0], rtol=1e-6)
     # Without it, the first sample stays unsettled: the census's irregular attractor.
     monkeypatch.setattr(_cycles, "NEAREST_TOL", 0.0)
     res, _ = census_check()
     assert list(res["outcome"][0]) == [_cycles.UNSETTLED, _cycles.PERIODIC]
+
+
+def test_cycles_are_told_apart_by_three_harmonics_in_units_of_the_motion():
+    tol = _census.CYCLE_TOL
+    # Default grid, 52.9 N, 5.8 cm: two period-2 cycles with the same A1 and frequencies 0.2 %
+    # apart, and A2 four times apart (stops of each, as the census measured them).
+    omega = np.array([707.016631, 705.575347, 707.007009, 705.573791])
+    amps = np.array([[1.41260e-05, 4.06756e-06, 4.11515e-07], [1.41135e-05, 1.52727e-05, 6.07993e-07],
+                     [1.41265e-05, 4.06608e-06, 4.12261e-07], [1.41134e-05, 1.52730e-05, 6.07925e-07]])  # fmt: skip
+    label, heads = _cycles.cluster(omega, [2, 2, 2, 2], amps, np.full(4, np.nan), tol)
+    assert list(label) == [0, 1, 0, 1] and heads == [0, 1]
+    # A period-4 cycle at 168.33 rad/s whose first three harmonics (4e-8 m) are a small part of
+    # its motion (half z's range, 9.9e-6 m): its stops spread by 1.1 % of them, and are one cycle
+    # in units of the motion; in units of those harmonics they were two.
+    omega = np.array([168.329539, 168.330981])
+    amps = np.array([[4.16929e-08, 4.38001e-08, 4.51089e-08], [4.14910e-08, 4.33313e-08, 4.48290e-08]])
+    assert list(_cycles.cluster(omega, [4, 4], amps, np.full(2, 9.91e-6), tol)[0]) == [0, 0]
+    assert list(_cycles.cluster(omega, [4, 4], amps, np.full(2, np.nan), tol)[0]) == [0, 1]
+    # Another multiplicity, or a frequency 2 % off, is another cycle.
+    assert list(_cycles.cluster(omega, [4, 2], amps, np.full(2, 9.91e-6), tol)[0]) == [0, 1]
+    assert list(_cycles.cluster(omega * [1, 1.02], [4, 4], amps, np.full(2, 9.91e-6), tol)[0]) == [0, 1]

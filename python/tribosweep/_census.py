@@ -135,8 +135,8 @@ from ._settings import DEFAULTS
 _ATTRACTOR_OF: dict[str, int] = {"decayed": 0, "periodic": 1, "unsettled": 2, "diverged": 3, "failed": -1,
                                  "irregular": 2}
 
-#: Relative tolerance within which two cycles (same period multiplicity) are the same: frequency
-#: and first-harmonic amplitude of z.
+#: Relative tolerance within which two cycles (same period multiplicity) are the same: frequency,
+#: and the first three harmonic amplitudes of z in units of the motion (:func:`_cycles.cluster`).
 CYCLE_TOL: float = 1e-2
 #: A returning sample stops once its motion is below this fraction of the saddle cycle's A1 (and
 #: half of |z_st|), and shrinking.
@@ -385,7 +385,7 @@ def run(
         out["basin_fraction_se"][i] = np.sqrt(p * (1.0 - p) / nv)
         out["basin_stability"][i] = p[0]
         per = np.flatnonzero(a == 1)
-        label, heads = cyc.cluster(omega[i, per], mult[i, per], a1[i, per], cycle_tol)
+        label, heads = cyc.cluster_of(res, i, per, cycle_tol)
         cycle[i, per] = label
         out["n_cycles"][i] = len(heads)
         out["n_attractors"][i] = int(counts[0] > 0) + len(heads) + int(counts[2] > 0)

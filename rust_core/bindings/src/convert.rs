@@ -301,6 +301,7 @@ pub(crate) fn summaries_into(d: &Bound<'_, PyDict>, out: &[(Summary, String)]) -
     d.set_item("multiplicity", Array1::from_iter(out.iter().map(|o| o.0.multiplicity)).into_pyarray(py))?;
     d.set_item("y_end", states(out.iter().map(|o| &o.0.y_end), out.len()).into_pyarray(py))?;
     d.set_item("z0", f(&|s| s.z0))?;
+    d.set_item("z_half_range", f(&|s| s.z_half_range))?;
     for k in 0..3 {
         d.set_item(format!("z{}_amplitude", k + 1), f(&|s| s.z_amp[k]))?;
         d.set_item(format!("z{}_phase", k + 1), f(&|s| s.z_phase[k]))?;

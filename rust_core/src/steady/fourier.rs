@@ -96,6 +96,9 @@ pub(super) fn fourier_period(s: &Slider, y0: &State, period: f64, opts: &SteadyO
         (2.0 * a / n as f64, 2.0 * b / n as f64)
     };
     sum.z0 = ys.iter().map(|y| y[idx::Z]).sum::<f64>() / n as f64;
+    let (lo, hi) =
+        ys.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), y| (lo.min(y[idx::Z]), hi.max(y[idx::Z])));
+    sum.z_half_range = 0.5 * (hi - lo);
     let mut alpha = [0.0; 3];
     for k in 1..=3 {
         let (a, b) = coef(idx::Z, k);

@@ -434,6 +434,9 @@ pub struct Summary {
     pub z0: f64,
     /// Amplitudes of the first three harmonics of z [m].
     pub z_amp: [f64; 3],
+    /// Half of z's range over the period [m] (periodic only, from the Fourier samples): the size of
+    /// the motion, which a subharmonic cycle's first harmonics can be a small part of.
+    pub z_half_range: f64,
     /// Phases of harmonics 1-3 of z relative to z1 (the first is 0 by definition) [rad].
     pub z_phase: [f64; 3],
     /// Amplitude [rad] and phase [rad] of the first harmonic of phi.
@@ -498,6 +501,7 @@ impl Summary {
             y_end: State::repeat(f64::NAN),
             z0: f64::NAN,
             z_amp: [f64::NAN; 3],
+            z_half_range: f64::NAN,
             z_phase: [f64::NAN; 3],
             phi_amp: f64::NAN,
             phi_phase: f64::NAN,
