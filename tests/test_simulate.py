@@ -149,6 +149,13 @@ def test_unilateral_seed_reaches_bouncing_cycle(seed_values):
     assert abs(float(ds.z1_amplitude[0]) / ref["A1"] - 1) < 0.01
     assert abs(float(ds.fraction_off_disk[0]) - ref["fraction_off_disk"]) < 0.01
     assert float(ds.min_normal_force[0]) == 0.0  # the pin leaves the disk
+    # z_half_range: half z's range over the period, against a dense sampling of one period from the
+    # section state (the Fourier's 512 samples miss an extreme by under (pi / 512)^2 / 2 = 2e-5).
+    start = [float(ds[f"{v}_end"][0]) for v in ("z", "z_dot", "x", "x_dot", "phi", "phi_dot")]
+    t = np.linspace(0.0, 2 * np.pi / float(ds.omega[0]), 20001)
+    z = ts.simulate(ts.SliderModel(contact="unilateral", mu=0.215), float(t[-1]), y0=start, t_eval=t, rtol=1e-10).z
+    np.testing.assert_allclose(float(ds.z_half_range[0]), 0.5 * float(np.ptp(z.values)), rtol=1e-4)
+    assert float(ds.z_half_range[0]) > float(ds.z1_amplitude[0])
 
 
 def test_bilateral_seed_decays_to_sliding_from_small_disturbance():

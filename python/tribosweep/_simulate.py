@@ -284,6 +284,7 @@ def ensemble(
             "omega": ("rad s-1", "angular frequency of the fundamental"),
             "period": ("s", "period of the cycle"),
             "z0": ("m", "mean of z over the period"),
+            "z_half_range": ("m", "half of z's range over the period (the size of the motion)"),
             "z1_amplitude": ("m", "amplitude of the first harmonic of z"),
             "z2_amplitude": ("m", "amplitude of the second harmonic of z"),
             "z3_amplitude": ("m", "amplitude of the third harmonic of z"),
