@@ -337,6 +337,9 @@ def test_a_run_unsettled_at_t_max_on_a_slow_approach_ends_on_the_stable_cycle_sh
     ref = run(60.0)
     np.testing.assert_allclose(checked.omega.values, ref.omega.values, rtol=1e-7)
     np.testing.assert_allclose(checked.z1_amplitude.values, ref.z1_amplitude.values, rtol=1e-5)
+    # The half-range from 512 samples a period: its minimum falls between them, off by up to about
+    # (pi / 512)^2 / 2 = 2e-5 (2.4e-5 apart here).
+    np.testing.assert_allclose(checked.z_half_range.values, ref.z_half_range.values, rtol=1e-4)
     # Without the shooting it stays unsettled.
     monkeypatch.setattr(_cycles, "NEAREST_TOL", 0.0)
     assert ts.labels(run(10.0, y0).outcome).values[0] == "unsettled"
@@ -348,6 +351,10 @@ def test_the_sweep_reports_a_slow_approach_as_its_cycle_and_intermittency_as_irr
     assert ts.labels(slow.regime).values.ravel()[0] == "contact_loss"
     assert int(_first(slow, "cycle_verified")) == 1 and "a slow approach" in str(_first(slow, "reason"))
     assert np.isnan(_first(slow, "irregular_ftle"))
+    # Its size: the cycle's own, as a run to 60 s measures it.
+    ref = ts.ensemble(ts.apparatus_model(10.0, SLOW["arm_length"][0], 0.2, base=SLOW_LAW), 60.0, {"normal_load": [10.0]},
+                      steady=True, check_cycles=True)  # fmt: skip
+    assert float(_first(slow, "z_half_range")) == pytest.approx(float(ref.z_half_range[0]), rel=1e-4)
     # At 25.6 N, 0.4 m/s the motion is intermittent: laminar phases near a period-2 cycle, bursts
     # every 4 s (unsettled at 200 s). At t_max it may be in a laminar phase, repeating to 1.6e-3;
     # shooting from there finds no stable cycle (Newton does not converge), so it stays irregular.

@@ -115,6 +115,18 @@ def test_wrong_types(kwargs):
         ts.sweep(**{"strategy": "linear", "progress": False, **kwargs})
 
 
+def test_the_describing_functions_half_range_of_z():
+    # A1 sin psi + A2 sin(2 psi + theta): one harmonic alone gives its amplitude; otherwise against
+    # a million samples (the 4,096 are within (pi / 4096)^2 / 2 = 3e-7).
+    half = _stages.two_harmonic_half_range
+    assert half(2e-5, 0.0, 1.0) == pytest.approx(2e-5, rel=1e-12)
+    assert half(0.0, 6e-6, 4.2) == pytest.approx(6e-6, rel=1e-6)
+    psi = np.linspace(0.0, 2 * np.pi, 1_000_000, endpoint=False)
+    for a1, a2, th in ((2e-5, 6e-6, 4.2), (1e-6, 3e-6, 0.3)):
+        z = a1 * np.sin(psi) + a2 * np.sin(2 * psi + th)
+        assert half(a1, a2, th) == pytest.approx(0.5 * np.ptp(z), rel=1e-6)
+
+
 def test_tidf_and_shooting_stages_at_the_seed(seed_values):
     ref = seed_values["tidf_root_seed"]
     orb = seed_values["bilateral_periodic_orbit_seed"]
@@ -313,8 +325,8 @@ def test_a_failed_point_is_data_not_an_exception(monkeypatch):
         n = sel.size
         return {"status": np.full(n, ts.STATUS["panic"], np.uint8), "outcome": np.full(n, 4, np.uint8),
                 "reason": ["panic: boom"] * n, **{k: np.full(n, np.nan) for k in (
-                    "omega", "z1_amplitude", "z2_amplitude", "phi1_amplitude", "fraction_off_disk", "min_normal_force",
-                    "min_slip_velocity")}, "n_rhs": np.zeros(n, np.int64)}  # fmt: skip
+                    "omega", "z1_amplitude", "z2_amplitude", "z_half_range", "phi1_amplitude", "fraction_off_disk",
+                    "min_normal_force", "min_slip_velocity")}, "n_rhs": np.zeros(n, np.int64)}  # fmt: skip
 
     monkeypatch.setattr(_stages, "run_steady", panicking)
     ds = ts.sweep(normal_load=[10.0, 50.0], strategy="auto", progress=False)

@@ -159,6 +159,8 @@ POINT_VARIABLES: dict[str, tuple[str, str | None, str]] = {
                                       "for the ordinary cycle, about 2 past a period doubling"),
     "z1_amplitude": ("f8", "m", "amplitude of the first harmonic of z on the cycle"),
     "z2_amplitude": ("f8", "m", "amplitude of the second harmonic of z on the cycle"),
+    "z_half_range": ("f8", "m", "half of z's range over the cycle: the size of the motion, of which a "
+                                "subharmonic cycle's first harmonics can be a small part"),
     "phi1_amplitude": ("f8", "rad", "amplitude of the first harmonic of the twist phi on the cycle"),
     "min_normal_force": ("f8", "N", "minimum total normal force (over the cycle if periodic, else the run)"),
     "fraction_off_disk": ("f8", "1", "fraction of the cycle with the pin off the disk"),
@@ -185,7 +187,7 @@ POINT_VARIABLES: dict[str, tuple[str, str | None, str]] = {
 }
 #: Variables of the cycle a point's own run ended on (a transient that ended periodic, or the
 #: describing function's cycle where sliding is unstable).
-CYCLE_VARIABLES: tuple[str, ...] = ("cycle_omega", "cycle_period_ratio", "z1_amplitude", "z2_amplitude",
+CYCLE_VARIABLES: tuple[str, ...] = ("cycle_omega", "cycle_period_ratio", "z1_amplitude", "z2_amplitude", "z_half_range",
                                     "phi1_amplitude", "fraction_off_disk")  # fmt: skip
 CYCLE_NOTE: str = (
     "the cycle the point's own run ended on, NaN where it did not end on one: where sliding is linearly "
