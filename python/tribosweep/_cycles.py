@@ -44,9 +44,9 @@ LEAVE_PERIODS_MAX: int = 1000
 
 #: Cycle quantities of a steady-state summary that a run measured on the converged orbit replaces.
 CYCLE_KEYS: tuple[str, ...] = (
-    "omega", "period", "multiplicity", "z0", "z_half_range", "z1_amplitude", "z1_phase", "z2_amplitude", "z2_phase", "z3_amplitude",
-    "z3_phase", "phi1_amplitude", "phi1_phase", "x1_amplitude", "x1_phase", "min_normal_force", "fraction_off_disk",
-    "min_slip_velocity", "max_gap", "max_abs_z",
+    "omega", "period", "multiplicity", "z0", "z_half_range", "z1_amplitude", "z1_phase", "z2_amplitude", "z2_phase",
+    "z3_amplitude", "z3_phase", "phi1_amplitude", "phi1_phase", "x1_amplitude", "x1_phase", "min_normal_force",
+    "fraction_off_disk", "min_slip_velocity", "max_gap", "max_abs_z",
 )  # fmt: skip
 
 #: A run that reached ``t_max`` without repeating to ``periodic_tol`` is shot from its newest
@@ -190,12 +190,24 @@ def check(summary: dict, shoot, steady, t_max: float) -> tuple[dict, np.ndarray]
     return s, verified
 
 
+def slow_candidates(outcome: np.ndarray, status: np.ndarray, residual: np.ndarray) -> np.ndarray:
+    """Runs that reached ``t_max`` unsettled with their newest section nearly repeating
+    (:data:`NEAREST_TOL`): those shot from there as slow approaches."""
+    return (outcome == UNSETTLED) & (status == STATUS["not_converged"]) & (residual <= NEAREST_TOL)
+
+
+def slow_note(t: float, residual: float, mult: int, mu: float) -> str:
+    """The reason of a run that became its cycle as a slow approach."""
+    return (f"a slow approach: no repetition to periodic_tol by t_max = {t:.3g} s (its newest section repeated to "
+            f"{residual:.2g} after {int(mult)}); shooting from there converged on this stable cycle (largest "
+            f"multiplier {mu:.4g})")  # fmt: skip
+
+
 def _slow_approach(shoot, steady, s: dict, eligible: np.ndarray, notes: list[list[str]]) -> np.ndarray:
     """Runs of ``s`` that reached ``t_max`` unsettled, shot from their newest section state where it
-    nearly repeated (:data:`NEAREST_TOL`); a stable orbit of that period is measured and becomes the
-    run's outcome. Returns per row whether it did (verified)."""
-    idx = np.flatnonzero(eligible & (s["outcome"] == UNSETTLED) & (s["status"] == STATUS["not_converged"])
-                         & (s["nearest_residual"] <= NEAREST_TOL))  # fmt: skip
+    nearly repeated (:func:`slow_candidates`); a stable orbit of that period is measured and becomes
+    the run's outcome. Returns per row whether it did (verified)."""
+    idx = np.flatnonzero(eligible & slow_candidates(s["outcome"], s["status"], s["nearest_residual"]))
     done = np.zeros(len(s["outcome"]), dtype=bool)
     if not idx.size:
         return done
@@ -205,19 +217,11 @@ def _slow_approach(shoot, steady, s: dict, eligible: np.ndarray, notes: list[lis
     good = idx[orbs["stable"]]
     if not good.size:
         return done
-    t_end = s["t_end"][good].astype(np.float64)
-    res, mult = s["nearest_residual"][good], s["nearest_multiplicity"][good]
-    measured = _measure(steady, s, good, orbs["state0"][orbs["stable"]], stop_quantities=False)
     mu = slowest_multiplier(orbs["moduli"][orbs["stable"]])
-    for i, t, r, p, m, ok in zip(good, t_end, res, mult, mu, measured):
-        if not ok:
-            continue
-        s["outcome"][i] = PERIODIC
-        s["status"][i] = STATUS["success"]
-        s["reason"][i] = ""
-        notes[i].append(f"a slow approach: no repetition to periodic_tol by t_max = {t:.3g} s (its newest section "
-                        f"repeated to {r:.2g} after {int(p)}); shooting from there converged on this stable cycle "
-                        f"(largest multiplier {m:.4g})")  # fmt: skip
+    measured = _measure(steady, s, good, orbs["state0"][orbs["stable"]], stop_quantities=False)
+    for i, m in zip(good[measured], mu[measured]):
+        notes[i].append(slow_note(float(s["t_end"][i]), s["nearest_residual"][i], s["nearest_multiplicity"][i], m))
+        s["outcome"][i], s["status"][i], s["reason"][i] = PERIODIC, STATUS["success"], ""
         done[i] = True
     return done
 
@@ -369,42 +373,36 @@ class CensusCheck:
         return again
 
     def _slow_approach(self, shoot, stuck: np.ndarray) -> None:
-        """Samples unsettled at ``t_max`` whose newest section nearly repeated (:data:`NEAREST_TOL`;
+        """Samples unsettled at ``t_max`` whose newest section nearly repeated (:func:`slow_candidates`;
         not those in ``stuck``), shot from there in one call: each stable orbit is measured by a
         run started on it (period, multiplicity, harmonics: what the census clusters by) and the
         sample becomes ``periodic`` on it, as :func:`check` does for a sweep's transient."""
         if "nearest_residual" not in self.res:
             return
         k = self.res["outcome"].shape[1]
-        ok = (self.flat("outcome") == UNSETTLED) & (self.flat("status") == STATUS["not_converged"])
-        ok &= self.flat("nearest_residual") <= NEAREST_TOL
+        ok = slow_candidates(self.flat("outcome"), self.flat("status"), self.flat("nearest_residual"))
         ok[stuck] = False
         flat = np.flatnonzero(ok)
         if not flat.size:
             return
-        pts = flat // k
         nan = np.full(flat.size, np.nan)
-        orbs = shoot(pts, self.flat("nearest_y")[flat], self.flat("nearest_period")[flat], nan, nan)
+        orbs = shoot(flat // k, self.flat("nearest_y")[flat], self.flat("nearest_period")[flat], nan, nan)
         self.flat("n_rhs")[flat] += orbs["n_rhs"].astype(self.res["n_rhs"].dtype)
-        good = np.flatnonzero(orbs["stable"])
-        if not good.size:
+        flat, state0 = flat[orbs["stable"]], orbs["state0"][orbs["stable"]]
+        if not flat.size:
             return
-        state0 = orbs["state0"][good]
-        r = rows(self.steady(pts[good], state0, None))
-        self.flat("n_rhs")[flat[good]] += r["n_rhs"].astype(self.res["n_rhs"].dtype)
-        mu = slowest_multiplier(orbs["moduli"][good])
+        mu = slowest_multiplier(orbs["moduli"][orbs["stable"]])
+        r = rows(self.steady(flat // k, state0, None))
+        self.flat("n_rhs")[flat] += r["n_rhs"].astype(self.res["n_rhs"].dtype)
         done = r["outcome"] == PERIODIC
         for key in CYCLE_KEYS:
             if key in self.res:
-                self.flat(key)[flat[good][done]] = r[key][done]
-        for f, y, res_, m in zip(flat[good][done], state0[done], self.flat("nearest_residual")[flat[good][done]],
-                                 mu[done]):  # fmt: skip
-            self.flat("outcome")[f] = PERIODIC
-            self.flat("status")[f] = STATUS["success"]
+                self.flat(key)[flat[done]] = r[key][done]
+        for f, y, m in zip(flat[done], state0[done], mu[done]):
+            why = slow_note(float(self.flat("t_end")[f]), self.flat("nearest_residual")[f],
+                            self.flat("nearest_multiplicity")[f], m)  # fmt: skip
+            self.flat("outcome")[f], self.flat("status")[f], self.flat("reason")[f] = PERIODIC, STATUS["success"], why
             self.flat("y_end")[f] = y
-            self.flat("reason")[f] = (f"a slow approach: no repetition to periodic_tol by t_max (its newest section "
-                                      f"repeated to {res_:.2g}); shooting from there converged on a stable cycle "
-                                      f"(largest multiplier {m:.4g})")  # fmt: skip
             self.orbit[(int(f // k), int(f % k))] = (True, y)
 
     def _leave(self, go: list) -> np.ndarray:
