@@ -48,6 +48,24 @@ def test_fractions_converge_within_their_standard_errors(seed64):
     # The smaller census is the start of the larger: same samples, same fates.
     np.testing.assert_array_equal(big.y0.values[:64], seed64.y0.values)
     np.testing.assert_array_equal(big.attractor_reached.values[:64], seed64.attractor_reached.values)
+    # The 95 % Wilson intervals bracket their fractions, and narrow with K.
+    for ds in (seed64, big):
+        assert (ds.basin_fraction_low <= ds.basin_fraction).all() and (ds.basin_fraction <= ds.basin_fraction_high).all()
+    width = {ds.sizes["sample"]: (ds.basin_fraction_high - ds.basin_fraction_low).values for ds in (seed64, big)}
+    assert (width[512] < width[64]).all()
+
+
+def test_the_basin_fractions_wilson_interval():
+    from scipy.stats import binomtest
+
+    # Against scipy's own Wilson score interval, the ends included (where sqrt(p (1 - p) / K) is 0).
+    for n in (16, 32, 1000):
+        for k in (0, 1, n // 3, n - 1, n):
+            lo, hi = _census.wilson(np.array([k / n]), n)
+            ref = binomtest(k, n).proportion_ci(confidence_level=0.95, method="wilson")
+            np.testing.assert_allclose([lo[0], hi[0]], [ref.low, ref.high], rtol=1e-12, atol=1e-15)
+    # None of 32: the fraction is below 3.84 / 35.84 = 0.107 with 95 % confidence, not exactly 0.
+    assert _census.wilson(np.array([0.0]), 32)[1][0] == pytest.approx(1.959963984540054**2 / (32 + 3.8414588206941285))
 
 
 @pytest.mark.slow

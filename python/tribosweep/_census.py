@@ -234,6 +234,8 @@ def starts(
 CENSUS_VARIABLES: dict[str, tuple[str, str | None, str, bool]] = {
     "basin_fraction": ("f8", "1", "fraction of the census disturbances that reach each attractor", True),
     "basin_fraction_se": ("f8", "1", "binomial standard error of basin_fraction, sqrt(p (1 - p) / K)", True),
+    "basin_fraction_low": ("f8", "1", "lower end of the 95 % Wilson score interval of basin_fraction", True),
+    "basin_fraction_high": ("f8", "1", "upper end of the 95 % Wilson score interval of basin_fraction", True),
     "basin_stability": ("f8", "1", "fraction of the census disturbances that return to steady sliding", False),
     "n_attractors": ("i8", "1", "coexisting attractors seen by the census: sliding, each distinct cycle, irregular "
                      "motion (-1: no census)", False),
@@ -251,6 +253,24 @@ CENSUS_VARIABLES: dict[str, tuple[str, str | None, str, bool]] = {
     "largest_cycle_verified": ("i1", None, "whether shooting converged the census cycle with the largest basin to a "
                                "stable orbit, on which the largest_cycle_* variables were measured", False),
 }  # fmt: skip
+
+
+#: Normal quantile of the basin fractions' two-sided 95 % Wilson score interval.
+WILSON_Z: float = 1.959963984540054
+
+
+def wilson(p: np.ndarray, n: int, z: float = WILSON_Z) -> tuple[np.ndarray, np.ndarray]:
+    """Wilson score interval of binomial fractions ``p`` of ``n`` samples: ``(low, high)``.
+
+    Where no sample (or every one) reached an attractor, ``sqrt(p (1 - p) / n)`` is 0, as if the
+    fraction were known exactly; the score interval is not: ``[0, z^2 / (n + z^2)]`` (0.107 for
+    K = 32), and its coverage stays near 95 % at small ``n`` and extreme ``p``.
+    """
+    p = np.asarray(p, dtype=np.float64)
+    z2n = z * z / n
+    centre = (p + 0.5 * z2n) / (1.0 + z2n)
+    half = z * np.sqrt(p * (1.0 - p) / n + 0.25 * z2n / n) / (1.0 + z2n)
+    return np.clip(centre - half, 0.0, 1.0), np.clip(centre + half, 0.0, 1.0)
 
 
 #: Flags of ``largest_cycle_verified``.
@@ -383,6 +403,7 @@ def run(
         p = counts / nv
         out["basin_fraction"][i] = p
         out["basin_fraction_se"][i] = np.sqrt(p * (1.0 - p) / nv)
+        out["basin_fraction_low"][i], out["basin_fraction_high"][i] = wilson(p, nv)
         out["basin_stability"][i] = p[0]
         per = np.flatnonzero(a == 1)
         label, heads = cyc.cluster_of(res, i, per, cycle_tol)
@@ -558,8 +579,9 @@ def census(
     Returns
     -------
     xarray.Dataset
-        ``basin_fraction`` and ``basin_fraction_se`` on ``attractor`` (sliding, cycle, irregular,
-        escape); ``basin_stability``, ``n_attractors``, ``n_cycles`` and the largest cycle's
+        ``basin_fraction``, ``basin_fraction_se`` and the 95 % Wilson interval
+        ``basin_fraction_low`` .. ``basin_fraction_high`` (:func:`wilson`) on ``attractor``
+        (sliding, cycle, irregular, escape); ``basin_stability``, ``n_attractors``, ``n_cycles`` and the largest cycle's
         frequency and amplitude; per ``sample``: the start ``y0``, the ``attractor`` reached, its
         ``cycle`` label (-1 if none), ``omega``, ``z1_amplitude``, ``t_end``, ``n_rhs`` and
         ``recurrence`` (1 where irregular motion was recognised by matching a pilot's attractor).

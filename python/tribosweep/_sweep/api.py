@@ -181,8 +181,9 @@ def sweep(
     census : bool
         ``auto``: take the attractor census (``tribosweep.census``) at stable points with a saddle
         cycle: ``samples`` disturbances on the torsion and normal modes, each run to its attractor
-        with the model's contact law; ``basin_fraction`` (with ``basin_fraction_se``) on the
-        ``attractor`` dimension (sliding, cycle, irregular, escape), ``basin_stability``,
+        with the model's contact law; ``basin_fraction`` (with ``basin_fraction_se`` and its 95 %
+        Wilson interval ``basin_fraction_low`` .. ``basin_fraction_high``) on the ``attractor``
+        dimension (sliding, cycle, irregular, escape), ``basin_stability``,
         ``n_attractors``, ``n_cycles`` and the largest cycle's frequency and amplitude. ``bistable``
         is derived from it: ``coexisting`` where more than one attractor was seen,
         ``one_attractor``, or ``no_saddle`` where the describing function predicts no saddle (no
