@@ -423,3 +423,14 @@ def test_cycles_are_told_apart_by_three_harmonics_in_units_of_the_motion():
     # Another multiplicity, or a frequency 2 % off, is another cycle.
     assert list(_cycles.cluster(omega, [4, 2], amps, np.full(2, 9.91e-6), tol)[0]) == [0, 1]
     assert list(_cycles.cluster(omega * [1, 1.02], [4, 4], amps, np.full(2, 9.91e-6), tol)[0]) == [0, 1]
+
+
+def test_census_rows_of_arrays_without_columns():
+    # Without stationarity blocks (irregular_block=0) the census's cell arrays have no columns; a
+    # sample going on from an unstable cycle reads every per-sample array as one row per sample
+    # (it raised "cannot reshape array of size 0").
+    res = {"irregular_cells": np.zeros((2, 3, 0), dtype=np.uint64), "t_end": np.arange(6.0).reshape(2, 3)}
+    check = _cycles.CensusCheck(res, _census.CYCLE_TOL, None, lambda: None, 1.0, 1e-9, 1e-8)
+    assert check.flat("irregular_cells").shape == (6, 0)
+    check.flat("t_end")[4] = -1.0
+    assert res["t_end"][1, 1] == -1.0

@@ -328,8 +328,9 @@ class CensusCheck:
     def flat(self, key: str) -> np.ndarray:
         """``res[key]`` as one row per sample (a view: writes go to ``res``)."""
         v = self.res[key]
-        flat = v.reshape((-1,) + v.shape[2:])
-        assert np.shares_memory(flat, v), key  # a copy would drop the writes
+        # The row count spelled out: a cell array without columns (no stationarity blocks) has size 0.
+        flat = v.reshape((v.shape[0] * v.shape[1],) + v.shape[2:])
+        assert v.size == 0 or np.shares_memory(flat, v), key  # a copy would drop the writes
         return flat
 
     def settle(self, shoot) -> None:
