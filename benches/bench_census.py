@@ -7,6 +7,7 @@ run in the same process (the machines are shared: absolute seconds drift with th
     python benches/bench_census.py --sweep-points 120 --samples 16 --threads 2
     python benches/bench_census.py --scipy 128 --sweep-points 0   # labels against scipy, 128 starts
     python benches/bench_census.py --compare --sweep-points 0     # the stationarity stop against t_max
+    python benches/bench_census.py --compare --blocks 128,256 --sweep-points 0   # two block sizes
     python benches/bench_census.py --recurrence --sweep-points 0  # recurrence on the pilots' attractors, on/off
     python benches/bench_census.py --rtol 1e-6,1e-8,1e-10 --sweep-points 0   # the census's accuracy and cost
 """
@@ -85,8 +86,10 @@ def sweep(n_loads: int, n_arms: int, n_speeds: int, k: int, threads: int | None)
           f"{censused // n_speeds} computed), coexisting attractors at {coexist}")  # fmt: skip
 
 
-def compare_irregular_stop(n_loads: int, n_arms: int, k: int, threads: int | None) -> None:
-    """The census with the stationarity stop of irregular motion against runs to t_max, sample by sample.
+def compare_irregular_stop(n_loads: int, n_arms: int, k: int, threads: int | None,
+                           blocks: tuple[int, ...] = (DEFAULTS.irregular.block,)) -> None:  # fmt: skip
+    """The census with the stationarity stop of irregular motion (each of ``blocks`` sections per
+    block) against runs to t_max, sample by sample.
 
     The points are those the default sweep censuses (stable, with a saddle cycle) at 0.3 m/s; the
     census there is the same at every speed under constant friction.
@@ -95,29 +98,32 @@ def compare_irregular_stop(n_loads: int, n_arms: int, k: int, threads: int | Non
 
     pts = grid_points(n_loads, n_arms, threads)
     out = {}
-    for block in (0, DEFAULTS.irregular.block):
+    for block in (0, *blocks):
         t0 = time.perf_counter()
         runs = [ts.census(dataclasses.replace(ts.apparatus_model(a, b, 0.3), contact="unilateral"), samples=k,
                           irregular_block=block, threads=threads) for a, b in pts]  # fmt: skip
         out[block] = (time.perf_counter() - t0, np.array([r.attractor_reached.values for r in runs]),
                       np.array([r.t_end.values for r in runs]))  # fmt: skip
-    (w0, a0, t0_), (w1, a1, t1_) = out.values()
     names = ts.ATTRACTOR_NAMES
-    for (w, a, t), label in ((out[0], "to t_max"), (out[max(out)], f"block {max(out)}")):
+    w0, a0, t0_ = out[0]
+    for block, (w, a, t) in out.items():
+        label = "to t_max" if block == 0 else f"block {block}"
         counts = ", ".join(f"{n} {int((a == i).sum())}" for i, n in enumerate(names))
         print(f"census {label}: {len(pts)} points x K = {k}: {w:.1f} s, simulated {t.sum():.0f} s; {counts}")
-    moved = a0 != a1
-    pairs = {}
-    for x, y in zip(a0[moved], a1[moved]):
-        key = f"{names[x] if x >= 0 else 'failed'} -> {names[y] if y >= 0 else 'failed'}"
-        pairs[key] = pairs.get(key, 0) + 1
-    print(f"  labels that differ: {int(moved.sum())} of {a0.size} ({100 * moved.mean():.1f} %): {pairs}; "
-          f"cost {w0 / w1:.2f}x lower, simulated time {t0_.sum() / t1_.sum():.2f}x")  # fmt: skip
-    z = fraction_shift(a0, a1, k)
-    load, arm = pts[int(np.argmax(z))]
-    print(f"  points where a fraction moves by more than 2 / 3 standard errors: {int((z > 2).sum())} / "
-          f"{int((z > 3).sum())} of {len(pts)} (largest {z.max():.2f}, "
-          f"at {load:.1f} N, {100 * arm:.1f} cm)")  # fmt: skip
+        if block == 0:
+            continue
+        moved = a0 != a
+        pairs: dict[str, int] = {}
+        for x, y in zip(a0[moved], a[moved]):
+            key = f"{names[x] if x >= 0 else 'failed'} -> {names[y] if y >= 0 else 'failed'}"
+            pairs[key] = pairs.get(key, 0) + 1
+        print(f"  labels that differ from t_max: {int(moved.sum())} of {a0.size} ({100 * moved.mean():.1f} %): "
+              f"{pairs}; cost {w0 / w:.2f}x lower, simulated time {t0_.sum() / t.sum():.2f}x")  # fmt: skip
+        z = fraction_shift(a0, a, k)
+        load, arm = pts[int(np.argmax(z))]
+        print(f"  points where a fraction moves by more than 2 / 3 standard errors: {int((z > 2).sum())} / "
+              f"{int((z > 3).sum())} of {len(pts)} (largest {z.max():.2f}, "
+              f"at {load:.1f} N, {100 * arm:.1f} cm)")  # fmt: skip
 
 
 def compare_recurrence(k: int, threads: int | None) -> None:
@@ -207,6 +213,8 @@ def main() -> None:
                     help="comma-separated rtols: the census of the grid's points at each (K = --samples)")
     ap.add_argument("--compare", action="store_true",
                     help="the stationarity stop against runs to t_max (K = --samples)")
+    ap.add_argument("--blocks", type=str, default=str(DEFAULTS.irregular.block),
+                    help="with --compare: comma-separated irregular_block values to compare")
     ap.add_argument("--recurrence", action="store_true",
                     help="recurrence on the pilots' attractors against each sample's own blocks (K = --samples)")  # fmt: skip
     a = ap.parse_args()
@@ -217,7 +225,7 @@ def main() -> None:
     if a.rtol:
         rtol_agreement([float(x) for x in a.rtol.split(",")], a.samples, a.threads)
     if a.compare:
-        compare_irregular_stop(40, 10, a.samples, a.threads)
+        compare_irregular_stop(40, 10, a.samples, a.threads, tuple(int(b) for b in a.blocks.split(",")))
     if a.recurrence:
         compare_recurrence(a.samples, a.threads)
     if a.sweep_points == 2000:
