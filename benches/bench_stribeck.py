@@ -13,7 +13,7 @@ kind (``steady``: the transients; ``sampled``: the irregular points' measurement
 ``final``: their Lyapunov-exponent segments, and the runs leaving an unstable cycle; ``shooting``:
 the check of every cycle a transient stopped on), with their right-hand sides and accepted steps.
 
-``--settings`` instead runs one law's sweep over the transients' ``rtol`` x ``irregular_block``
+``--settings`` instead runs one law's sweep over the transients' ``rtol`` x ``transient_irregular_block``
 against a reference run to ``t_max`` at rtol 1e-10 (:mod:`tribosweep.bench.sweep_settings`), prints
 its table and writes ``sweep_settings.png`` into ``--out``.
 """
@@ -84,7 +84,7 @@ def main(argv=None) -> int:
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--repeat", type=int, default=2, help="best of this many runs of each law")
     ap.add_argument("--stages", action="store_true", help="time the core calls of each law's last run by kind")
-    ap.add_argument("--settings", action="store_true", help="speed against agreement over rtol x irregular_block")
+    ap.add_argument("--settings", action="store_true", help="speed against agreement over rtol x transient_irregular_block")
     ap.add_argument("--law", default="switch", choices=("switch", "coulomb"), help="the law of --settings")
     ap.add_argument("--out", default="bench_out", help="where --settings writes its chart")
     a = ap.parse_args(argv)

@@ -13,7 +13,7 @@ import pytest
 import xarray as xr
 
 import tribosweep as ts
-from tribosweep import _census, _codes
+from tribosweep import _census, _codes, _core
 from tribosweep._codes import REGIME
 from tribosweep._settings import SweepSettings
 from tribosweep._sweep import chunk as _chunk
@@ -99,6 +99,7 @@ def test_bad_extra_axes(extra, match):
         ({"census_t_max": 0.0}, "census_t_max"),
         ({"census_rtol": 1.5}, r"census_rtol = 1.5 is out of range: must be in \[1e-15, 1\)"),
         ({"irregular_block": -1}, r"irregular_block = -1 is out of range: must be an integer in \[0, "),
+        ({"transient_irregular_block": 2.5}, r"transient_irregular_block = 2.5 is out of range: must be an integer in "),
     ],
 )
 def test_bad_options(kwargs, match):
@@ -113,6 +114,27 @@ def test_bad_options(kwargs, match):
 def test_wrong_types(kwargs):
     with pytest.raises(TypeError, match=next(iter(kwargs))):
         ts.sweep(**{"strategy": "linear", "progress": False, **kwargs})
+
+
+def test_the_transients_and_the_census_have_their_own_stationarity_blocks(monkeypatch):
+    # The auto transients stop irregular motion after three blocks of 128 sections, the census's
+    # disturbances after three of 256 (tribosweep._settings.Irregular: what each was measured at).
+    seen = []
+    real = _core.ensemble
+
+    def spy(*args, **kw):
+        if kw.get("kind") == "steady":  # the census's runs are those with its return-to-sliding thresholds
+            seen.append(("census" if "decay_thresholds" in kw else "transient", kw["irregular_block"]))
+        return real(*args, **kw)
+
+    monkeypatch.setattr(_core, "ensemble", spy)
+    ds = ts.sweep(normal_load=[10.0, 50.0], samples=4, threads=2, progress=False)
+    assert ds.attrs["solver_transient_irregular_block"] == 128 and ds.attrs["solver_irregular_block"] == 256
+    assert {"transient", "census"} == {who for who, _ in seen}
+    assert all(block == {"transient": 128, "census": 256}[who] for who, block in seen), seen
+    seen.clear()
+    ts.sweep(normal_load=[10.0], census=False, transient_irregular_block=64, threads=2, progress=False)
+    assert seen and all(block == 64 for _, block in seen), seen
 
 
 def test_the_describing_functions_half_range_of_z():

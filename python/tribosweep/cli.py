@@ -121,8 +121,9 @@ _SETTINGS: dict[str, tuple[str, object, str, str]] = {
     "census_t_max": ("census", float, "S", "longest run of one census disturbance [s]"),
     "disturbance_scale": ("census", float, "X", "largest modal amplitude of a census disturbance in units of |z_st|"),
     "census_rtol": ("census", float, "R", "relative tolerance of the census disturbances' runs (1e-6)"),
-    "irregular_block": ("irregular", int, "N", "sections per block of the stationarity test that ends a transient or a "
-                        "census disturbance as irregular motion (0: run to t_max)"),
+    "irregular_block": ("irregular", int, "N", "sections per block of the stationarity test that ends a census "
+                        "disturbance as irregular motion (0: run to census_t_max)"),
+    "transient_irregular_block": ("irregular", int, "N", "the same for the auto transients (0: run to t_max)"),
     "irregular_window": ("irregular", float, "S", "measurement window of irregular motion [s]"),
     "irregular_sample_dt": ("irregular", float, "S", "its sampling interval [s]"),
     "ftle_tau": ("irregular", float, "S", "segment of the Lyapunov exponent [s]"),

@@ -80,6 +80,7 @@ def sweep(
     shooting_rtol: float = _D.shooting.rtol,
     shooting_tol: float = _D.shooting.tol,
     irregular_block: int = _D.irregular.block,
+    transient_irregular_block: int = _D.irregular.transient_block,
     irregular_window: float = _D.irregular.window,
     irregular_sample_dt: float = _D.irregular.sample_dt,
     ftle_tau: float = _D.irregular.ftle_tau,
@@ -209,9 +210,12 @@ def sweep(
     decay_amplitude : float, m, optional
         Amplitude below which a motion counts as decayed (default ``1e-3 |z_st|``).
     irregular_block : int
-        Sections per block of the stationarity test (256; 0: off): a transient or census
-        disturbance in bounded motion that neither repeats nor decays ends as irregular once three
-        consecutive blocks of Poincare sections agree (see :func:`tribosweep.census`), else at ``t_max``.
+        Sections per block of the census's stationarity test (256; 0: off): a census disturbance
+        in bounded motion that neither repeats nor decays ends as irregular once three
+        consecutive blocks of Poincare sections agree (see :func:`tribosweep.census`), else at ``census_t_max``.
+    transient_irregular_block : int
+        The same for the ``auto`` transients (128; 0: off, else at ``t_max``): see
+        ``tribosweep._settings.Irregular``.
     irregular_window, irregular_sample_dt : float, s
         A transient that stays bounded but neither repeats nor decays (stationary, or still so at
         ``t_max``) is regime ``irregular``; from where it ended, ``z`` is sampled every ``irregular_sample_dt`` (1e-4)
@@ -335,7 +339,8 @@ def sweep(
         decay_amplitude=decay_amplitude, census=census, samples=samples, census_t_max=census_t_max,
         disturbance_scale=disturbance_scale, census_rtol=census_rtol, census_recurrence=census_recurrence,
         unstable_disturbance=unstable_disturbance, shooting_rtol=shooting_rtol,
-        shooting_tol=shooting_tol, irregular_block=irregular_block, irregular_window=irregular_window,
+        shooting_tol=shooting_tol, irregular_block=irregular_block,
+        transient_irregular_block=transient_irregular_block, irregular_window=irregular_window,
         irregular_sample_dt=irregular_sample_dt,
         ftle_tau=ftle_tau, ftle_segments=ftle_segments, ftle_min_segments=ftle_min_segments,
         ftle_warmup=ftle_warmup, ftle_d0=ftle_d0, ftle_rtol=ftle_rtol,

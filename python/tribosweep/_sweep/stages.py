@@ -351,7 +351,7 @@ def run_steady(p: Points, sel: np.ndarray, y0: np.ndarray, decay: np.ndarray | N
         periodic_tol=float(st.periodic_tol), decay_amplitude=st.decay_amplitude, n_fourier=512,
         restart=None if restart is None else np.ascontiguousarray(restart, dtype=np.float64),
         decay_amplitudes=None if decay is None else np.ascontiguousarray(decay, dtype=np.float64),
-        irregular_block=int(p.settings.irregular.block),
+        irregular_block=int(p.settings.irregular.transient_block),
     )  # fmt: skip
 
 

@@ -3,7 +3,7 @@
 The issue-10 Stribeck sweep (`contact="unilateral"`, the switch friction law, `mu_static=0.3`,
 loads 10-150 N x 10, arms 5-12.7 cm x 4, speeds 0.2-1 m/s x 5: 200 points, `census=False`,
 `t_max=20`) spends its time on the transients of its irregular points. Two settings set that cost:
-the transients' `rtol` and `irregular_block`, the sections per block of the stationarity test that
+the transients' `rtol` and `transient_irregular_block`, the sections per block of the stationarity test that
 ends an irregular transient before `t_max` (0: it runs to `t_max`). This module runs the sweep
 over both and compares every run with a reference that runs every transient to `t_max` at rtol 1e-10:
 
@@ -38,7 +38,7 @@ from .._sweep import sweep
 #: The issue-10 sweep's axes.
 AXES = dict(normal_load=np.linspace(10, 150, 10), arm_length=np.linspace(0.05, 0.127, 4),
             sliding_speed=np.linspace(0.2, 1.0, 5))  # fmt: skip
-#: The settings compared: transient rtol x `irregular_block`.
+#: The settings compared: transient rtol x `transient_irregular_block`.
 RTOLS = (1e-6, 1e-7, 1e-8, 1e-9)
 BLOCKS = (64, 128, 256, 0)
 #: The reference: every transient to `t_max` at this rtol.
@@ -97,19 +97,19 @@ def sweep_settings(out_dir: os.PathLike, *, quick: bool = False, threads: int = 
     out.mkdir(parents=True, exist_ok=True)
     repeat = 1 if quick else 2
     model = SliderModel(contact="unilateral", friction_law=law, mu_static=0.3)
-    _run(model, threads, 1, rtol=1e-6, irregular_block=256)  # warm-up (first call's imports and caches)
-    ref, t_ref = _run(model, threads, 1, rtol=REF_RTOL, irregular_block=0)
+    _run(model, threads, 1, rtol=1e-6, transient_irregular_block=256)  # warm-up (first call's imports and caches)
+    ref, t_ref = _run(model, threads, 1, rtol=REF_RTOL, transient_irregular_block=0)
     n = int(ref.regime.size)
     floor = []
     for f in (1.01, 0.99):
-        ds, t = _run(model, threads, 1, rtol=REF_RTOL * f, irregular_block=0)
+        ds, t = _run(model, threads, 1, rtol=REF_RTOL * f, transient_irregular_block=0)
         floor.append(
             dict(compare(ds, ref), rtol=REF_RTOL * f, points_per_s=n / t, rhs_per_point=float(ds.n_rhs.mean()))
         )
     rows = []
     for rtol in RTOLS:
         for block in BLOCKS:
-            ds, t = _run(model, threads, repeat, rtol=rtol, irregular_block=block)
+            ds, t = _run(model, threads, repeat, rtol=rtol, transient_irregular_block=block)
             rows.append(dict(compare(ds, ref), rtol=rtol, block=block, points_per_s=n / t,
                              rhs_per_point=float(ds.n_rhs.mean())))  # fmt: skip
     numbers = {"law": law, "threads": threads, "points": n, "reference_points_per_s": n / t_ref,
@@ -127,7 +127,7 @@ def _chart(d: dict):
 
     fig = Figure(figsize=(10.5, 4.8), layout="constrained")
     ax_l, ax_a = fig.subplots(1, 2)
-    default = (DEFAULTS.integration.rtol, DEFAULTS.irregular.block)
+    default = (DEFAULTS.integration.rtol, DEFAULTS.irregular.transient_block)
     colors = dict(zip(RTOLS, ("tab:red", "tab:orange", "tab:green", "tab:blue")))
     markers = dict(zip(BLOCKS, ("v", "s", "o", "D")))
     lo = min(f["regimes_differ"] for f in d["floor"])
@@ -166,7 +166,7 @@ def _chart(d: dict):
     handles.append(Line2D([], [], color="0.4", marker="o", mec="k", ls="none", label=f"default ({default[0]:g}, {default[1]})"))
     fig.legend(handles=handles, fontsize=8, loc="outside lower center", ncol=len(handles))
     fig.suptitle(f"The Stribeck sweep ({d['law']} law, {d['points']} points, t_max 20 s): "
-                 "transient rtol x irregular_block, against a reference run to t_max at rtol 1e-10", fontsize=10)  # fmt: skip
+                 "transient rtol x transient_irregular_block, against a reference run to t_max at rtol 1e-10", fontsize=10)  # fmt: skip
     return fig
 
 
@@ -178,14 +178,14 @@ def _markdown(d: dict, png: str) -> str:
         f"![sweep settings]({png})",
         "",
         f"The issue-10 Stribeck sweep ({d['law']} law, {d['points']} points, `census=False`, `t_max=20`, "
-        f"{d['threads']} threads) over the transients' `rtol` and `irregular_block`, against a reference that runs "
+        f"{d['threads']} threads) over the transients' `rtol` and `transient_irregular_block`, against a reference that runs "
         f"every transient to `t_max` at rtol {REF_RTOL:g} ({d['reference_points_per_s']:.0f} points/s, "
         f"{d['reference_rhs_per_point']:,.0f} right-hand sides per point, {d['reference_irregular']} irregular). "
         f"The reference itself at rtol +-1 % differs in {fl[0]['regimes_differ']} and {fl[1]['regimes_differ']} "
         f"regimes (the noise floor: chaotic transients' fates move with the last bits); its irregular points' "
         f"`z` range by {fl[0]['z_range_diff_median']:.1%} and {fl[1]['z_range_diff_median']:.1%} (median).",
         "",
-        "| rtol | irregular_block | points/s | rhs/point | regimes differing | same cycle (other) | "
+        "| rtol | transient_irregular_block | points/s | rhs/point | regimes differing | same cycle (other) | "
         "z1 error median | z1 error max | irregular z range, median diff |",
         "|---|---|---|---|---|---|---|---|---|",
     ]

@@ -458,7 +458,7 @@ def run_work_precision(out_dir: os.PathLike, config: BenchConfig | None = None, 
         extra = (extra + "\n\n" + mc["markdown"]).strip()
         from .sweep_settings import sweep_settings
 
-        _log("the Stribeck sweep's settings (transient rtol x irregular_block)", progress)
+        _log("the Stribeck sweep's settings (transient rtol x transient_irregular_block)", progress)
         ss = sweep_settings(out, quick=payload["meta"]["quick"])
         payload["sweep_settings"] = ss["numbers"]
         files.update(ss["files"])
