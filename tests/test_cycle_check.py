@@ -434,3 +434,26 @@ def test_census_rows_of_arrays_without_columns():
     assert check.flat("irregular_cells").shape == (6, 0)
     check.flat("t_end")[4] = -1.0
     assert res["t_end"][1, 1] == -1.0
+
+
+def test_a_check_near_a_weakly_unstable_cycle_converges_and_finds_it_unstable(monkeypatch):
+    # A census sample's stop on the 2,000-point grid (unilateral seed at 10 N, 0.46 m/s; its
+    # state and period as the census recorded them): Newton needs 11 iterations to the unstable
+    # orbit it is near (largest multiplier 1.021), more than the 8 the check allowed until
+    # 2026-11-27, which left the sample counted as an unverified cycle.
+    names = ["normal_load", "omega_friction", "omega_normal", "omega_torsion", "sliding_speed"]
+    values = np.array([[10.0, 256.2792306396808, 297.8639429981659, 565.5657484215244, 0.46]])
+    y = np.array([[2.1640345695254352e-06, -1.1881771608268643e-15, 4.1290719292967672e-07, 1.1320509809288176e-05,
+                   -2.5268663151866962e-04, 5.6005733275590927e-02]])  # fmt: skip
+    period, nan = np.array([0.0106404432481817]), np.full(1, np.nan)
+
+    def check():
+        return _cycles.shoot(UNILATERAL.values(), "unilateral", "constant", names, values, y, period, nan, nan,
+                             rtol=1e-7, tol=1e-8, threads=1)  # fmt: skip
+
+    orb = check()
+    assert bool(orb["unstable"][0]) and not bool(orb["stable"][0])
+    assert _cycles.slowest_multiplier(orb["moduli"])[0] == pytest.approx(1.0208, abs=5e-4)
+    assert 9 <= int(orb["newton_iterations"][0]) <= _cycles.CHECK_MAX_ITER
+    monkeypatch.setattr(_cycles, "CHECK_MAX_ITER", 8)
+    assert "Newton did not converge after 8" in check()["note"][0]
