@@ -1,6 +1,7 @@
 """Shared fixtures: the seed reference values of ../shared/reference/seed_values.json; the pixel size of a
 PNG file and the Figures behind the images a function saves (to check a chart's content, not its bytes);
-which of the seed census's first samples keep their fate under inputs moved by a few ulps."""
+which of the seed census's first samples keep their fate under inputs moved by a few ulps; a start on a
+slow approach to a stable cycle, for the sweep's transients too."""
 
 from __future__ import annotations
 
@@ -26,6 +27,43 @@ def moved(x, k: int) -> np.ndarray:
     for _ in range(abs(k)):
         x = np.nextafter(x, np.inf if k > 0 else -np.inf)
     return x
+
+
+#: The switch-law Stribeck point at 10 N, 10.1 cm, 0.2 m/s (benches/bench_stribeck.py): a stable
+#: period-2 contact-loss cycle whose slowest multiplier is 0.9933 (x's light damping).
+SLOW_POINT = dict(normal_load=[10.0], arm_length=[0.10133333333333333], sliding_speed=[0.2])
+
+
+def slow_law():
+    import tribosweep as ts
+
+    return ts.SliderModel(contact="unilateral", friction_law="switch", mu_static=0.3, sliding_speed=0.2)
+
+
+def slow_approach_start():
+    """The slow point's model, a start on its cycle's section with x moved by 0.3 of its amplitude (no
+    chaotic phase: only the slow approach, which repeats to periodic_tol at 15.4 s, the same under
+    inputs moved by ulps and rtol by 1 %), and a run from the default start to 60 s (periodic)."""
+    import tribosweep as ts
+
+    m = ts.apparatus_model(10.0, SLOW_POINT["arm_length"][0], 0.2, base=slow_law())
+    done = ts.ensemble(m, 60.0, {"normal_load": [10.0]}, steady=True)
+    y0 = np.array([float(done[f"{v}_end"][0]) for v in ("z", "z_dot", "x", "x_dot", "phi", "phi_dot")])
+    y0[2] += 0.3 * float(done.x1_amplitude[0])
+    return m, y0, done
+
+
+@pytest.fixture
+def slow_transients(monkeypatch):
+    """The sweep's transients at unstable points start at :func:`slow_approach_start`'s state instead
+    of on the unstable mode, whose chaotic prelude decides, with the last bits, how long the slow point
+    takes to settle and even on which of its coexisting cycles (contact loss, or stick-slip at rtol
+    +1 %). Returns that function's result."""
+    from tribosweep._sweep import stages
+
+    m, y0, done = slow_approach_start()
+    monkeypatch.setattr(stages, "mode_start", lambda full, law, sel, z_amp, eig: np.tile(y0, (np.size(sel), 1)))
+    return m, y0, done
 
 
 #: The seed census's first samples whose fates ``seed_census_fates`` checks.

@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 
 import tribosweep as ts
+from conftest import SLOW_POINT, slow_approach_start, slow_law
 from tribosweep import _census, _core, _cycles
 from tribosweep._codes import OUTCOME_NAMES, REGIME
 from tribosweep._settings import Steady, SweepSettings
@@ -291,27 +292,22 @@ def test_a_stop_is_within_periodic_tol_over_the_multiplier_gap_of_its_orbit():
         assert s["n"] >= 3 and s["within_3x"] == 1.0, (law, s)
 
 
-#: The switch-law Stribeck point at 10 N, 10.1 cm, 0.2 m/s (benches/bench_stribeck.py): a stable
-#: period-2 contact-loss cycle whose slowest multiplier is 0.9933 (x's light damping). Its
-#: transients settle after some seconds of chaotic motion, at a time that moves with the last bits
-#: (22-25 s from the default start at -2..+2 ulps of the inputs; the sweep's, 21.5 s at 0 ulps).
-SLOW_LAW = ts.SliderModel(contact="unilateral", friction_law="switch", mu_static=0.3, sliding_speed=0.2)
-SLOW = dict(normal_load=[10.0], arm_length=[0.10133333333333333], sliding_speed=[0.2])
+#: The slow point's law and axes (tests/conftest.py): its transients settle after some seconds of
+#: chaotic motion, at a time that moves with the last bits (22-25 s from the default start at -2..+2
+#: ulps of the inputs; the sweep's, 21.5 s at 0 ulps).
+SLOW_LAW = slow_law()
+SLOW = SLOW_POINT
 
 
 def test_a_run_unsettled_at_t_max_on_a_slow_approach_ends_on_the_stable_cycle_shooting_finds(monkeypatch):
-    m = ts.apparatus_model(10.0, SLOW["arm_length"][0], 0.2, base=SLOW_LAW)
+    m, y0, done = slow_approach_start()
 
     def run(t_end, y0=None, check=True):
         return ts.ensemble(m, t_end, {"normal_load": [10.0]}, y0=y0, steady=True, check_cycles=check)
 
-    done = run(60.0, check=False)
     assert ts.labels(done.outcome).values[0] == "periodic"
     assert np.isnan(done.nearest_residual.values[0]) and int(done.nearest_multiplicity[0]) == 0
-    # A start on the cycle's section with x moved by 0.3 of its amplitude: no chaotic phase, only
-    # the slow approach (it repeats at 15.4 s).
-    y0 = np.array([float(done[f"{v}_end"][0]) for v in STATE])
-    y0[2] += 0.3 * float(done.x1_amplitude[0])
+    # From the start near the cycle: no chaotic phase, only the slow approach (it repeats at 15.4 s).
     assert 12.0 < float(run(60.0, y0, check=False).t_end[0]) < 20.0
     times = np.array([4.0, 6.0, 8.0, 10.0])
     runs = [run(t, y0, check=False) for t in times]
@@ -345,16 +341,20 @@ def test_a_run_unsettled_at_t_max_on_a_slow_approach_ends_on_the_stable_cycle_sh
     assert ts.labels(run(10.0, y0).outcome).values[0] == "unsettled"
 
 
-def test_the_sweep_reports_a_slow_approach_as_its_cycle_and_intermittency_as_irregular():
-    # t_max = 16 s: the transient has not repeated yet (at 21.5 s), but its newest section has.
-    slow = ts.sweep(model=SLOW_LAW, census=False, t_max=16.0, threads=2, progress=False, **SLOW)
+def test_the_sweep_reports_a_slow_approach_as_its_cycle(slow_transients):
+    # The transient starts near the cycle (the slow_transients fixture) and has not repeated by
+    # t_max = 10 s (at 15.4 s), but its newest section has.
+    m, _, _ = slow_transients
+    slow = ts.sweep(model=SLOW_LAW, census=False, t_max=10.0, threads=2, progress=False, **SLOW)
     assert ts.labels(slow.regime).values.ravel()[0] == "contact_loss"
     assert int(_first(slow, "cycle_verified")) == 1 and "a slow approach" in str(_first(slow, "reason"))
     assert np.isnan(_first(slow, "irregular_ftle"))
     # Its size: the cycle's own, as a run to 60 s measures it.
-    ref = ts.ensemble(ts.apparatus_model(10.0, SLOW["arm_length"][0], 0.2, base=SLOW_LAW), 60.0, {"normal_load": [10.0]},
-                      steady=True, check_cycles=True)  # fmt: skip
-    assert float(_first(slow, "z_half_range")) == pytest.approx(float(ref.z_half_range[0]), rel=1e-4)
+    on = ts.ensemble(m, 60.0, {"normal_load": [10.0]}, steady=True, check_cycles=True)
+    assert float(_first(slow, "z_half_range")) == pytest.approx(float(on.z_half_range[0]), rel=1e-4)
+
+
+def test_intermittent_motion_at_t_max_stays_irregular():
     # At 25.6 N, 0.4 m/s the motion is intermittent: laminar phases near a period-2 cycle, bursts
     # every 4 s (unsettled at 200 s). At t_max it may be in a laminar phase, repeating to 1.6e-3;
     # shooting from there finds no stable cycle (Newton does not converge), so it stays irregular.
@@ -368,7 +368,7 @@ def test_the_census_counts_a_sample_on_a_slow_approach_with_the_cycle_it_approac
     # Two samples of the slow point's census, started as above: one unsettled at t_max = 10 s,
     # one run on until it repeats. The first is shot from its newest section and joins the second's
     # cycle (one cluster) instead of counting as irregular motion.
-    m = ts.apparatus_model(10.0, SLOW["arm_length"][0], 0.2, base=SLOW_LAW)
+    m, y0, done = slow_approach_start()
     base, names, vals = m.values(), ["normal_load"], np.array([[10.0]])
 
     def steady(rows, starts, known, restart=None, t_max=10.0):
@@ -379,10 +379,6 @@ def test_the_census_counts_a_sample_on_a_slow_approach_with_the_cycle_it_approac
     def shoot(rows, y, p, z1, size):
         return _cycles.shoot(base, "unilateral", "switch", names, vals[rows], y, p, z1, size, rtol=1e-9, tol=1e-8,
                              threads=1)  # fmt: skip
-
-    done = ts.ensemble(m, 60.0, {"normal_load": [10.0]}, steady=True)
-    y0 = np.array([float(done[f"{v}_end"][0]) for v in STATE])
-    y0[2] += 0.3 * float(done.x1_amplitude[0])
 
     def census_check():
         runs = [_cycles.rows(steady([0], y0, None, t_max=t)) for t in (10.0, 60.0)]
