@@ -326,7 +326,7 @@ impl SectionWatcher {
     /// back: the largest compared component's difference in units of what [`Self::repeats`]
     /// allows per unit of `rel`.
     fn residual(&self, d: usize) -> f64 {
-        let amp = (0..d).fold(State::zeros(), |m, k| m.sup(&self.get(k).peaks));
+        let amp = self.span_amp(d);
         let (a, b) = (self.get(0), self.get(d));
         self.comps.iter().map(|&c| (a.y[c] - b.y[c]).abs() / amp[c].max(1e-6 * self.sizes[c])).fold(0.0, f64::max)
     }
@@ -349,10 +349,13 @@ impl SectionWatcher {
     /// to each component's amplitude (floored at a millionth of its characteristic size, so that a
     /// component that hardly moves does not demand the impossible).
     fn repeats(&self, d: usize, rel: f64) -> bool {
-        // The motion's own scale over the compared span (a minor maximum's interval alone may
-        // miss a component's extreme).
-        let amp = (0..d).fold(State::zeros(), |m, k| m.sup(&self.get(k).peaks));
-        self.repeats_within(d, rel, &amp)
+        self.repeats_within(d, rel, &self.span_amp(d))
+    }
+
+    /// The motion's own scale over the newest `d` crossings: the sup of their peaks (a minor
+    /// maximum's interval alone may miss a component's extreme).
+    fn span_amp(&self, d: usize) -> State {
+        (0..d).fold(State::zeros(), |m, k| m.sup(&self.get(k).peaks))
     }
 
     /// [`Self::repeats`] with the span's amplitude `amp` given (the sup of the newest `d` crossings' peaks).
