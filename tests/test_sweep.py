@@ -137,16 +137,19 @@ def test_the_transients_and_the_census_have_their_own_stationarity_blocks(monkey
     assert seen and all(block == 64 for _, block in seen), seen
 
 
-def test_the_describing_functions_half_range_of_z():
-    # A1 sin psi + A2 sin(2 psi + theta): one harmonic alone gives its amplitude; otherwise against
-    # a million samples (the 4,096 are within (pi / 4096)^2 / 2 = 3e-7).
-    half = _stages.two_harmonic_half_range
-    assert half(2e-5, 0.0, 1.0) == pytest.approx(2e-5, rel=1e-12)
-    assert half(0.0, 6e-6, 4.2) == pytest.approx(6e-6, rel=1e-6)
+def test_the_describing_functions_waveform_extremes():
+    # z = A0 + A1 sin psi + A2 sin(2 psi + theta) of each root (the sweep's z_half_range where the
+    # describing function decides is half their difference), against a million samples.
+    ds = ts.describing_function(ts.SliderModel(normal_load=30.0))
     psi = np.linspace(0.0, 2 * np.pi, 1_000_000, endpoint=False)
-    for a1, a2, th in ((2e-5, 6e-6, 4.2), (1e-6, 3e-6, 0.3)):
-        z = a1 * np.sin(psi) + a2 * np.sin(2 * psi + th)
-        assert half(a1, a2, th) == pytest.approx(0.5 * np.ptp(z), rel=1e-6)
+    assert ds.sizes["root"] >= 2
+    for r in range(ds.sizes["root"]):
+        a0, a1, a2, th = (float(ds[k][r]) for k in ("A0", "A1", "A2", "theta"))
+        z = a0 + a1 * np.sin(psi) + a2 * np.sin(2 * psi + th)
+        scale = abs(a1) + abs(a2)
+        assert float(ds.z_max[r]) == pytest.approx(z.max(), abs=1e-10 * scale)
+        assert float(ds.z_min[r]) == pytest.approx(z.min(), abs=1e-10 * scale)
+        assert float(ds.z_min[r]) < a0 < float(ds.z_max[r])
 
 
 def test_tidf_and_shooting_stages_at_the_seed(seed_values):

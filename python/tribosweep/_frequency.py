@@ -116,6 +116,7 @@ _ROOT_VARS = {
     "x1_amplitude": ("m", "amplitude of the first harmonic of x"),
     "x1_phase": ("rad", "phase of x1 relative to z1, in (-pi, pi]"),
     "z_max": ("m", "largest z of the two-harmonic waveform"),
+    "z_min": ("m", "smallest z of the two-harmonic waveform"),
     "third_harmonic_ratio": ("1", "third harmonic of F_z dropped by the describing function, relative to the first two"),
     "residual": ("1", "scaled residual of the harmonic balance at the root"),
 }

@@ -129,14 +129,6 @@ def mode_start(full: Mapping[str, np.ndarray], friction_law: str, sel: np.ndarra
     return np.ascontiguousarray(y0)
 
 
-def two_harmonic_half_range(a1: float, a2: float, theta: float, n: int = 4096) -> float:
-    """Half the range of the describing function's waveform ``A1 sin psi + A2 sin(2 psi + theta)``
-    (its ``A0`` shifts it), from ``n`` samples: within ``(pi / n)^2 / 2`` relative (3e-7)."""
-    psi = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
-    z = a1 * np.sin(psi) + a2 * np.sin(2 * psi + theta)
-    return 0.5 * float(z.max() - z.min())
-
-
 def linear(p: Points) -> None:
     """Stage 1: linear stability of steady sliding at every point."""
     t0 = time.perf_counter()
@@ -214,8 +206,7 @@ def describing_function(p: Points, *, unstable_too: bool, predict_cycles: bool, 
             out["cycle_omega"][i] = out["tidf_omega"][i]
             out["z1_amplitude"][i] = out["tidf_a1"][i]
             out["z2_amplitude"][i] = df["A2"][j, k[0]]
-            out["z_half_range"][i] = two_harmonic_half_range(df["A1"][j, k[0]], df["A2"][j, k[0]],
-                                                             df["theta"][j, k[0]])
+            out["z_half_range"][i] = 0.5 * (df["z_max"][j, k[0]] - df["z_min"][j, k[0]])
             out["phi1_amplitude"][i] = df["phi1_amplitude"][j, k[0]]
             reason[i] = "cycle predicted by the describing function"
         elif predict_cycles:

@@ -40,7 +40,7 @@ fn describing_function<'py>(
     let n = out.len();
     let r = out.iter().map(|o| o.as_ref().map_or(0, |s| s.roots.len())).max().unwrap_or(0).max(1);
     let d = PyDict::new(py);
-    let fields: [(&str, RootField); 16] = [
+    let fields: [(&str, RootField); 17] = [
         ("omega", |x| x.omega),
         ("A0", |x| x.a0),
         ("A1", |x| x.a1),
@@ -55,6 +55,7 @@ fn describing_function<'py>(
         ("x1_amplitude", |x| x.x_amp),
         ("x1_phase", |x| x.x_phase),
         ("z_max", |x| x.z_max),
+        ("z_min", |x| x.z_min),
         ("third_harmonic_ratio", |x| x.third_harmonic_ratio),
         ("residual", |x| x.residual_norm),
     ];

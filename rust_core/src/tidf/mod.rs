@@ -209,6 +209,8 @@ pub struct Root {
     pub x_phase: f64,
     /// Largest dynamic `z` over a period of the two-harmonic waveform [m].
     pub z_max: f64,
+    /// Smallest dynamic `z` over a period of the two-harmonic waveform [m].
+    pub z_min: f64,
     /// True if `z_st + z_max > 0`: the pin would leave the disk (the bilateral law, and this
     /// describing function, are then outside their validity).
     pub contact_opens: bool,

@@ -49,6 +49,8 @@ impl Tidf {
         let x1 = self.mu * lz1 * a1 / lx1;
         let x2 = self.mu * lz2 * z2 / lx2;
         let z_max = two_harmonic_max(a0, a1, a2, th);
+        // min z = -max(-z), the same waveform with every amplitude negated.
+        let z_min = -two_harmonic_max(-a0, -a1, -a2, th);
         // Mean dynamic contact force per unit mass: w_z^2 A0 with the block fixed, 0 for a dead load.
         let fz0_m = match self.variant {
             Variant::Consistent => self.wz * self.wz * a0,
@@ -76,6 +78,7 @@ impl Tidf {
             x_amp: x1.norm(),
             x_phase: x1.arg(),
             z_max,
+            z_min,
             contact_opens: self.z_st + z_max > 0.0,
             physical: a0.abs() < self.z_st.abs() && (w - torsion_frequency).abs() <= band * torsion_frequency,
             fz_harmonics: [f1, f2, f3],
