@@ -201,9 +201,13 @@ def slow_candidates(outcome: np.ndarray, status: np.ndarray, residual: np.ndarra
     return (outcome == UNSETTLED) & (status == STATUS["not_converged"]) & (residual <= NEAREST_TOL)
 
 
+#: How the reason of a run that became its cycle as a slow approach begins (:func:`slow_note`).
+SLOW_MARK: str = "a slow approach"
+
+
 def slow_note(t: float, residual: float, mult: int, mu: float) -> str:
     """The reason of a run that became its cycle as a slow approach."""
-    return (f"a slow approach: no repetition to periodic_tol by t_max = {t:.3g} s (its newest section repeated to "
+    return (f"{SLOW_MARK}: no repetition to periodic_tol by t_max = {t:.3g} s (its newest section repeated to "
             f"{residual:.2g} after {int(mult)}); shooting from there converged on this stable cycle (largest "
             f"multiplier {mu:.4g})")  # fmt: skip
 

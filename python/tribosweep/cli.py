@@ -385,7 +385,9 @@ def describe(ds, path: str | None = None) -> str:
             if (v >= 0).any():
                 slow = ""
                 if var == "cycle_verified" and "reason" in ds:
-                    n = sum("a slow approach" in str(r) for r in np.asarray(ds.reason.values).ravel())
+                    from ._cycles import SLOW_MARK
+
+                    n = sum(SLOW_MARK in str(r) for r in np.asarray(ds.reason.values).ravel())
                     slow = f"; {n} of them a slow approach, not repeating by t_max" if n else ""
                 lines.append(f"{what} checked by shooting: {int((v == 1).sum())} verified (a stable orbit, measured on "
                              f"it), {int((v == 0).sum())} not verified (see reason){slow}")  # fmt: skip
