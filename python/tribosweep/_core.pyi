@@ -98,6 +98,7 @@ def ensemble(
     known_cells: npt.NDArray[np.uint64] | None = None,
     known_cell_extent: npt.NDArray[np.float64] | None = None,
     restart: npt.NDArray[np.float64] | None = None,
+    stationary_tol: float | None = None,
 ) -> dict[str, Any]: ...
 def linear_stability(
     base: dict[str, float],

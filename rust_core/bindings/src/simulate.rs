@@ -246,12 +246,13 @@ fn summaries(out: Vec<Result<TrajectoryResult, String>>) -> Vec<(Summary, String
 /// `irregular_block > 0`: sustained irregular motion stops once stationary over three blocks of
 /// that many sections, outcome "irregular", or once a block matches one of the trajectory's
 /// `known_irregular` fingerprints, those of irregular runs of the same model, or its sections keep
-/// to their `known_cells`; see `knowns`; `restart`: each run's own `t_max` and hold, see `restarts`).
+/// to their `known_cells`; see `knowns`; `restart`: each run's own `t_max` and hold, see `restarts`;
+/// `stationary_tol`: the repetition tolerance that sets the stationarity floor, default `periodic_tol`).
 /// The core picks the path (lane-batched or scalar) and the grouping; results do not depend on it
 /// beyond integration accuracy, nor on the thread count at all. Every non-success status has a
 /// reason; Ctrl-C stops every thread (`KeyboardInterrupt`, the results are dropped).
 #[pyfunction]
-#[pyo3(signature = (base, contact, friction_law, names, values, y0, t_end, method, rtol, *, atol=None, t_eval=None, threads=None, kind="final", periodic_tol=1e-5, decay_amplitude=None, n_fourier=512, max_steps=None, max_events=None, decay_amplitudes=None, watch_x=true, decay_thresholds=None, irregular_block=0, known_irregular=None, known_cells=None, known_cell_extent=None, restart=None))]
+#[pyo3(signature = (base, contact, friction_law, names, values, y0, t_end, method, rtol, *, atol=None, t_eval=None, threads=None, kind="final", periodic_tol=1e-5, decay_amplitude=None, n_fourier=512, max_steps=None, max_events=None, decay_amplitudes=None, watch_x=true, decay_thresholds=None, irregular_block=0, known_irregular=None, known_cells=None, known_cell_extent=None, restart=None, stationary_tol=None))]
 #[allow(clippy::too_many_arguments)]
 fn ensemble<'py>(
     py: Python<'py>,
@@ -281,6 +282,7 @@ fn ensemble<'py>(
     known_cells: Option<PyReadonlyArray3<'py, u64>>,
     known_cell_extent: Option<PyReadonlyArray3<'py, f64>>,
     restart: Option<PyReadonlyArray2<'py, f64>>,
+    stationary_tol: Option<f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let call = Call::rows(py, &base, contact, friction_law, &names, &values, threads)?;
     let n = call.len();
@@ -329,6 +331,7 @@ fn ensemble<'py>(
                 method: settings.method,
                 tol: settings.tol,
                 periodic_tol,
+                stationary_tol,
                 decay_amplitude,
                 n_fourier,
                 watch_x,

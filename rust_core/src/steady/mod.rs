@@ -331,6 +331,12 @@ pub struct SteadyOptions {
     pub tol: Tolerances,
     /// Relative tolerance of the section-state repetition that declares a periodic state.
     pub periodic_tol: f64,
+    /// The repetition tolerance that sets the stationarity test's residual floor
+    /// ([`STATIONARY_FLOOR`] times it, at least [`STATIONARY_MIN_RESIDUAL`]);
+    /// `None`: `periodic_tol`. Runs whose stops repeat to a loose `periodic_tol`, each stop then
+    /// checked by shooting (the census's first stops), keep the floor of the strict tolerance:
+    /// what counts as irregular motion does not move with the stops.
+    pub stationary_tol: Option<f64>,
     /// No periodic state is declared at a section crossed before this time [s]: a run going on
     /// from near an unstable cycle repeats there at first (0: no hold).
     pub hold: f64,
@@ -398,6 +404,7 @@ impl Default for SteadyOptions {
             method: Method::Dopri5,
             tol: Tolerances::new(1e-8),
             periodic_tol: 1e-5,
+            stationary_tol: None,
             hold: 0.0,
             decay_amplitude: None,
             decay_thresholds: None,

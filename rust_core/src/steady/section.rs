@@ -292,7 +292,8 @@ impl SectionWatcher {
                 hits: [0; KNOWN_MAX],
                 recent: [0.0; RECUR_SECTIONS],
             }),
-            stationary_floor: (STATIONARY_FLOOR * opts.periodic_tol).max(STATIONARY_MIN_RESIDUAL),
+            stationary_floor: (STATIONARY_FLOOR * opts.stationary_tol.unwrap_or(opts.periodic_tol))
+                .max(STATIONARY_MIN_RESIDUAL),
             irregular: false,
             fingerprint: None,
             matched_known: false,

@@ -139,6 +139,25 @@ fn stationary_irregular_motion_stops_after_three_blocks_and_nothing_else_does() 
     assert_eq!(watch(&tight, 3000, jitter), ("running", 3000));
 }
 
+#[test]
+fn a_loose_periodic_tol_keeps_the_stationarity_floor_of_stationary_tol() {
+    // A period-2 cycle with a torus of 2 % of the sizes on top: a residual of some 5e-3 of the
+    // sizes, steady, and never a repetition to 1e-3 of the amplitudes.
+    let opts = SteadyOptions { watch_x: false, irregular_block: 32, ..SteadyOptions::default() };
+    let wobble = |n: usize| two(0.0)(n) + 0.02 * torus(1.0)(n);
+    assert_eq!(watch(&opts, 1000, wobble), ("irregular", 8 + 3 * 32));
+    // A loose periodic_tol alone raises the floor to 100 times itself (0.1): the same motion runs on.
+    let loose = SteadyOptions { periodic_tol: 1e-3, ..opts };
+    assert_eq!(watch(&loose, 1000, wobble), ("running", 1000));
+    // With the strict tolerance's floor kept, it is irregular after the same sections.
+    let kept = SteadyOptions { stationary_tol: Some(1e-5), ..loose };
+    assert_eq!(watch(&kept, 1000, wobble), ("irregular", 8 + 3 * 32));
+    // ...and the loose tolerance still stops a cycle approached at 0.9 per section, sooner.
+    let (strict_n, loose_n) = (watch(&opts, 1000, two(0.9)), watch(&kept, 1000, two(0.9)));
+    assert_eq!((strict_n.0, loose_n.0), ("periodic", "periodic"));
+    assert!(loose_n.1 < strict_n.1, "{loose_n:?} {strict_n:?}");
+}
+
 /// Independent draws with an exponential tail (`P(X > k)` about `2^-k`): the leading zero bits of
 /// a hashed `n` (splitmix64) plus a uniform fraction from a second hash. Integer arithmetic only:
 /// the same bits on every machine.
