@@ -265,6 +265,66 @@ def test_recurrence_on_a_pilots_attractor_stops_irregular_samples_early_with_the
     np.testing.assert_array_equal(rec.attractor_reached.values[neither], own.attractor_reached.values[neither])
 
 
+STRIBECK_SWITCH = ts.SliderModel(contact="unilateral", friction_law="switch", mu_static=0.3)
+
+
+def test_first_stops_at_a_loose_tolerance_end_on_the_orbits_for_half_the_work():
+    """Under speed-dependent friction the samples after the pilots first stop once their section state
+    repeats to 1e-3, and each stop is shot from: a stable orbit of its period is the sample's cycle,
+    measured on the orbit.
+
+    At 150 N, 5 cm, 0.8 m/s (a point of the Stribeck sweep's census) the samples end on one
+    bouncing cycle or return to sliding. Against the census without first stops (``stop_tol`` =
+    ``periodic_tol``): the pilots run alike to the bit, the fractions agree within 3 standard errors
+    of their difference, the cycle samples' frequency and amplitude are those of the verified
+    orbit to 1e-9 and 1e-7 (they were measured on it), where the strict stops are only within
+    ``periodic_tol / (1 - |mu|)`` of it (x's multiplier 0.993: 1.4e-3; 1.4e-7 and 7e-7 were
+    measured), and the cycle samples cost half the right-hand sides (0.51x measured, 2026-11-28:
+    mean stop 2.7 s against 5.6 s).
+    """
+    k = 32
+    m = ts.apparatus_model(150.0, 0.05, 0.8, base=STRIBECK_SWITCH)
+    on, off = ts.census(m, samples=k), ts.census(m, samples=k, stop_tol=1e-5)
+    assert _census.first_stop_tol(None, "switch", 1e-5) == _census.FIRST_STOP_TOL == 1e-3
+    _within_3_se(on, off, k)
+    pil = slice(0, _census.PILOTS)
+    np.testing.assert_array_equal(on.t_end.values[pil], off.t_end.values[pil])
+    assert int(on.largest_cycle_verified) == 1
+    big = np.argmax(np.bincount(on.cycle.values[on.cycle.values >= 0]))
+    c = (on.cycle.values == big) & (off.attractor_reached.values == 1)
+    c[pil] = False
+    assert c.sum() >= k // 2, c.sum()
+    w, a1 = float(on.largest_cycle_omega), float(on.largest_cycle_a1)
+    # All but a sample or two (one whose first stop went on and stopped strictly later: 1 of 25 with
+    # the inputs moved by 2 ulps) were measured on the orbit; every one is within the strict bound.
+    on_orbit = (np.abs(on.omega.values[c] / w - 1) <= 1e-9) & (np.abs(on.z1_amplitude.values[c] / a1 - 1) <= 1e-7)
+    assert on_orbit.sum() >= c.sum() - 2, (on.omega.values[c] / w - 1, on.z1_amplitude.values[c] / a1 - 1)
+    np.testing.assert_allclose(on.omega.values[c], w, rtol=1e-5 / (1 - 0.993))
+    np.testing.assert_allclose(on.z1_amplitude.values[c], a1, rtol=1e-5 / (1 - 0.993))
+    np.testing.assert_allclose(off.omega.values[c], w, rtol=1e-5 / (1 - 0.993))
+    np.testing.assert_allclose(off.z1_amplitude.values[c], a1, rtol=1e-5 / (1 - 0.993))
+    assert on.n_rhs.values[c].sum() < 0.75 * off.n_rhs.values[c].sum()
+
+
+def test_first_stops_are_off_under_constant_friction_and_reach_the_sweep():
+    assert _census.first_stop_tol(None, "constant", 1e-5) == 1e-5
+    assert _census.first_stop_tol(None, "coulomb", 1e-5) == 1e-3
+    assert _census.first_stop_tol(3e-3, "constant", 1e-5) == 3e-3
+    # Constant friction: the default census is the one without first stops, to the bit.
+    m = ts.apparatus_model(20.7692, 0.1099, 0.3, base=SEED_U)
+    a, b = ts.census(m, samples=8), ts.census(m, samples=8, stop_tol=1e-5)
+    np.testing.assert_array_equal(a.t_end.values, b.t_end.values)
+    # The sweep's census_stop_tol is the census's stop_tol (and its solver attribute).
+    pt = dict(normal_load=[150.0], arm_length=[0.05], sliding_speed=[0.8])
+    ds = ts.sweep(model=STRIBECK_SWITCH, samples=8, progress=False, census_stop_tol=1e-4, **pt)
+    alone = ts.census(ts.apparatus_model(150.0, 0.05, 0.8, base=STRIBECK_SWITCH), samples=8, stop_tol=1e-4)
+    assert int(ds.census_samples.item()) == 8
+    np.testing.assert_array_equal(ds.basin_fraction.values.ravel(), alone.basin_fraction.values)
+    assert ds.attrs["solver_census_stop_tol"] == 1e-4
+    with pytest.raises(ValueError, match=r"census_stop_tol = 0.2 is out of range: must be in \(0, 0.1\]"):
+        ts.sweep(model=STRIBECK_SWITCH, samples=8, progress=False, census_stop_tol=0.2, **pt)
+
+
 def test_a_sweep_point_says_how_its_irregular_samples_were_decided():
     # The reason counts the irregular samples stopped as stationary, by recurrence, and those that reached t_max,
     # as the standalone census's per-sample end times tell (K = 16 at the point above). Under constant
@@ -424,6 +484,9 @@ def test_a_sweep_point_has_the_standalone_census():
         ({"integrator": "euler"}, "euler"),
         ({"irregular_block": -1}, r"irregular_block = -1 is out of range: must be an integer in \[0, "),
         ({"irregular_block": 2.5}, "irregular_block"),
+        ({"stop_tol": 0.0}, r"stop_tol = 0.0 is out of range: must be a finite number > 0"),
+        ({"stop_tol": 0.5}, r"stop_tol = 0.5 is out of range: must be in \(0, 0.1\]"),
+        ({"stop_tol": "loose"}, "stop_tol = 'loose' is not a number"),
     ],
 )
 def test_census_rejects_bad_input(kwargs, needle):

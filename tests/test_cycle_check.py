@@ -453,3 +453,59 @@ def test_a_check_near_a_weakly_unstable_cycle_converges_and_finds_it_unstable(mo
     assert 9 <= int(orb["newton_iterations"][0]) <= _cycles.CHECK_MAX_ITER
     monkeypatch.setattr(_cycles, "CHECK_MAX_ITER", 8)
     assert "Newton did not converge after 8" in check()["note"][0]
+
+
+def test_a_census_first_stop_is_its_stable_orbit_or_goes_on_from_there():
+    """``CensusCheck.resolve``'s bookkeeping on three first stops, with the core replaced by records.
+
+    Shooting finds a stable orbit of the first stop's period (the sample becomes that orbit, measured
+    by a run started on it, verified), an unstable one from the second (it goes on with the hold of
+    a sample leaving an unstable cycle: ``ceil(ln 1e3 / ln 1.5) = 18`` periods of 0.02 s, and says
+    so) and fails from the third (it goes on from its stop, no hold, nothing said). The two that go
+    on do so in one call, each with the time it has left.
+    """
+    periodic, decayed = OUTCOME_NAMES.index("periodic"), OUTCOME_NAMES.index("decayed")
+    res = {"outcome": np.full((1, 3), periodic), "status": np.zeros((1, 3), dtype=np.int64),
+           "y_end": np.arange(18.0).reshape(1, 3, 6), "period": np.full((1, 3), 0.01),
+           "t_end": np.array([[1.0, 2.0, 3.0]]), "n_rhs": np.array([[10, 20, 30]]),
+           "reason": np.full((1, 3), "", dtype=object), "omega": np.full((1, 3), 600.0)}  # fmt: skip
+    state0 = np.full((3, 6), 7.0)
+    calls = []
+
+    def shoot(rows, y, p, z1, size):
+        calls.append(("shoot", rows, y.copy(), p.copy(), z1, size))
+        return {"status": np.array([0, 0, 1]), "stable": np.array([True, False, False]),
+                "unstable": np.array([False, True, False]), "state0": state0, "n_rhs": np.array([1, 1, 1]),
+                "moduli": np.array([[0.5] * 6, [1.5] + [0.5] * 5, [np.nan] * 6]),
+                "period": np.array([0.01, 0.02, np.nan])}  # fmt: skip
+
+    def steady(rows, y0, known, restart=None):
+        calls.append(("steady", rows, y0.copy(), restart))
+        n = len(rows)
+        out = {"outcome": np.full(n, periodic if restart is None else decayed), "n_rhs": np.full(n, 5),
+               "t_end": np.full(n, 0.5), "omega": np.full(n, 640.0), "reason": np.full(n, "", dtype=object),
+               "status": np.zeros(n, dtype=np.int64), "y_end": np.zeros((n, 6)), "period": np.full(n, np.nan)}  # fmt: skip
+        return out
+
+    check = _cycles.CensusCheck(res, 1e-2, steady, lambda: None, 30.0, 1e-7, 1e-10)
+    check.resolve(shoot, np.array([0, 1, 2]))
+    kinds = [c[0] for c in calls]
+    assert kinds == ["shoot", "steady", "steady"], kinds
+    _, rows, y, p, z1, size = calls[0]
+    np.testing.assert_array_equal(y, np.arange(18.0).reshape(3, 6))
+    assert np.all(np.isnan(z1)) and np.all(np.isnan(size))  # held to the period alone
+    # The stable orbit: measured on it, the sample's cycle, verified.
+    _, rows, y0, restart = calls[1]
+    assert restart is None and list(rows) == [0]
+    np.testing.assert_array_equal(y0, state0[:1])
+    assert res["omega"][0, 0] == 640.0 and res["outcome"][0, 0] == periodic
+    np.testing.assert_array_equal(res["y_end"][0, 0], state0[0])
+    assert check.orbit[(0, 0)][0] is True and res["n_rhs"][0, 0] == 10 + 1 + 5
+    # The other two go on in one call from where they stopped, with the time they have left.
+    _, rows, y0, restart = calls[2]
+    np.testing.assert_array_equal(y0, np.arange(6.0, 18.0).reshape(2, 6))
+    np.testing.assert_allclose(restart, [[28.0, 18 * 0.02], [27.0, 0.0]])
+    assert "largest multiplier 1.5" in res["reason"][0, 1] and res["reason"][0, 2] == ""
+    np.testing.assert_array_equal(res["outcome"][0, 1:], [decayed, decayed])
+    np.testing.assert_allclose(res["t_end"][0, 1:], [2.5, 3.5])
+    assert (0, 1) not in check.orbit and (0, 2) not in check.orbit

@@ -342,6 +342,43 @@ class CensusCheck:
         assert v.size == 0 or np.shares_memory(flat, v), key  # a copy would drop the writes
         return flat
 
+    def resolve(self, shoot, flat: np.ndarray) -> None:
+        """The first stops of the samples ``flat`` (flat indices), which repeated to the census's loose
+        ``stop_tol``, each shot from, in one call, and held to the period alone (a stop that loose
+        is up to ``stop_tol / (1 - |mu|)`` off its cycle: 10 % near a slow multiplier, more than
+        :data:`SAME_ORBIT_A1`). A stable orbit is measured by a run started on it, in one call, and
+        the sample is on it, verified. The others go on from their stops, in one call, stopping on
+        cycles that repeat to ``periodic_tol`` from then on: those near an unstable orbit with the
+        hold of :meth:`_leave`, those whose shooting failed or found an orbit of another period
+        without one."""
+        if not flat.size:
+            return
+        k = self.res["outcome"].shape[1]
+        nan = np.full(flat.size, np.nan)
+        orbs = shoot(flat // k, self.flat("y_end")[flat], self.flat("period")[flat], nan, nan)
+        self.flat("n_rhs")[flat] += orbs["n_rhs"].astype(self.res["n_rhs"].dtype)
+        done = np.zeros(flat.size, dtype=bool)
+        good = np.flatnonzero(orbs["stable"])
+        if good.size:
+            g, state0 = flat[good], orbs["state0"][good]
+            r = rows(self.steady(g // k, state0, None))
+            self.flat("n_rhs")[g] += r["n_rhs"].astype(self.res["n_rhs"].dtype)
+            ok = r["outcome"] == PERIODIC
+            for key in CYCLE_KEYS:
+                if key in self.res:
+                    self.flat(key)[g[ok]] = r[key][ok]
+            self.flat("y_end")[g[ok]] = state0[ok]
+            for f, y in zip(g[ok], state0[ok]):
+                self.orbit[(int(f // k), int(f % k))] = (True, y)
+            done[good[ok]] = True
+        rest = np.flatnonzero(~done)
+        if not rest.size:
+            return
+        unstable = orbs["unstable"][rest]
+        moduli = np.where(unstable[:, None], orbs["moduli"][rest], np.nan)
+        period = np.where(unstable, orbs["period"][rest], self.flat("period")[flat[rest]])
+        self._leave([(int(f // k), int(f % k), mu, p) for f, mu, p in zip(flat[rest], moduli, period)])
+
     def settle(self, shoot) -> None:
         """Checks the cycles (:meth:`_rounds`), then the samples left unsettled at ``t_max`` on a slow
         approach (:meth:`_slow_approach`)."""
@@ -417,14 +454,20 @@ class CensusCheck:
 
     def _leave(self, go: list) -> np.ndarray:
         """Samples ``go`` (point, sample, moduli, period) go on from near their unstable cycles; returns
-        their flat indices."""
+        their flat indices. Moduli of NaN: no orbit to leave (a first stop whose shooting found no
+        stable one of its period, :meth:`resolve`), no hold and no note."""
         k = self.res["outcome"].shape[1]
         pts = np.array([i for i, *_ in go])
         flat = pts * k + np.array([s for _, s, *_ in go])
         t0 = self.flat("t_end")[flat].astype(np.float64)
-        left, hold = leave(t0, self.t_max, np.array([g[2] for g in go]), np.array([g[3] for g in go]))
-        for f, t, g in zip(flat, t0, go):
+        moduli = np.array([g[2] for g in go])
+        left, hold = leave(t0, self.t_max, moduli, np.array([g[3] for g in go]))
+        none = np.isnan(moduli).any(axis=1)
+        hold[none] = 0.0
+        for f, t, g, skip in zip(flat, t0, go, none):
             self.orbit.pop((g[0], g[1]), None)  # its next stop is another, to be checked afresh
+            if skip:
+                continue
             why = f"at t = {t:.3g} s it stopped near an unstable cycle (largest multiplier {np.max(g[2]):.3g})"
             self.flat("reason")[f] = "; ".join(filter(None, [self.flat("reason")[f], why]))
         done = left <= 0

@@ -128,6 +128,18 @@ class Shooting:
         _set(self, "tidf_grid", _count("tidf_grid", self.tidf_grid, 16))
 
 
+def stop_tol(name: str, value) -> float | None:
+    """A census's first-stop tolerance: a relative repetition of the section state in (0, 0.1], or
+    None (the friction law's default, :func:`tribosweep._census.first_stop_tol`)."""
+    if value is None:
+        return None
+    v = _checks.positive(name, value)
+    if v > 0.1:
+        raise ValueError(f"{name} = {value!r} is out of range: must be in (0, 0.1] (a relative repetition of the "
+                         "section state)")
+    return v
+
+
 @dataclass(frozen=True)
 class Census:
     """The attractor census (:func:`tribosweep.census`).
@@ -151,6 +163,16 @@ class Census:
         the rest are boundary samples, whose fate is a coin toss at any tolerance), no point's
         fraction moves by 2 standard errors, and the census costs 0.78-0.86x that at 1e-8
         (``benches/bench_census.py --rtol``).
+    stop_tol : float, optional
+        The repetition tolerance at which a sample after its point's two pilots first stops on a
+        cycle; every such stop is shot from, and the sample is on the stable orbit shooting
+        converges to, measured there, or goes on from its stop at ``periodic_tol`` (see
+        ``tribosweep._census``). None (default): 1e-3 under speed-dependent friction, where
+        the lightly damped ``x`` mode (multiplier 0.993 per period) holds a repetition to
+        ``periodic_tol`` back by seconds (the switch-law Stribeck sweep's census 0.76-0.84x the
+        time, no fraction moving by 1 standard error); ``periodic_tol`` (no first stops) under
+        constant friction, whose census compares the fast components only and settles within
+        a few periods (the 2,000-point grid took 42.0 s with first stops at 1e-3, against 36.7 s).
     recurrence : bool
         Let the samples after each point's two pilots stop as irregular once they keep to an
         irregular attractor a pilot established: 32 sections in a row in its cells, or one block
@@ -170,6 +192,7 @@ class Census:
     disturbance_scale: float = 3.0
     rtol: float = 1e-6
     recurrence: bool = True
+    stop_tol: float | None = None
 
     def __post_init__(self):
         _set(self, "enabled", bool(self.enabled))
@@ -185,6 +208,7 @@ class Census:
         _set(self, "samples", int(self.samples))
         _set(self, "t_max", _checks.positive("census_t_max", self.t_max))
         _set(self, "disturbance_scale", _checks.positive("disturbance_scale", self.disturbance_scale))
+        _set(self, "stop_tol", stop_tol("census_stop_tol", self.stop_tol))
         try:
             _set(self, "rtol", _checks.rtol(self.rtol))
         except ValueError as e:
@@ -300,6 +324,7 @@ _FLAT: tuple[tuple[str, str, str], ...] = (
     ("disturbance_scale", "census", "disturbance_scale"),
     ("census_rtol", "census", "rtol"),
     ("census_recurrence", "census", "recurrence"),
+    ("census_stop_tol", "census", "stop_tol"),
     ("unstable_disturbance", "", "unstable_disturbance"),
     ("irregular_block", "irregular", "block"),
     ("transient_irregular_block", "irregular", "transient_block"),

@@ -121,6 +121,8 @@ _SETTINGS: dict[str, tuple[str, object, str, str]] = {
     "census_t_max": ("census", float, "S", "longest run of one census disturbance [s]"),
     "disturbance_scale": ("census", float, "X", "largest modal amplitude of a census disturbance in units of |z_st|"),
     "census_rtol": ("census", float, "R", "relative tolerance of the census disturbances' runs (1e-6)"),
+    "census_stop_tol": ("census", float, "R", "repetition tolerance of a census sample's first stop on a cycle, "
+                        "checked by shooting (default 1e-3 under speed-dependent friction, none under constant)"),
     "irregular_block": ("irregular", int, "N", "sections per block of the stationarity test that ends a census "
                         "disturbance as irregular motion (0: run to census_t_max)"),
     "transient_irregular_block": ("irregular", int, "N", "the same for the auto transients (0: run to t_max)"),
@@ -142,7 +144,8 @@ _DASK_KEYS = {"scheduler"}
 _SOLVER_KEYS = set(_SETTINGS) | {"census"}
 #: [census] keys -> sweep() arguments.
 _CENSUS_KEYS = {"enabled": "census", "samples": "samples", "t_max": "census_t_max",
-                "disturbance_scale": "disturbance_scale", "rtol": "census_rtol", "recurrence": "census_recurrence"}  # fmt: skip
+                "disturbance_scale": "disturbance_scale", "rtol": "census_rtol", "recurrence": "census_recurrence",
+                "stop_tol": "census_stop_tol"}  # fmt: skip
 
 
 def _default(name: str):

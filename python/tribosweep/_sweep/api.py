@@ -76,6 +76,7 @@ def sweep(
     disturbance_scale: float = _D.census.disturbance_scale,
     census_rtol: float = _D.census.rtol,
     census_recurrence: bool = _D.census.recurrence,
+    census_stop_tol: float | None = _D.census.stop_tol,
     unstable_disturbance: float = _D.unstable_disturbance,
     shooting_rtol: float = _D.shooting.rtol,
     shooting_tol: float = _D.shooting.tol,
@@ -204,6 +205,11 @@ def sweep(
         Let census samples stop as irregular once they keep to an irregular attractor one of the
         point's two pilot samples established, in its cells or on a block matching its statistics
         (default True; False: each sample decides by its own three blocks). See ``tribosweep._census``.
+    census_stop_tol : float, optional
+        The repetition tolerance at which a census sample after the pilots first stops on a cycle;
+        every such stop is shot from, and the sample is on the stable orbit shooting converges to, or
+        goes on (see ``tribosweep._settings.Census``). Default: 1e-3 under speed-dependent friction,
+        none under constant friction; at ``periodic_tol`` or below: no first stops.
     unstable_disturbance : float
         ``auto``: transients of linearly unstable points start on the unstable mode with
         ``|z| = unstable_disturbance |z_st|``.
@@ -338,6 +344,7 @@ def sweep(
         t_max=t_max, integrator=integrator, rtol=rtol, atol=atol, periodic_tol=periodic_tol,
         decay_amplitude=decay_amplitude, census=census, samples=samples, census_t_max=census_t_max,
         disturbance_scale=disturbance_scale, census_rtol=census_rtol, census_recurrence=census_recurrence,
+        census_stop_tol=census_stop_tol,
         unstable_disturbance=unstable_disturbance, shooting_rtol=shooting_rtol,
         shooting_tol=shooting_tol, irregular_block=irregular_block,
         transient_irregular_block=transient_irregular_block, irregular_window=irregular_window,

@@ -522,7 +522,7 @@ def census(p: Points) -> None:
         periodic_tol=p.settings.steady.periodic_tol, threads=p.threads,
         eigenvalues=p.eigenvalues[cand], linear_frequency=out["linear_frequency"][cand],
         saddle=p.saddle[cand], irregular_block=p.settings.irregular.block, recurrence=cs.recurrence,
-        shooting_rtol=p.settings.shooting.rtol, shooting_tol=p.settings.shooting.tol,
+        shooting_rtol=p.settings.shooting.rtol, shooting_tol=p.settings.shooting.tol, stop_tol=cs.stop_tol,
     )  # fmt: skip
     p.charge(cand, t1)
     out["n_rhs"][cand] += per["n_rhs"].sum(axis=1)
