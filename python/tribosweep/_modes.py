@@ -2,8 +2,14 @@
 
 Used for the census's disturbances and the start of an unstable point's transient. Everything here
 gives the same bits on every machine: complex arithmetic, square roots and the C library's scalar
-``exp``/``tanh``, but no LAPACK (OpenBLAS picks its kernels by CPU) and none of numpy's array
+``exp``/``tanh``, but no LAPACK or BLAS (OpenBLAS picks its kernels by CPU) and none of numpy's array
 transcendental functions (SIMD kernels picked by the CPU: AVX-512 machines round differently).
+
+One limit, measured on numpy 2.4 (2026-11-28): numpy multiplies complex arrays with fused
+multiply-adds where the CPU has them. Its AVX2 and AVX-512 kernels gave the same bits
+(``NPY_DISABLE_CPU_FEATURES``), but its baseline x86-64-v2 kernel, for CPUs without FMA (before
+2013), rounds differently. A numpy scalar's complex product rounds like the latter, so mixing the
+two changes the bits as well.
 """
 
 from __future__ import annotations
@@ -40,40 +46,54 @@ def mode_shape(v: Mapping[str, np.ndarray], lam: np.ndarray) -> np.ndarray:
 
 
 def null_vector(a: np.ndarray) -> np.ndarray:
-    """A null vector of the singular ``(d, d)`` complex matrix ``a`` by Gaussian elimination with
-    complete pivoting: after ``d - 1`` pivots the last pivot column is the free variable, set to 1.
+    """A null vector of the singular ``(d, d)`` complex matrix ``a``: :func:`null_vectors` of one."""
+    return null_vectors(np.asarray(a)[None])[0]
 
-    Only complex arithmetic and comparisons of ``|.|^2`` (no LAPACK, no transcendental function),
-    with ties broken by the first index: the same bits on every machine, as :func:`mode_shape`.
+
+def null_vectors(a: np.ndarray) -> np.ndarray:
+    """A null vector of each singular ``(d, d)`` complex matrix of ``a`` ``(n, d, d)``, by Gaussian
+    elimination with complete pivoting: after ``d - 1`` pivots the last pivot column is the free
+    variable, set to 1.
+
+    Only elementwise complex arithmetic on the batch and comparisons of ``|.|^2`` (no LAPACK, no
+    BLAS, no transcendental function), with ties broken by the first index; the back-substitution
+    sums in index order (a BLAS dot, as ``@`` calls, sums as the CPU's kernel does). All matrices
+    at once: the Stribeck sweep's 95 unstable points took 6.5 ms one by one, 0.4 ms so.
     """
     a = np.array(a, dtype=complex)
-    d = a.shape[0]
-    cols = np.arange(d)
+    n, d = a.shape[0], a.shape[1]
+    at = np.arange(n)
+    cols = np.tile(np.arange(d), (n, 1))
     for k in range(d - 1):
-        sub = a[k:, k:]
-        mag = sub.real * sub.real + sub.imag * sub.imag
-        r, c = divmod(int(np.argmax(mag)), d - k)
-        a[[k, k + r]] = a[[k + r, k]]
-        a[:, [k, k + c]] = a[:, [k + c, k]]
-        cols[[k, k + c]] = cols[[k + c, k]]
-        a[k + 1 :, k:] -= (a[k + 1 :, k] / a[k, k])[:, None] * a[k, k:]
-    u = np.zeros(d, dtype=complex)
-    u[d - 1] = 1.0
+        sub = a[:, k:, k:]
+        mag = (sub.real * sub.real + sub.imag * sub.imag).reshape(n, -1)
+        r, c = np.divmod(np.argmax(mag, axis=1), d - k)
+        a[at, k], a[at, k + r] = a[at, k + r].copy(), a[at, k].copy()
+        a[at, :, k], a[at, :, k + c] = a[at, :, k + c].copy(), a[at, :, k].copy()
+        cols[at, k], cols[at, k + c] = cols[at, k + c].copy(), cols[at, k].copy()
+        a[:, k + 1 :, k:] -= (a[:, k + 1 :, k] / a[:, k, k, None])[:, :, None] * a[:, k, None, k:]
+    u = np.zeros((n, d), dtype=complex)
+    u[:, d - 1] = 1.0
     for k in range(d - 2, -1, -1):
-        u[k] = -(a[k, k + 1 :] @ u[k + 1 :]) / a[k, k]
-    out = np.empty(d, dtype=complex)
-    out[cols] = u
+        acc = a[:, k, k + 1] * u[:, k + 1]
+        for j in range(k + 2, d):
+            acc = acc + a[:, k, j] * u[:, j]
+        u[:, k] = -acc / a[:, k, k]
+    out = np.empty((n, d), dtype=complex)
+    out[at[:, None], cols] = u
     return out
 
 
 def mode_shape_numeric(j: np.ndarray, lam: np.ndarray) -> np.ndarray:
     """Eigenvectors from the null space of ``J - lam I`` (speed-dependent friction: x acts back),
-    with ``z = 1`` where ``z`` takes part (else the largest component 1); :func:`null_vector`."""
-    out = np.empty((lam.size, 6), dtype=complex)
-    for i in range(lam.size):
-        vec = null_vector(j[i] - lam[i] * np.eye(6))
-        mag = vec.real * vec.real + vec.imag * vec.imag
-        out[i] = vec / vec[0] if mag[0] > 1e-24 * mag.max() else vec / vec[int(np.argmax(mag))]
+    with ``z = 1`` where ``z`` takes part (else the largest component 1); :func:`null_vectors`."""
+    lam = np.asarray(lam)
+    vec = null_vectors(np.asarray(j) - lam[:, None, None] * np.eye(6))
+    mag = vec.real * vec.real + vec.imag * vec.imag
+    at = np.arange(lam.size)
+    pick = np.where(mag[:, 0] > 1e-24 * mag.max(axis=1), 0, np.argmax(mag, axis=1))
+    out = vec / vec[at, pick][:, None]
+    out[at, pick] = 1.0  # exactly (numpy's complex division of a number by itself may round to 1 - 1 ulp)
     return out
 
 
