@@ -10,6 +10,7 @@ run in the same process (the machines are shared: absolute seconds drift with th
     python benches/bench_census.py --compare --blocks 128,256 --sweep-points 0   # two block sizes
     python benches/bench_census.py --recurrence --sweep-points 0  # recurrence on the pilots' attractors, on/off
     python benches/bench_census.py --rtol 1e-6,1e-8,1e-10 --sweep-points 0   # the census's accuracy and cost
+    python benches/bench_census.py --stop-tol 1e-5,1e-3 --law switch --sweep-points 0   # first stops, Stribeck sweep
 """
 
 from __future__ import annotations
@@ -202,6 +203,40 @@ def rtol_agreement(rtols: list[float], k: int, threads: int | None) -> None:
               f"{int((z > 2).sum())}/{int((z > 3).sum())}")  # fmt: skip
 
 
+def compare_stop_tol(tols: list[float], law: str, k: int, threads: int | None) -> None:
+    """The Stribeck sweep of ``benches/bench_stribeck.py`` under ``law`` with its census at each first-stop
+    tolerance (``census_stop_tol``; the first is the reference, ``periodic_tol`` turning first stops
+    off): wall time, right-hand sides, and per censused point the largest move of a fraction in
+    standard errors of the difference, and the cycle counts that differ. Each setting runs twice, the
+    wall time the faster."""
+    from bench_stribeck import AXES
+
+    model = ts.SliderModel(contact="unilateral", friction_law=law, mu_static=0.3)
+    runs = {}
+    for st in tols:
+        best = np.inf
+        for _ in range(2):
+            t0 = time.perf_counter()
+            ds = ts.sweep(model=model, t_max=20.0, threads=threads, progress=False, samples=k, census_stop_tol=st,
+                          **AXES)  # fmt: skip
+            best = min(best, time.perf_counter() - t0)
+        runs[st] = (best, ds)
+    ref = runs[tols[0]][1]
+    on = ref.census_samples.values > 0
+    names = ts.ATTRACTOR_NAMES
+    print(f"Stribeck sweep ({law} law) with its census, K = {k}, {int(on.sum())} censused points; reference: "
+          f"census_stop_tol {tols[0]:g}")  # fmt: skip
+    for st, (w, ds) in runs.items():
+        f, f0 = ds.basin_fraction.values[on], ref.basin_fraction.values[on]
+        se = np.maximum(np.sqrt((f * (1 - f) + f0 * (1 - f0)) / k), 1.0 / k)
+        z = np.max(np.abs(f - f0) / se, axis=-1)
+        mean = ", ".join(f"{n} {x:.4f}" for n, x in zip(names, f.mean(axis=0)))
+        print(f"  census_stop_tol {st:g}: {w:.2f} s, {int(ds.n_rhs.sum()) / 1e6:.0f} million right-hand sides; "
+              f"fractions moving by more than 2 / 3 standard errors at {int((z > 2).sum())} / {int((z > 3).sum())} "
+              f"points (largest {z.max():.2f}); cycle counts differing at "
+              f"{int((ds.n_cycles.values[on] != ref.n_cycles.values[on]).sum())}; mean fractions {mean}")  # fmt: skip
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--samples-one", type=int, default=1024)
@@ -217,8 +252,14 @@ def main() -> None:
                     help="with --compare: comma-separated irregular_block values to compare")
     ap.add_argument("--recurrence", action="store_true",
                     help="recurrence on the pilots' attractors against each sample's own blocks (K = --samples)")  # fmt: skip
+    ap.add_argument("--stop-tol", type=str, default="",
+                    help="comma-separated census_stop_tol values: the Stribeck sweep with its census at each (K = 32)")
+    ap.add_argument("--law", choices=("switch", "coulomb"), default="switch", help="with --stop-tol: the friction law")
     a = ap.parse_args()
     print(machine_line())
+    if a.stop_tol:
+        compare_stop_tol([float(x) for x in a.stop_tol.split(",")], a.law, DEFAULTS.census.samples, a.threads)
+        return
     one_point(a.samples_one, a.threads)
     if a.scipy:
         scipy_agreement(a.scipy)
