@@ -474,8 +474,9 @@ def first_stop_tol(stop_tol: float | None, friction_law: str, periodic_tol: floa
     and its light damping (a Floquet multiplier of about 0.993 per period) holds a repetition to
     ``periodic_tol`` back by seconds; a stop at 1e-3, then shot from, saves that. Measured on the
     Stribeck sweep of ``benches/bench_stribeck.py`` with its census (105 censused points, K = 32,
-    2026-11-28): switch law 4.85-5.27 s -> 4.08 s (right-hand sides 451 -> 343 million), tanh law
-    5.18 -> 4.20 s; no point's fraction moves by more than 0.47 standard errors, no cycle count
+    2026-11-28, ``python benches/bench_census.py --stop-tol 1e-5,1e-3 --law switch``): switch law
+    4.85-5.27 s -> 4.08-4.32 s (right-hand sides 451-453 -> 343-348 million), tanh law 4.74-5.18 ->
+    4.04-4.20 s; no point's fraction moves by more than 1.0 standard error, no cycle count
     changes. 3e-3: 4.53 s, 1e-2: 6.42 s (more first stops near unstable orbits, which go on).
     Under constant friction the census compares ``(z, zd, phi, phid)`` only, which repeat to
     ``periodic_tol`` within a few periods: the 2,000-point grid's census took 42.0 s with first

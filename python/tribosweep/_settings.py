@@ -169,8 +169,8 @@ class Census:
         converges to, measured there, or goes on from its stop at ``periodic_tol`` (see
         ``tribosweep._census``). None (default): 1e-3 under speed-dependent friction, where
         the lightly damped ``x`` mode (multiplier 0.993 per period) holds a repetition to
-        ``periodic_tol`` back by seconds (the switch-law Stribeck sweep's census 0.76-0.84x the
-        time, no fraction moving by 1 standard error); ``periodic_tol`` (no first stops) under
+        ``periodic_tol`` back by seconds (the switch-law Stribeck sweep's census 0.77-0.84x the
+        time, no fraction moving by more than 1 standard error); ``periodic_tol`` (no first stops) under
         constant friction, whose census compares the fast components only and settles within
         a few periods (the 2,000-point grid took 42.0 s with first stops at 1e-3, against 36.7 s).
     recurrence : bool
