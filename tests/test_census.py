@@ -465,6 +465,17 @@ def test_census_output_is_independent_of_threads_chunks_and_executor():
         _same(ref, ts.sweep(threads=1, chunk_size=5, executor=pool, **SWEEP))
 
 
+def test_a_census_with_first_stops_is_independent_of_threads_and_chunks():
+    # Under speed-dependent friction the first stops are shot from, measured and sent on in calls
+    # over the whole chunk; each sample's fate still depends on nothing but its point.
+    sweep = dict(model=STRIBECK_SWITCH, normal_load=[103.33, 150.0], arm_length=[0.05], sliding_speed=[0.6, 0.8],
+                 samples=8, census_t_max=10.0, progress=False)  # fmt: skip
+    ref = ts.sweep(threads=1, chunk_size=64, **sweep)
+    assert (ref.census_samples.values > 0).sum() >= 3 and np.nansum(ref.basin_fraction.values[..., 1]) > 1.0
+    _same(ref, ts.sweep(threads=2, chunk_size=1, **sweep))
+    _same(ref, ts.sweep(threads=2, chunk_size=3, **sweep))
+
+
 def test_a_sweep_point_has_the_standalone_census():
     # The seed point inside a sweep and alone: the same samples, the same fates.
     ds = ts.sweep(normal_load=[84.46], samples=16, progress=False)
