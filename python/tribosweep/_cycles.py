@@ -354,23 +354,7 @@ class CensusCheck:
         if not flat.size:
             return
         k = self.res["outcome"].shape[1]
-        nan = np.full(flat.size, np.nan)
-        orbs = shoot(flat // k, self.flat("y_end")[flat], self.flat("period")[flat], nan, nan)
-        self.flat("n_rhs")[flat] += orbs["n_rhs"].astype(self.res["n_rhs"].dtype)
-        done = np.zeros(flat.size, dtype=bool)
-        good = np.flatnonzero(orbs["stable"])
-        if good.size:
-            g, state0 = flat[good], orbs["state0"][good]
-            r = rows(self.steady(g // k, state0, None))
-            self.flat("n_rhs")[g] += r["n_rhs"].astype(self.res["n_rhs"].dtype)
-            ok = r["outcome"] == PERIODIC
-            for key in CYCLE_KEYS:
-                if key in self.res:
-                    self.flat(key)[g[ok]] = r[key][ok]
-            self.flat("y_end")[g[ok]] = state0[ok]
-            for f, y in zip(g[ok], state0[ok]):
-                self.orbit[(int(f // k), int(f % k))] = (True, y)
-            done[good[ok]] = True
+        orbs, done = self._on_orbits(shoot, flat, self.flat("y_end")[flat], self.flat("period")[flat])
         rest = np.flatnonzero(~done)
         if not rest.size:
             return
@@ -426,31 +410,43 @@ class CensusCheck:
         sample becomes ``periodic`` on it, as :func:`check` does for a sweep's transient."""
         if "nearest_residual" not in self.res:
             return
-        k = self.res["outcome"].shape[1]
         ok = slow_candidates(self.flat("outcome"), self.flat("status"), self.flat("nearest_residual"))
         ok[stuck] = False
         flat = np.flatnonzero(ok)
         if not flat.size:
             return
-        nan = np.full(flat.size, np.nan)
-        orbs = shoot(flat // k, self.flat("nearest_y")[flat], self.flat("nearest_period")[flat], nan, nan)
-        self.flat("n_rhs")[flat] += orbs["n_rhs"].astype(self.res["n_rhs"].dtype)
-        flat, state0 = flat[orbs["stable"]], orbs["state0"][orbs["stable"]]
-        if not flat.size:
-            return
-        mu = slowest_multiplier(orbs["moduli"][orbs["stable"]])
-        r = rows(self.steady(flat // k, state0, None))
-        self.flat("n_rhs")[flat] += r["n_rhs"].astype(self.res["n_rhs"].dtype)
-        done = r["outcome"] == PERIODIC
-        for key in CYCLE_KEYS:
-            if key in self.res:
-                self.flat(key)[flat[done]] = r[key][done]
-        for f, y, m in zip(flat[done], state0[done], mu[done]):
+        orbs, done = self._on_orbits(shoot, flat, self.flat("nearest_y")[flat], self.flat("nearest_period")[flat])
+        mu = slowest_multiplier(orbs["moduli"][done])
+        for f, m in zip(flat[done], mu):
             why = slow_note(float(self.flat("t_end")[f]), self.flat("nearest_residual")[f],
                             self.flat("nearest_multiplicity")[f], m)  # fmt: skip
             self.flat("outcome")[f], self.flat("status")[f], self.flat("reason")[f] = PERIODIC, STATUS["success"], why
-            self.flat("y_end")[f] = y
-            self.orbit[(int(f // k), int(f % k))] = (True, y)
+
+    def _on_orbits(self, shoot, flat: np.ndarray, y: np.ndarray, period: np.ndarray) -> tuple[dict, np.ndarray]:
+        """Shooting from the states ``y`` of the samples ``flat`` (flat indices) with periods ``period``,
+        in one call, held to the period alone; each stable orbit measured by a run started on it,
+        in one call, whose cycle quantities and state become the sample's (verified). Returns the
+        shooting's result and, per sample, whether its stable orbit was measured."""
+        k = self.res["outcome"].shape[1]
+        nan = np.full(flat.size, np.nan)
+        orbs = shoot(flat // k, y, period, nan, nan)
+        self.flat("n_rhs")[flat] += orbs["n_rhs"].astype(self.res["n_rhs"].dtype)
+        done = np.zeros(flat.size, dtype=bool)
+        good = np.flatnonzero(orbs["stable"])
+        if not good.size:
+            return orbs, done
+        g, state0 = flat[good], orbs["state0"][good]
+        r = rows(self.steady(g // k, state0, None))
+        self.flat("n_rhs")[g] += r["n_rhs"].astype(self.res["n_rhs"].dtype)
+        ok = r["outcome"] == PERIODIC
+        for key in CYCLE_KEYS:
+            if key in self.res:
+                self.flat(key)[g[ok]] = r[key][ok]
+        self.flat("y_end")[g[ok]] = state0[ok]
+        for f, y0 in zip(g[ok], state0[ok]):
+            self.orbit[(int(f // k), int(f % k))] = (True, y0)
+        done[good[ok]] = True
+        return orbs, done
 
     def _leave(self, go: list) -> np.ndarray:
         """Samples ``go`` (point, sample, moduli, period) go on from near their unstable cycles; returns
