@@ -286,6 +286,7 @@ def test_first_stops_at_a_loose_tolerance_end_on_the_orbits_for_half_the_work():
     m = ts.apparatus_model(150.0, 0.05, 0.8, base=STRIBECK_SWITCH)
     on, off = ts.census(m, samples=k), ts.census(m, samples=k, stop_tol=1e-5)
     assert _census.first_stop_tol(None, "switch", 1e-5) == _census.FIRST_STOP_TOL == 1e-3
+    assert on.attrs["stop_tol"] == 1e-3 and off.attrs["stop_tol"] == 1e-5
     _within_3_se(on, off, k)
     pil = slice(0, _census.PILOTS)
     np.testing.assert_array_equal(on.t_end.values[pil], off.t_end.values[pil])
@@ -314,6 +315,7 @@ def test_first_stops_are_off_under_constant_friction_and_reach_the_sweep():
     m = ts.apparatus_model(20.7692, 0.1099, 0.3, base=SEED_U)
     a, b = ts.census(m, samples=8), ts.census(m, samples=8, stop_tol=1e-5)
     np.testing.assert_array_equal(a.t_end.values, b.t_end.values)
+    assert a.attrs["stop_tol"] == a.attrs["periodic_tol"] == 1e-5
     # The sweep's census_stop_tol is the census's stop_tol (and its solver attribute).
     pt = dict(normal_load=[150.0], arm_length=[0.05], sliding_speed=[0.8])
     ds = ts.sweep(model=STRIBECK_SWITCH, samples=8, progress=False, census_stop_tol=1e-4, **pt)

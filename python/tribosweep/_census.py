@@ -108,6 +108,11 @@ Early stops
     the census (1e-4) saves 7 % of the simulated time but turns 32 slowly decaying samples and 67
     irregular ones into cycles.
 
+    First stops (speed-dependent friction, :func:`first_stop_tol`): the samples after the pilots
+    stop on a cycle once their section state repeats to 1e-3, and every such stop is shot from
+    (:meth:`tribosweep._cycles.CensusCheck.resolve`): a stable orbit of its period is the
+    sample's cycle, measured on the orbit; the others go on, repeating to ``periodic_tol``.
+
     Re-measured after the first-step rule of the integrators (``ModeSteps``, 2026-11-26): the
     simulated time with recurrence 18,467 s (25,612 s without); 10 labels differ from the
     own-test census (28 at rtol 1.01e-6, against 11-16 for the previous build), 72 from runs to
@@ -621,6 +626,11 @@ def census(
         Let the samples after the pilots stop once they keep to a pilot's irregular attractor: 32
         sections in a row in the cells its sections visited, or one block that matches its
         statistics (the default); ``False``: every sample decides by its own three blocks.
+    stop_tol : float, optional
+        The repetition tolerance at which a sample after the pilots first stops on a cycle, each
+        such stop then shot from (:func:`first_stop_tol`): by default 1e-3 under speed-dependent
+        friction, none (``periodic_tol``) under constant friction. The attribute ``stop_tol`` says
+        which applied.
     threads : int, optional
         Rust worker threads (results do not depend on it).
 
@@ -708,6 +718,7 @@ def census(
     attrs.update(model_contact=model.contact, model_friction_law=model.friction_law, samples=int(samples),
                  disturbance_scale=scale, t_max=t_max, integrator=integrator, rtol=rtol, periodic_tol=periodic_tol,
                  cycle_tol=cycle_tol, irregular_block=irregular_block,
+                 stop_tol=max(first_stop_tol(stop_tol, model.friction_law, periodic_tol), periodic_tol),
                  pilots=min(PILOTS, int(samples)) if recurrence and irregular_block else int(samples),
                  sliding_stable=int(stable[0]),
                  saddle_a1=float(sad[0, 0]),
