@@ -156,6 +156,14 @@ def test_census_flags_and_config(tmp_path, capsys):
         assert ds.attrs["solver_irregular_block"] == 32 and ds.attrs["solver_census_rtol"] == 2e-7
         assert int(ds.census_samples.item()) + int(ds.census_failed.item()) == 4
     assert "attractor census: 1 points, 4 disturbances each" in out
+    # 0 turns these off, as their help says (the positive-integer check refused it until 2026-11-28).
+    code, _, err = run(["sweep", "--normal-load", "84.46", "--samples", "4", "--irregular-block", "0",
+                        "--transient-irregular-block", "0", "--approach-periods", "0", "--census-stop-tol", "1e-4",
+                        "-o", tmp_path / "z.nc", "--no-progress"], capsys)  # fmt: skip
+    assert code == 0, err
+    with xr.open_dataset(tmp_path / "z.nc") as ds:
+        assert ds.attrs["solver_irregular_block"] == ds.attrs["solver_transient_irregular_block"] == 0
+        assert ds.attrs["solver_approach_periods"] == 0 and ds.attrs["solver_census_stop_tol"] == 1e-4
     code, _, err = run(["sweep", "--normal-load", "84.46", "--no-census", "-o", tmp_path / "n.nc", "--no-progress"],
                        capsys)  # fmt: skip
     assert code == 0, err
@@ -374,7 +382,7 @@ def test_info_counts_the_slow_approaches(tmp_path, capsys, slow_transients):
     nc = tmp_path / "s.nc"
     code, out, err = run(["sweep", "--friction-law", "switch", "--model", "mu_static=0.3", "--sliding-speed", "0.2",
                           "--normal-load", "10", "--arm-length", "0.10133333333333333", "--no-census", "--t-max", "10",
-                          "-o", nc, "--no-progress", "--threads", "2"], capsys)  # fmt: skip
+                          "--approach-periods", "0", "-o", nc, "--no-progress", "--threads", "2"], capsys)  # fmt: skip
     assert code == 0, err
     assert ("transient cycles checked by shooting: 1 verified (a stable orbit, measured on it), 0 not verified (see "
             "reason); 1 of them a slow approach, not repeating by t_max") in out  # fmt: skip

@@ -34,6 +34,9 @@ STATE = ("z", "z_dot", "x", "x_dot", "phi", "phi_dot")
 
 
 def _sweep(**kw):
+    # The transients' stops at periodic_tol, which these tests check (a slow approach checked in the
+    # run ends on its orbit: test_a_slow_approach_is_checked_inside_the_run_and_ends_there_on_its_cycle).
+    kw.setdefault("approach_periods", 0)
     return ts.sweep(model=UNILATERAL, census=False, t_max=20.0, threads=2, progress=False, **BOUNCING, **kw)
 
 
@@ -345,13 +348,43 @@ def test_the_sweep_reports_a_slow_approach_as_its_cycle(slow_transients):
     # The transient starts near the cycle (the slow_transients fixture) and has not repeated by
     # t_max = 10 s (at 15.4 s), but its newest section has.
     m, _, _ = slow_transients
-    slow = ts.sweep(model=SLOW_LAW, census=False, t_max=10.0, threads=2, progress=False, **SLOW)
+    slow = ts.sweep(model=SLOW_LAW, census=False, t_max=10.0, threads=2, progress=False, approach_periods=0, **SLOW)
     assert ts.labels(slow.regime).values.ravel()[0] == "contact_loss"
     assert int(_first(slow, "cycle_verified")) == 1 and "a slow approach" in str(_first(slow, "reason"))
     assert np.isnan(_first(slow, "irregular_ftle"))
     # Its size: the cycle's own, as a run to 60 s measures it.
     on = ts.ensemble(m, 60.0, {"normal_load": [10.0]}, steady=True, check_cycles=True)
     assert float(_first(slow, "z_half_range")) == pytest.approx(float(on.z_half_range[0]), rel=1e-4)
+
+
+def test_a_slow_approach_is_checked_inside_the_run_and_ends_there_on_its_cycle(slow_transients):
+    """The run from near the slow point's cycle (x moved by 0.3 of its amplitude: only the slow
+    approach, by 0.9933 a period) repeats to periodic_tol at 15.4 s. With the slow-approach test
+    (blocks of 10 periods, the default) it is shot from, inside the run, once the largest residual
+    has shrunk over three blocks to 1e-3: it ends at 8.8 s on the stable orbit, measured on it (the
+    cycle a run to 60 s repeats on, to 1e-7 in omega and 1e-5 in A1), for 0.58x the right-hand
+    sides (2026-11-28). Through the sweep: the same cycle, verified, before t_max = 10 s."""
+    m, y0, done = slow_transients
+    base, names, vals = m.values(), ["normal_load"], np.array([[10.0]])
+
+    def run(approach):
+        return _core.ensemble(base, "unilateral", "switch", names, vals, np.atleast_2d(y0), 60.0, "dop853", 1e-8,
+                              threads=1, kind="steady", periodic_tol=1e-5, approach_periods=approach)  # fmt: skip
+
+    strict, fast = run(0), run(Steady().approach_periods)
+    assert Steady().approach_periods == 10
+    assert not strict["approach"][0] and 12.0 < strict["t_end"][0] < 20.0
+    assert fast["approach"][0] and fast["outcome"][0] == _cycles.PERIODIC and int(fast["multiplicity"][0]) == 2
+    assert fast["t_end"][0] < 0.75 * strict["t_end"][0], (fast["t_end"], strict["t_end"])
+    assert fast["n_rhs"][0] < 0.75 * strict["n_rhs"][0]
+    np.testing.assert_allclose(fast["omega"], done.omega.values, rtol=1e-7)
+    np.testing.assert_allclose(fast["z1_amplitude"], done.z1_amplitude.values, rtol=1e-5)
+    sweep = ts.sweep(model=SLOW_LAW, census=False, t_max=10.0, threads=2, progress=False, **SLOW)
+    assert ts.labels(sweep.regime).values.ravel()[0] == "contact_loss"
+    assert int(_first(sweep, "cycle_verified")) == 1 and "a slow approach" not in str(_first(sweep, "reason"))
+    np.testing.assert_allclose(float(_first(sweep, "cycle_omega")), float(done.omega[0]), rtol=1e-7)
+    with pytest.raises(ValueError, match=r"approach_periods = -1 is out of range: must be an integer in \[0, 10000\]"):
+        ts.sweep(model=SLOW_LAW, census=False, progress=False, approach_periods=-1, **SLOW)
 
 
 def test_intermittent_motion_at_t_max_stays_irregular():

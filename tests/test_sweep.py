@@ -346,7 +346,7 @@ def test_an_unsettled_run_with_a_non_finite_end_is_a_failure_not_irregular():
 def test_a_failed_point_is_data_not_an_exception(monkeypatch):
     # Whatever goes wrong in the core for one point (here a simulated panic) becomes that point's
     # status and reason; the sweep goes on with the others.
-    def panicking(points, sel, y0, decay=None):
+    def panicking(points, sel, y0, decay=None, **kw):
         n = sel.size
         return {"status": np.full(n, ts.STATUS["panic"], np.uint8), "outcome": np.full(n, 4, np.uint8),
                 "reason": ["panic: boom"] * n, **{k: np.full(n, np.nan) for k in (

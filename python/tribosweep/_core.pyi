@@ -99,6 +99,9 @@ def ensemble(
     known_cell_extent: npt.NDArray[np.float64] | None = None,
     restart: npt.NDArray[np.float64] | None = None,
     stationary_tol: float | None = None,
+    approach_periods: int = 0,
+    approach_rtol: float | None = None,
+    approach_tol: float | None = None,
 ) -> dict[str, Any]: ...
 def linear_stability(
     base: dict[str, float],

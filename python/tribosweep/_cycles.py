@@ -168,7 +168,12 @@ def check(summary: dict, shoot, steady, t_max: float) -> tuple[dict, np.ndarray]
     n = len(s["outcome"])
     verified = np.zeros(n, dtype=bool)
     notes: list[list[str]] = [[] for _ in range(n)]
-    todo = np.flatnonzero(s["outcome"] == PERIODIC)
+    periodic = s["outcome"] == PERIODIC
+    # A run that stopped on a slow approach was checked inside the run (the core's `approach`):
+    # it ended on a stable orbit, measured there.
+    approach = periodic & np.asarray(s.get("approach", np.zeros(n, dtype=bool)), dtype=bool)
+    verified[approach] = True
+    todo = np.flatnonzero(periodic & ~approach)
     for _ in range(CHECK_ROUNDS):
         if not todo.size:
             break

@@ -87,15 +87,32 @@ class Steady:
         Relative repetition tolerance of the Poincare-section state that declares a cycle.
     decay_amplitude : float, m, optional
         Amplitude below which a motion has decayed (default ``1e-3 |z_st|``).
+    approach_periods : int
+        ``auto`` transients: periods per block of the slow-approach test. Once the largest
+        repetition residual of the section state over a block has shrunk three blocks in a row,
+        to at most 1e-3 (the core's ``APPROACH_TOL``), the run shoots from there, inside the run:
+        a stable orbit of that period ends it, measured on the orbit (verified); near an unstable
+        one it goes on with a hold, and where shooting fails, on without the test. 0: every run
+        waits for the repetition to ``periodic_tol``. A cycle whose slowest multiplier is 0.993
+        (the lightly damped ``x`` mode under speed-dependent friction) takes some 660 periods
+        from a repetition to 1e-3 to one to 1e-5. Measured (2026-11-28): the Stribeck sweep at
+        491 -> 523 points/s (switch law, right-hand sides -14 %; tanh law -11 %, time unchanged),
+        the 2,000-point grid's transients 1.52 -> 1.18 s, no regime changed.
     """
 
     t_max: float = 100.0
     periodic_tol: float = 1e-5
     decay_amplitude: float | None = None
+    approach_periods: int = 10
 
     def __post_init__(self):
         _set(self, "t_max", _checks.positive("t_max", self.t_max))
         _set(self, "periodic_tol", _checks.positive("periodic_tol", self.periodic_tol))
+        v = self.approach_periods
+        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or not 0 <= v <= 10_000:
+            raise ValueError(f"approach_periods = {v!r} is out of range: must be an integer in [0, 10000] (periods of "
+                             "steady contraction; 0: off)")
+        _set(self, "approach_periods", int(v))
         if self.decay_amplitude is not None:
             _set(self, "decay_amplitude", _checks.positive("decay_amplitude", self.decay_amplitude))
 
@@ -317,6 +334,7 @@ _FLAT: tuple[tuple[str, str, str], ...] = (
     ("rtol", "integration", "rtol"),
     ("atol", "integration", "atol"),
     ("periodic_tol", "steady", "periodic_tol"),
+    ("approach_periods", "steady", "approach_periods"),
     ("decay_amplitude", "steady", "decay_amplitude"),
     ("census", "census", "enabled"),
     ("samples", "census", "samples"),

@@ -88,6 +88,10 @@ def _named_axis(text: str) -> tuple[str, np.ndarray]:
     return name.strip(), parse_axis(spec)
 
 
+#: Integer settings for which 0 is valid (off, or none), checked by the settings themselves.
+_ZERO_OK = {"ftle_warmup", "irregular_block", "transient_irregular_block", "approach_periods"}
+
+
 def _positive_int(text: str) -> int:
     try:
         v = int(text)
@@ -109,6 +113,8 @@ _SETTINGS: dict[str, tuple[str, object, str, str]] = {
     "rtol": ("integration", float, "R", "relative tolerance of every run"),
     "atol": ("integration", "floats", "A", "absolute tolerance: one value or six (default rtol x each state's size)"),
     "periodic_tol": ("integration", float, "R", "relative repetition tolerance that declares a cycle"),
+    "approach_periods": ("integration", int, "M", "periods of steady contraction after which an auto transient's "
+                         "slow approach to a cycle stops for shooting (0: off)"),
     "decay_amplitude": ("integration", float, "M", "amplitude below which a motion has decayed [m] (default "
                         "1e-3 |z_st|)"),
     "disturbance": ("integration", "floats", "Z", "initial z offset [m] of transients, or a state of six values "
@@ -254,7 +260,7 @@ def _add_sweep_arguments(p: argparse.ArgumentParser) -> None:
         default = _default(name)
         shown = "" if default is None or "(default" in text else f" (default {default:g})" if isinstance(
             default, (int, float)) else f" (default {default})"  # fmt: skip
-        typ = _floats if kind == "floats" else _positive_int if kind is int and name != "ftle_warmup" else kind
+        typ = _floats if kind == "floats" else _positive_int if kind is int and name not in _ZERO_OK else kind
         groups[group].add_argument("--" + name.replace("_", "-"), type=typ, metavar=metavar, help=text + shown)
 
 

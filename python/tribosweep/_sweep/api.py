@@ -69,6 +69,7 @@ def sweep(
     rtol: float = _D.integration.rtol,
     atol: float | Sequence[float] | None = None,
     periodic_tol: float = _D.steady.periodic_tol,
+    approach_periods: int = _D.steady.approach_periods,
     decay_amplitude: float | None = None,
     census: bool = _D.census.enabled,
     samples: int = _D.census.samples,
@@ -342,6 +343,7 @@ def sweep(
                          "max_points")  # fmt: skip
     settings = SweepSettings.from_flat(
         t_max=t_max, integrator=integrator, rtol=rtol, atol=atol, periodic_tol=periodic_tol,
+        approach_periods=approach_periods,
         decay_amplitude=decay_amplitude, census=census, samples=samples, census_t_max=census_t_max,
         disturbance_scale=disturbance_scale, census_rtol=census_rtol, census_recurrence=census_recurrence,
         census_stop_tol=census_stop_tol,

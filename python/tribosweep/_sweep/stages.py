@@ -328,11 +328,14 @@ def _escape_reason(summary: dict, i: int) -> str:
 
 
 def run_steady(p: Points, sel: np.ndarray, y0: np.ndarray, decay: np.ndarray | None = None,
-               restart: np.ndarray | None = None) -> dict:  # fmt: skip
+               restart: np.ndarray | None = None, approach: bool = False) -> dict:  # fmt: skip
     """Runs to steady state of the points ``sel`` from ``y0`` (one row, or one per point), in the core.
 
     ``restart``: per run ``(t_max, hold)``, runs that go on from where earlier ones stopped (the
-    core's ``restart``); default: the settings' ``t_max`` and no hold.
+    core's ``restart``); default: the settings' ``t_max`` and no hold. ``approach``: a slow
+    approach to a cycle is checked by shooting inside the run after ``approach_periods`` periods
+    of steady contraction, at the checks' tolerances (the transients' first runs; a run that
+    stops so is on a stable orbit, measured there: its check is done).
     """
     it, st = p.settings.integration, p.settings.steady
     return _core.ensemble(
@@ -343,6 +346,8 @@ def run_steady(p: Points, sel: np.ndarray, y0: np.ndarray, decay: np.ndarray | N
         restart=None if restart is None else np.ascontiguousarray(restart, dtype=np.float64),
         decay_amplitudes=None if decay is None else np.ascontiguousarray(decay, dtype=np.float64),
         irregular_block=int(p.settings.irregular.transient_block),
+        approach_periods=int(st.approach_periods) if approach else 0,
+        approach_rtol=_cycles.check_rtol(it.rtol, p.settings.shooting.rtol), approach_tol=float(p.settings.shooting.tol),
     )  # fmt: skip
 
 
@@ -404,7 +409,7 @@ def transient(p: Points, *, start_on_mode: bool) -> None:
     # not depend on its place in the call.
     order = np.argsort(np.broadcast_to(p.full["sliding_speed"], (p.n,))[sel], kind="stable")
     back = np.argsort(order)
-    summary = {k: v[back] for k, v in _cycles.rows(run_steady(p, sel[order], y0s[order])).items()}
+    summary = {k: v[back] for k, v in _cycles.rows(run_steady(p, sel[order], y0s[order], approach=True)).items()}
     p.charge(sel, t1)
     summary, verified = check_cycles(p, sel, summary)
     t_max = float(p.settings.steady.t_max)

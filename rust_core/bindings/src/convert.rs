@@ -322,6 +322,8 @@ pub(crate) fn summaries_into(d: &Bound<'_, PyDict>, out: &[(Summary, String)]) -
     let peaks = states(peaks.iter(), out.len());
     d.set_item("irregular_peaks", peaks.into_pyarray(py))?;
     d.set_item("irregular_matched", Array1::from_iter(out.iter().map(|o| o.0.matched_known)).into_pyarray(py))?;
+    // Periodic runs that stopped on a slow approach (`approach_periods`), not a repetition.
+    d.set_item("approach", Array1::from_iter(out.iter().map(|o| o.0.approach)).into_pyarray(py))?;
     // Their cells (zeros and NaN extents where there are none): input for `known_cells`. Without
     // any (no stationarity blocks, no irregular run) the cell array has no columns: 1.7 KB per
     // trajectory of zeros would outweigh every other column together.

@@ -9,9 +9,10 @@ use pyo3::types::PyDict;
 use std::collections::HashMap;
 use tribosweep_core::ensemble::{run as run_ensemble, run_sampled_into, Restart, Settings, Task, TrajectoryResult};
 use tribosweep_core::model::State;
+use tribosweep_core::shooting::approach_check;
 use tribosweep_core::status::Status;
 use tribosweep_core::steady::{
-    self, Cells, DecayTest, Fingerprint, Known, RunResult, SteadyOptions, Summary, CELL_WORDS, KNOWN_MAX,
+    self, ApproachCheck, Cells, DecayTest, Fingerprint, Known, RunResult, SteadyOptions, Summary, CELL_WORDS, KNOWN_MAX,
 };
 
 /// One trajectory. Returns a dict: `t` (n,), `y` (n, 6), and the run's status, reason (why the
@@ -247,12 +248,15 @@ fn summaries(out: Vec<Result<TrajectoryResult, String>>) -> Vec<(Summary, String
 /// that many sections, outcome "irregular", or once a block matches one of the trajectory's
 /// `known_irregular` fingerprints, those of irregular runs of the same model, or its sections keep
 /// to their `known_cells`; see `knowns`; `restart`: each run's own `t_max` and hold, see `restarts`;
-/// `stationary_tol`: the repetition tolerance that sets the stationarity floor, default `periodic_tol`).
+/// `stationary_tol`: the repetition tolerance that sets the stationarity floor, default `periodic_tol`;
+/// `approach_periods > 0`: a slow approach to a cycle is checked by shooting inside the run after that
+/// many periods of steady contraction (at `approach_rtol`, Newton tolerance `approach_tol`), and a
+/// stable orbit ends the run on it, output `approach`).
 /// The core picks the path (lane-batched or scalar) and the grouping; results do not depend on it
 /// beyond integration accuracy, nor on the thread count at all. Every non-success status has a
 /// reason; Ctrl-C stops every thread (`KeyboardInterrupt`, the results are dropped).
 #[pyfunction]
-#[pyo3(signature = (base, contact, friction_law, names, values, y0, t_end, method, rtol, *, atol=None, t_eval=None, threads=None, kind="final", periodic_tol=1e-5, decay_amplitude=None, n_fourier=512, max_steps=None, max_events=None, decay_amplitudes=None, watch_x=true, decay_thresholds=None, irregular_block=0, known_irregular=None, known_cells=None, known_cell_extent=None, restart=None, stationary_tol=None))]
+#[pyo3(signature = (base, contact, friction_law, names, values, y0, t_end, method, rtol, *, atol=None, t_eval=None, threads=None, kind="final", periodic_tol=1e-5, decay_amplitude=None, n_fourier=512, max_steps=None, max_events=None, decay_amplitudes=None, watch_x=true, decay_thresholds=None, irregular_block=0, known_irregular=None, known_cells=None, known_cell_extent=None, restart=None, stationary_tol=None, approach_periods=0, approach_rtol=None, approach_tol=None))]
 #[allow(clippy::too_many_arguments)]
 fn ensemble<'py>(
     py: Python<'py>,
@@ -283,6 +287,9 @@ fn ensemble<'py>(
     known_cell_extent: Option<PyReadonlyArray3<'py, f64>>,
     restart: Option<PyReadonlyArray2<'py, f64>>,
     stationary_tol: Option<f64>,
+    approach_periods: usize,
+    approach_rtol: Option<f64>,
+    approach_tol: Option<f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let call = Call::rows(py, &base, contact, friction_law, &names, &values, threads)?;
     let n = call.len();
@@ -336,6 +343,10 @@ fn ensemble<'py>(
                 n_fourier,
                 watch_x,
                 irregular_block,
+                approach_periods,
+                approach_check: (approach_periods > 0).then_some(approach_check as ApproachCheck),
+                approach_rtol: approach_rtol.unwrap_or(SteadyOptions::default().approach_rtol),
+                approach_tol: approach_tol.unwrap_or(SteadyOptions::default().approach_tol),
                 ..SteadyOptions::default()
             };
             let task = Task::Steady {

@@ -35,6 +35,7 @@ use crate::ode::{
     integrate, Control, EventAction, Method, Observer, OdeSystem, Options, Outcome, Stats, StepView, MAX_EVENTS,
 };
 use crate::status::{Failure, Status};
+use crate::steady::ApproachVerdict;
 use crate::tidf::{two_harmonic_argmax, Root};
 use nalgebra::{Complex, SMatrix, SVector};
 use std::f64::consts::PI;
@@ -286,6 +287,21 @@ fn flow(
 
 /// The free unknowns: every state component except `zd` (fixed at 0 by the phase condition).
 pub(crate) const FREE: [usize; 5] = [idx::Z, idx::X, idx::XD, idx::PHI, idx::PHID];
+
+/// The check of a run's slow approach ([`crate::steady::ApproachCheck`]): shooting from the section
+/// state `y` over `period` at integration tolerance `rtol` and Newton tolerance `tol` (20
+/// iterations at most, as `tribosweep._cycles.CHECK_MAX_ITER`), held to the period (1 %).
+pub fn approach_check(s: &Slider, y: &State, period: f64, rtol: f64, tol: f64) -> (ApproachVerdict, Stats) {
+    let opts = ShootingOptions { rtol, tol, max_iter: 20, n_samples: 256, ..ShootingOptions::default() };
+    let orb = shoot(s, y, period, &opts);
+    let same = orb.status == Status::Success && (orb.period / period - 1.0).abs() <= 1e-2;
+    let verdict = match (same, orb.stable) {
+        (true, true) => ApproachVerdict::Stable { state0: orb.state0, period: orb.period },
+        (true, false) => ApproachVerdict::Unstable { largest: orb.moduli[0], period: orb.period },
+        _ => ApproachVerdict::Nothing,
+    };
+    (verdict, orb.stats)
+}
 
 /// Periodic orbit through the neighbourhood of `y0` with period near `period` (MODEL.md §6).
 ///

@@ -321,6 +321,9 @@ impl SteadyOutcome {
 }
 
 /// Settings of a run to steady state.
+// `approach_check` is a function pointer: equal options hold the same one (there is one checker,
+// `crate::shooting::approach_check`), and nothing decides by comparing them.
+#[allow(unpredictable_function_pointer_comparisons)]
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SteadyOptions {
     /// Longest simulated time [s].
@@ -362,11 +365,47 @@ pub struct SteadyOptions {
     /// Sections per block of the stationarity test that stops sustained irregular motion early
     /// ([`SteadyOutcome::Irregular`]); 0 turns it off (the run then goes on to `t_max`).
     pub irregular_block: usize,
+    /// Periods per block of the slow-approach test, whose approach is then checked by shooting
+    /// inside the run ([`Summary::approach`]; 0: off, the run waits for the repetition to
+    /// `periodic_tol`): the largest repetition residual after some `p` sections over blocks of
+    /// `approach_periods * p` sections has shrunk over three blocks in a row to at most
+    /// [`APPROACH_TOL`]. A run converging on a cycle whose slowest multiplier `mu`
+    /// is near 1 otherwise takes `ln(APPROACH_TOL / periodic_tol) / ln(1 / |mu|)` periods more
+    /// (660 at the Stribeck sweep's 0.993). Shooting from there (`approach_check`) converges on
+    /// the cycle: a stable orbit of the same period (to 1 %) ends the run on it, measured on the
+    /// orbit; near an unstable one the run goes on, declaring no cycle until a deviation along
+    /// its largest multiplier has grown a thousandfold (4 to 1,000 periods); where shooting
+    /// fails or finds another period, the run goes on with the approach test off. In the run, so
+    /// that a run going on keeps its lane and its place in the call.
+    pub approach_periods: usize,
+    /// The check of [`Self::approach_periods`]' stops (`None`: no approach test), with its
+    /// integration tolerance and Newton tolerance. Shooting lives above this module, which
+    /// hands it in (`crate::shooting::approach_check`), so that the modules stay a hierarchy.
+    pub approach_check: Option<ApproachCheck>,
+    /// Integration tolerance of the approach checks.
+    pub approach_rtol: f64,
+    /// Newton tolerance of the approach checks.
+    pub approach_tol: f64,
     /// Fingerprints of irregular attractors already established at this point (by other runs of
     /// the same model): a block of sections that matches one of them ends the run as irregular
     /// without waiting for three stationary blocks ([`Fingerprint`]; only with `irregular_block > 0`).
     pub known_irregular: Known,
 }
+
+/// What shooting from a slow approach's stop found ([`ApproachCheck`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ApproachVerdict {
+    /// A stable orbit of the stop's period (to 1 %): its state on the section and its period.
+    Stable { state0: State, period: f64 },
+    /// An unstable orbit of that period: its largest multiplier's modulus and its period.
+    Unstable { largest: f64, period: f64 },
+    /// No orbit of that period (Newton failed, or converged on another period).
+    Nothing,
+}
+
+/// Shooting from a slow approach's stop: the slider, the section state, the period there, the
+/// integration and Newton tolerances; the verdict and the work.
+pub type ApproachCheck = fn(&Slider, &State, f64, f64, f64) -> (ApproachVerdict, Stats);
 
 /// Most fingerprints of known irregular attractors a run compares its blocks with.
 pub const KNOWN_MAX: usize = 2;
@@ -412,6 +451,10 @@ impl Default for SteadyOptions {
             n_fourier: 512,
             watch_x: true,
             irregular_block: 0,
+            approach_periods: 0,
+            approach_check: None,
+            approach_rtol: 1e-9,
+            approach_tol: 1e-8,
             known_irregular: [None; KNOWN_MAX],
         }
     }
@@ -474,6 +517,10 @@ pub struct Summary {
     /// a block of its statistics, or [`RECUR_SECTIONS`] sections in a row in its cells) rather than
     /// three of its own blocks being stationary.
     pub matched_known: bool,
+    /// Periodic only: the run stopped on a slow approach ([`SteadyOptions::approach_periods`])
+    /// that shooting converged on a stable orbit of its period; `y_end`, the period and every
+    /// cycle quantity are the orbit's (verified).
+    pub approach: bool,
     /// Unsettled only: the newest section state's closest repetition ([`Nearest`]; `None` with
     /// fewer than two sections). A slowly attracting cycle that had not repeated to
     /// `periodic_tol` by `t_max` shows here, a start for shooting.
@@ -522,6 +569,7 @@ impl Summary {
             failure: None,
             fingerprint: None,
             matched_known: false,
+            approach: false,
             nearest: None,
         }
     }
@@ -556,68 +604,6 @@ impl DecayTest {
     }
 }
 
-pub(crate) struct SteadyObserver {
-    pub(crate) w: SectionWatcher,
-    pub(crate) decay_floor: f64,
-}
-
-impl SteadyObserver {
-    /// The observer of a run to steady state of `s` under `opts`.
-    pub(crate) fn new(s: &Slider, opts: &SteadyOptions) -> Self {
-        SteadyObserver {
-            w: SectionWatcher::new(opts, s),
-            decay_floor: 1e-6 * opts.decay_thresholds.map_or_else(|| decay_amplitude(opts, s), |t| t[idx::Z]),
-        }
-    }
-}
-
-impl Observer<6, ContactMode> for SteadyObserver {
-    fn on_step(&mut self, st: &StepView<'_, 6, ContactMode>) -> Control {
-        let (zd0, zd1) = (st.y0[idx::ZD], st.y1[idx::ZD]);
-        self.w.peak_since = self.w.peak_since.max(st.y1[idx::Z].abs());
-        self.w.peaks_since = self.w.peaks_since.sup(&st.y1.abs());
-        if zd0 > 0.0 && zd1 <= 0.0 {
-            // Section: zd = 0 falling. Located on the dense output, which is accurate to the
-            // integration tolerance; that sets the section's.
-            let (t, y) = locate(st, |y| y[idx::ZD], |f| f[idx::ZD], 1e-14 * st.t1.abs().max(1.0));
-            let peaks = self.w.peaks_since.sup(&y.abs());
-            self.w.peak_since = st.y1[idx::Z].abs();
-            self.w.peaks_since = st.y1.abs();
-            self.w.push(Crossing { t, y, peaks });
-            if self.w.found.is_some() || self.w.decayed || self.w.irregular {
-                return Control::Stop;
-            }
-        } else if st.y1.norm() == 0.0 || self.w.peak_since < self.decay_floor {
-            // Exactly at rest (or below any meaningful size): nothing will ever cross the section.
-            self.w.decayed = true;
-            return Control::Stop;
-        }
-        Control::Continue
-    }
-}
-
-/// Locate a zero of `g` (falling from > 0 to <= 0) inside a step on the dense output (the events'
-/// root finder, [`crate::ode::events::locate`]): the time on the far side of the zero, and the state there.
-///
-/// Where the interpolant keeps the right-hand side at the ends of its step and the step was not
-/// cut short by an event, the search starts at the root of `g`'s cubic model (`rate`: `dg/dt`
-/// from the state's derivative).
-fn locate(
-    st: &StepView<'_, 6, ContactMode>,
-    g: impl Fn(&State) -> f64,
-    rate: impl Fn(&State) -> f64,
-    tol: f64,
-) -> (f64, State) {
-    use crate::ode::events::{hermite_root, locate_from};
-    let (g0, g1) = (g(st.y0), g(st.y1));
-    let guess = st.dense.end_rates().and_then(|((t0, t1), (f0, f1))| {
-        (t0 == st.t0 && t1 == st.t1).then(|| hermite_root(t0, t1 - t0, g0, g1, rate(&f0), rate(&f1))).flatten()
-    });
-    let t = locate_from(|t| g(&st.dense.eval(t)), st.t0, g0, st.t1, g1, tol, guess);
-    let y = if t == st.t1 { *st.y1 } else { st.dense.eval(t) };
-    (t, y)
-}
-
 /// Run `s` from `y0` until it decays, settles on a periodic state, escapes, or reaches `t_max`,
 /// and summarise the motion.
 pub fn run_to_steady(s: &Slider, y0: &State, opts: &SteadyOptions) -> Summary {
@@ -633,6 +619,7 @@ pub(crate) fn summarize(s: &Slider, r: &RunResult, w: &SectionWatcher, opts: &St
     sum.y_end = r.y;
     sum.extremes = r.extremes;
     sum.stats = r.stats;
+    sum.stats += w.extra;
     sum.failure = r.failure;
     sum.min_normal_force = r.extremes.min_normal_force;
     sum.min_slip_velocity = r.extremes.min_slip_velocity;
@@ -649,7 +636,12 @@ pub(crate) fn summarize(s: &Slider, r: &RunResult, w: &SectionWatcher, opts: &St
         Status::Success => {}
         _ => return sum,
     }
-    if let Some((p, period)) = w.found {
+    if let Some(m) = &w.measured {
+        // A slow approach that its check verified: the cycle as the run on the orbit measured it.
+        let (t_end, extremes, stats) = (sum.t_end, sum.extremes, sum.stats);
+        sum = **m;
+        (sum.t_end, sum.extremes, sum.stats, sum.approach) = (t_end, extremes, stats, true);
+    } else if let Some((p, period)) = w.found {
         sum.outcome = SteadyOutcome::Periodic;
         sum.period = period;
         sum.multiplicity = p as u32;
@@ -674,17 +666,20 @@ pub(crate) fn summarize(s: &Slider, r: &RunResult, w: &SectionWatcher, opts: &St
 
 mod cells;
 mod fourier;
+mod observer;
 mod section;
 pub use cells::{Cells, CELLS, CELL_COMPS, CELL_WORDS, RECUR_SECTIONS};
 use fourier::fourier_period;
 #[cfg(test)]
 use fourier::{amp_phase, wrap};
+pub(crate) use observer::SteadyObserver;
+#[cfg(test)]
 use section::Crossing;
 pub(crate) use section::SectionWatcher;
 #[cfg(test)]
 use section::{ALL, NOT_X};
 pub use section::{
-    REDUCE_TOL, STATIONARY_FLOOR, STATIONARY_MIN_RESIDUAL, STATIONARY_PEAK_TOL, STATIONARY_RESIDUAL_TOL,
+    APPROACH_TOL, REDUCE_TOL, STATIONARY_FLOOR, STATIONARY_MIN_RESIDUAL, STATIONARY_PEAK_TOL, STATIONARY_RESIDUAL_TOL,
 };
 
 #[cfg(test)]

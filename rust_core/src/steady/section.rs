@@ -6,6 +6,7 @@ use super::{
     RECUR_SECTIONS,
 };
 use crate::model::{idx, FrictionLaw, Slider, State};
+use crate::ode::Stats;
 
 #[derive(Clone, Copy)]
 pub(super) struct Crossing {
@@ -47,6 +48,53 @@ pub(crate) struct SectionWatcher {
     pub(super) fingerprint: Option<Fingerprint>,
     /// Irregular by matching a known fingerprint.
     pub(super) matched_known: bool,
+    /// Periods of steady contraction that stop a slow approach (`SteadyOptions::approach_periods`; 0: off).
+    approach_periods: usize,
+    /// Per `p`: the envelope of the repetition residual after `p` sections, block by block.
+    envelope: [Envelope; MAX_MULTIPLICITY + 1],
+    /// The newest `found` is a slow approach's, to be checked by shooting.
+    pub(super) approach: bool,
+    /// A slow approach's check converged on a stable orbit: the summary of a run on it.
+    pub(super) measured: Option<Box<super::Summary>>,
+    /// The checks' work.
+    pub(super) extra: Stats,
+}
+
+/// Largest repetition residual at which a steadily contracting approach stops the run
+/// (`SteadyOptions::approach_periods`).
+pub const APPROACH_TOL: f64 = 1e-3;
+
+/// The largest repetition residual over blocks of `approach_periods * p` crossings: the current
+/// block's so far, and the newest three completed (oldest first). Its envelope, not each
+/// crossing's residual, since a slow mode with a complex multiplier (the lightly damped `x`
+/// oscillator's) turns its deviation about the cycle, and the residual on the section swings
+/// with it while its envelope shrinks.
+#[derive(Clone, Copy, Default)]
+struct Envelope {
+    current: f64,
+    count: usize,
+    done: [f64; 3],
+    n_done: usize,
+}
+
+impl Envelope {
+    /// Add a crossing's residual (NaN: not computed, resets); `true` when this completed a block
+    /// and the newest three shrink, each below the one before, the newest at most [`APPROACH_TOL`].
+    fn add(&mut self, r: f64, block: usize) -> bool {
+        if r.is_nan() {
+            *self = Envelope::default();
+            return false;
+        }
+        self.current = self.current.max(r);
+        self.count += 1;
+        if self.count < block {
+            return false;
+        }
+        self.done = [self.done[1], self.done[2], self.current];
+        (self.current, self.count, self.n_done) = (0.0, 0, self.n_done + 1);
+        let [a, b, c] = self.done;
+        self.n_done >= 3 && c < b && b < a && c <= APPROACH_TOL
+    }
 }
 
 /// Largest relative spread of three consecutive blocks' mean repetition residuals for stationary motion.
@@ -297,6 +345,11 @@ impl SectionWatcher {
             irregular: false,
             fingerprint: None,
             matched_known: false,
+            approach_periods: if opts.approach_check.is_some() { opts.approach_periods } else { 0 },
+            envelope: [Envelope::default(); MAX_MULTIPLICITY + 1],
+            approach: false,
+            measured: None,
+            extra: Stats::default(),
         }
     }
 
@@ -401,6 +454,9 @@ impl SectionWatcher {
                 self.matches_in_row[p] = 0;
             }
         }
+        if self.approach_periods > 0 && self.slow_approach() {
+            return;
+        }
         // Decay: the motion, measured on every component in units of its characteristic size
         // (so that a torsion oscillation with little z is not missed) or of its own threshold,
         // is small over the newest window and below the window before it.
@@ -443,6 +499,41 @@ impl SectionWatcher {
             } else if st.matched(floor, comps) {
                 (self.irregular, self.matched_known, self.fingerprint) = (true, true, Some(st.newest()));
             }
+        }
+    }
+
+    /// The slow-approach test (`SteadyOptions::approach_periods`), after the repetition test found
+    /// nothing at the newest crossing: where for some `p` (the smallest wins) the envelope of the
+    /// residual after `p` sections has shrunk over three blocks of `approach_periods` periods
+    /// ([`Envelope`]) to at most [`APPROACH_TOL`], outside the hold, and the period agrees with
+    /// the one before to [`APPROACH_TOL`], sets `found` (reduced as the repetition test reduces
+    /// it) and `approach`.
+    fn slow_approach(&mut self) -> bool {
+        let n = self.n_seen;
+        let t = self.get(0).t;
+        for p in 1..=MAX_MULTIPLICITY {
+            let r = if n > 2 * p { self.residual(p) } else { f64::NAN };
+            if !self.envelope[p].add(r, self.approach_periods * p) || t < self.hold {
+                continue;
+            }
+            let (dt_now, dt_prev) = (t - self.get(p).t, self.get(p).t - self.get(2 * p).t);
+            if (dt_now - dt_prev).abs() > APPROACH_TOL * dt_now {
+                continue;
+            }
+            let d = (1..p).filter(|d| p % d == 0).find(|&d| self.repeats(d, REDUCE_TOL.max(self.tol))).unwrap_or(p);
+            (self.found, self.approach) = (Some((d, t - self.get(d).t)), true);
+            return true;
+        }
+        false
+    }
+
+    /// A slow approach's stop that its check did not confirm: the run goes on, with no cycle
+    /// declared before `hold` (an unstable orbit's), or without approach stops from now on.
+    pub(super) fn reject_approach(&mut self, hold: Option<f64>) {
+        (self.found, self.approach, self.envelope) = (None, false, [Envelope::default(); MAX_MULTIPLICITY + 1]);
+        match hold {
+            Some(t) => self.hold = self.hold.max(t),
+            None => self.approach_periods = 0,
         }
     }
 

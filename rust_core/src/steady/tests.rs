@@ -344,3 +344,51 @@ fn an_unsettled_run_reports_its_closest_repetition() {
     let far = watcher(&opts, 300, torus(1.0)).0.nearest().expect("sections").residual;
     assert!(far > 0.05, "{far}");
 }
+
+/// Section states converging on a period-1 cycle along a slow mode whose multiplier is complex,
+/// `rho e^(i theta)` per section: the deviation turns about the cycle, so the repetition residual
+/// on the section swings while its envelope shrinks by `rho` per section.
+fn spiral(rho: f64, theta: f64, amp: f64) -> impl Fn(usize) -> State {
+    let sizes = characteristic_sizes(&Slider::seed());
+    move |n: usize| {
+        let (c, s) = ((theta * n as f64).cos(), (theta * n as f64).sin());
+        let dev = amp * rho.powi(n as i32);
+        State::from_fn(|k, _| sizes[k] * (1.0 + dev * if k % 2 == 0 { c } else { s }))
+    }
+}
+
+#[test]
+fn a_slow_approach_stops_on_its_shrinking_envelope_and_nothing_else_does() {
+    // A periodic_tol nothing reaches: only the approach test can stop the runs.
+    // The watcher alone: its check (shooting, above this module) is never called here, but the test
+    // is on only with one.
+    let check: ApproachCheck = |_, _, _, _, _| (ApproachVerdict::Nothing, Stats::default());
+    let opts = SteadyOptions {
+        watch_x: false,
+        periodic_tol: 1e-14,
+        approach_periods: 16,
+        approach_check: Some(check),
+        ..SteadyOptions::default()
+    };
+    // A slow mode (0.99 a section) turning by 1 rad a section: the residual swings, the envelope shrinks.
+    let (w, n) = watcher(&opts, 5000, spiral(0.99, 1.0, 0.3));
+    assert!(w.approach && w.found.map(|f| f.0) == Some(1), "{:?} after {n}", w.found);
+    // It stops once three blocks of 16 sections shrank in a row and the newest is at most 1e-3:
+    // the residual is about the deviation times |1 - e^(-i)| / 0.99 = 0.96 at most, which falls
+    // from 0.3 to 1e-3 after some 560 sections (468 here: the compared components' largest
+    // swing is a little less), and not before 0.99^n 0.3 < 1e-3, 300 sections.
+    assert!((300..700).contains(&n), "{n}");
+    assert!(w.nearest().is_some_and(|r| r.residual <= APPROACH_TOL));
+    // Without a check the test is off.
+    let none = SteadyOptions { approach_check: None, ..opts };
+    assert_eq!(watch(&none, 2000, spiral(0.99, 1.0, 0.3)).0, "running");
+    // Off (0), or on a torus whose residual never shrinks, or growing by 1 % a section (17 % a
+    // block, more than the block's largest sample can miss the swing by: 1 - cos(1/2) = 12 %,
+    // which a slower growth may alias into a shrinking block; shooting then finds no stable orbit
+    // and the run goes on), from 1e-6 so that it stays below 1e-3 for some 690 sections: no stop.
+    let off = SteadyOptions { approach_periods: 0, ..opts };
+    assert_eq!(watch(&off, 2000, spiral(0.99, 1.0, 0.3)).0, "running");
+    assert_eq!(watch(&opts, 2000, torus(1.0)).0, "running");
+    let (w, n) = watcher(&opts, 690, spiral(1.01, 1.0, 1e-6));
+    assert!(w.found.is_none() && !w.decayed && !w.irregular, "{:?} {} {} after {n}", w.found, w.approach, w.decayed);
+}
