@@ -96,8 +96,8 @@ class Steady:
         waits for the repetition to ``periodic_tol``. A cycle whose slowest multiplier is 0.993
         (the lightly damped ``x`` mode under speed-dependent friction) takes some 660 periods
         from a repetition to 1e-3 to one to 1e-5. Measured (2026-11-28): the Stribeck sweep at
-        491 -> 523 points/s (switch law, right-hand sides -14 %; tanh law -11 %, time unchanged),
-        the 2,000-point grid's transients 1.52 -> 1.18 s, no regime changed.
+        491-508 -> 563-578 points/s (switch law, right-hand sides -14 %; tanh law -11 %, 443 ->
+        448), the 2,000-point grid's transients 1.52 -> 1.18 s, no regime changed.
     """
 
     t_max: float = 100.0
@@ -110,8 +110,8 @@ class Steady:
         _set(self, "periodic_tol", _checks.positive("periodic_tol", self.periodic_tol))
         v = self.approach_periods
         if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or not 0 <= v <= 10_000:
-            raise ValueError(f"approach_periods = {v!r} is out of range: must be an integer in [0, 10000] (periods of "
-                             "steady contraction; 0: off)")
+            raise ValueError(f"approach_periods = {v!r} is out of range: must be an integer in [0, 10000] (periods per "
+                             "block of the slow-approach test; 0: off)")
         _set(self, "approach_periods", int(v))
         if self.decay_amplitude is not None:
             _set(self, "decay_amplitude", _checks.positive("decay_amplitude", self.decay_amplitude))

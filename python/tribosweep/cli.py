@@ -113,8 +113,8 @@ _SETTINGS: dict[str, tuple[str, object, str, str]] = {
     "rtol": ("integration", float, "R", "relative tolerance of every run"),
     "atol": ("integration", "floats", "A", "absolute tolerance: one value or six (default rtol x each state's size)"),
     "periodic_tol": ("integration", float, "R", "relative repetition tolerance that declares a cycle"),
-    "approach_periods": ("integration", int, "M", "periods of steady contraction after which an auto transient's "
-                         "slow approach to a cycle stops for shooting (0: off)"),
+    "approach_periods": ("integration", int, "M", "periods per block of the test that checks an auto transient's "
+                         "slow approach to a cycle by shooting inside the run (0: off)"),
     "decay_amplitude": ("integration", float, "M", "amplitude below which a motion has decayed [m] (default "
                         "1e-3 |z_st|)"),
     "disturbance": ("integration", "floats", "Z", "initial z offset [m] of transients, or a state of six values "

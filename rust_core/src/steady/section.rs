@@ -48,7 +48,8 @@ pub(crate) struct SectionWatcher {
     pub(super) fingerprint: Option<Fingerprint>,
     /// Irregular by matching a known fingerprint.
     pub(super) matched_known: bool,
-    /// Periods of steady contraction that stop a slow approach (`SteadyOptions::approach_periods`; 0: off).
+    /// Periods per block of the slow-approach test (`SteadyOptions::approach_periods`; 0: off,
+    /// also where no check is handed in, or after a check found no orbit).
     approach_periods: usize,
     /// Per `p`: the envelope of the repetition residual after `p` sections, block by block.
     envelope: [Envelope; MAX_MULTIPLICITY + 1],
@@ -394,9 +395,15 @@ impl SectionWatcher {
                 Some((_, rb)) if rb <= r => best,
                 _ => Some((p, r)),
             })?;
-        let d = (1..p).filter(|d| p % d == 0).find(|&d| self.repeats(d, REDUCE_TOL.max(self.tol))).unwrap_or(p);
+        let d = self.reduced(p);
         let a = self.get(0);
         Some(super::Nearest { y: a.y, period: a.t - self.get(d).t, multiplicity: d as u32, residual })
+    }
+
+    /// `p` reduced to its smallest divisor whose section states repeat to [`REDUCE_TOL`] (or
+    /// `periodic_tol` where that is looser), `p` itself where none does.
+    fn reduced(&self, p: usize) -> usize {
+        (1..p).filter(|&d| p.is_multiple_of(d)).find(|&d| self.repeats(d, REDUCE_TOL.max(self.tol))).unwrap_or(p)
     }
 
     /// Whether the newest section state equals the one `d` crossings back within `rel` relative
@@ -445,8 +452,7 @@ impl SectionWatcher {
                     // periods, so p = 4 matches while the true p = 2 misses by the residual.
                     // Reduce p to its smallest divisor whose states repeat to REDUCE_TOL; a true
                     // sub-multiple structure (major/minor maxima of z) differs by far more.
-                    let d =
-                        (1..p).filter(|d| p % d == 0).find(|&d| self.repeats(d, REDUCE_TOL.max(self.tol))).unwrap_or(p);
+                    let d = self.reduced(p);
                     self.found = Some((d, self.get(0).t - self.get(d).t));
                     return;
                 }
@@ -520,7 +526,7 @@ impl SectionWatcher {
             if (dt_now - dt_prev).abs() > APPROACH_TOL * dt_now {
                 continue;
             }
-            let d = (1..p).filter(|d| p % d == 0).find(|&d| self.repeats(d, REDUCE_TOL.max(self.tol))).unwrap_or(p);
+            let d = self.reduced(p);
             (self.found, self.approach) = (Some((d, t - self.get(d).t)), true);
             return true;
         }
