@@ -6,6 +6,8 @@ errors from 0, a frequency within a stated fraction of a bin), never one chaotic
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -306,3 +308,43 @@ def test_benettin_rejects_bad_input_before_propagating(kwargs, match):
         _irregular.benettin(no_work, np.zeros((1, 3)), np.ones(3), **kwargs)
     with pytest.raises(ValueError, match="scale"):
         _irregular.benettin(no_work, np.zeros((1, 3)), np.array([1.0, 0.0, 1.0]))
+
+
+def test_intermittent_motion_stops_before_t_max_with_its_unstable_cycle():
+    # 134.4 N, 7.57 cm, 0.2 m/s on the Stribeck sweep under the switch law: the transient keeps
+    # coming back to within 1e-5-1e-4 of an unstable cycle of six sections per period (a flip
+    # multiplier of -1.04: the deviation grows alternating in sign, as in Pomeau-Manneville
+    # intermittency of type III), leaves it in bursts of 4-10 % every 4-5 s and comes back.
+    # Measured when this was written: from the sweep's start, laminar phases at about 1.5, 6.3,
+    # 10.5, 15 and 18.5 s; the sweep stopped by repetition near the saddle at 18.6 s, shot it,
+    # restarted and ended irregular by t_max = 20 s. Now the third visit that a check confirms
+    # ends the run: from four starts at 12.6-16.8 s (asserted: before t_max = 30 s, for margin).
+    m = ts.SliderModel(contact="unilateral", friction_law="switch", mu_static=0.3)
+    load, arm = np.linspace(10, 150, 10)[8], np.linspace(0.05, 0.127, 4)[1]
+    pp, names, vals = _point(m, load, arm, 0.2)
+    y0 = np.zeros((4, 6))
+    y0[:, 0] = (1e-6, -2e-6, 5e-6, 2e-5)
+    vals4 = np.repeat(vals, 4, axis=0)
+    r = _core.ensemble(m.values(), m.contact, m.friction_law, names, vals4, y0, 30.0, "dop853", 1e-8, kind="steady",
+                       approach_periods=10, approach_rtol=1e-9, approach_tol=1e-8)  # fmt: skip
+    assert np.all(r["outcome"] == _codes.OUTCOME_NAMES.index("irregular")) and np.all(r["t_end"] < 30.0), r["t_end"]
+    assert np.all(r["intermittent_visits"] == 3)
+    # The cycle against independent shootings at rtol 1e-11 (the run's checks: 1e-9) from where
+    # each run stopped (its third laminar phase): converged, unstable, the same period and multiplier.
+    orb = _core.periodic_orbits(m.values(), m.contact, m.friction_law, names, vals4, y0=r["y_end"],
+                                periods=r["intermittent_period"], rtol=1e-11, tol=1e-10)  # fmt: skip
+    assert np.all(orb["status"] == ts.STATUS["success"]) and not orb["stable"].any()
+    np.testing.assert_allclose(r["intermittent_period"], orb["period"], rtol=1e-6)
+    np.testing.assert_allclose(r["intermittent_multiplier"], orb["moduli"][:, 0], atol=1e-4)
+    assert np.all(orb["moduli"][:, 0] > 1.02)
+    # The sweep says so, with the same cycle.
+    ds = ts.sweep(m, normal_load=[load], arm_length=[arm], sliding_speed=[0.2], census=False, t_max=30.0,
+                  progress=False)  # fmt: skip
+    assert int(ds.regime.values.ravel()[0]) == REGIME["irregular"]
+    assert int(ds.status.values.ravel()[0]) == ts.STATUS["success"]
+    reason = str(ds.reason.values.ravel()[0])
+    hit = re.search(r"by t = ([\d.]+) s: intermittent, back near one unstable cycle \(period ([\d.e-]+) s, "
+                    r"largest Floquet multiplier modulus ([\d.]+)\) 3 times", reason)  # fmt: skip
+    assert hit, reason
+    assert float(hit[1]) < 30.0 and abs(float(hit[2]) / orb["period"][0] - 1) < 1e-4, reason
+    assert abs(float(hit[3]) - orb["moduli"][0, 0]) < 2e-3, reason

@@ -263,8 +263,9 @@ def classify(summary: dict, stable: np.ndarray, t_max: float) -> tuple[np.ndarra
     """Regime, status, reason and deciding stage of transient runs from their steady-state summaries.
 
     A run that stayed bounded (no escape, a finite end state) but neither repeated nor decayed,
-    either stationary over three blocks of sections (outcome ``irregular``) or still so at
-    ``t_max`` (outcome ``unsettled``), is an answer: sustained ``irregular`` motion, decided by the
+    either stationary over three blocks of sections or back near one unstable cycle between bursts
+    often enough to call it intermittent (outcome ``irregular``), or still so at ``t_max`` (outcome
+    ``unsettled``), is an answer: sustained ``irregular`` motion, decided by the
     transient, status ``success`` (its measurement follows in :func:`transient`). Only a failed
     integration makes a point ``failed``.
     """
@@ -276,6 +277,8 @@ def classify(summary: dict, stable: np.ndarray, t_max: float) -> tuple[np.ndarra
     t_end = summary.get("t_end")
     names = [OUTCOME_NAMES[o] for o in outcome]
     n = len(names)
+    im_period = np.asarray(summary.get("intermittent_period", np.full(n, np.nan)))
+    im_mult = np.asarray(summary.get("intermittent_multiplier", np.full(n, np.nan)))
     regime = np.full(n, REGIME["failed"], dtype=np.uint8)
     decided = np.full(n, DECIDED_BY["transient"], dtype=np.uint8)
     reason = np.asarray(summary["reason"], dtype=str).astype(object)
@@ -291,6 +294,10 @@ def classify(summary: dict, stable: np.ndarray, t_max: float) -> tuple[np.ndarra
             status[i] = STATUS["success"]
             when = (f"and stationary over three blocks of sections by t = {float(t_end[i]):.3g} s"
                     if name == "irregular" else f"by t_max = {t_max:g} s")  # fmt: skip
+            if name == "irregular" and np.isfinite(im_period[i]):
+                when = (f"by t = {float(t_end[i]):.3g} s: intermittent, back near one unstable cycle (period "
+                        f"{float(im_period[i]):.5g} s, largest Floquet multiplier modulus {float(im_mult[i]):.4g}) "
+                        f"{int(summary['intermittent_visits'][i])} times, leaving it in bursts between")  # fmt: skip
             reason[i] = f"bounded motion, neither periodic nor decayed {when}" + (
                 "" if not stable[i] else " (sliding is linearly stable: this motion coexists with it, or is a slow "
                 "transient)")  # fmt: skip

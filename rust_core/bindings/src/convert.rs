@@ -324,6 +324,12 @@ pub(crate) fn summaries_into(d: &Bound<'_, PyDict>, out: &[(Summary, String)]) -
     d.set_item("irregular_matched", Array1::from_iter(out.iter().map(|o| o.0.matched_known)).into_pyarray(py))?;
     // Periodic runs that stopped on a slow approach (`approach_periods`), not a repetition.
     d.set_item("approach", Array1::from_iter(out.iter().map(|o| o.0.approach)).into_pyarray(py))?;
+    // Irregular runs that stopped as intermittent motion: the unstable cycle they kept returning
+    // to (its period, largest multiplier modulus; NaN otherwise) and the visits (0 otherwise).
+    d.set_item("intermittent_period", f(&|s| s.intermittent.map_or(f64::NAN, |m| m.period)))?;
+    d.set_item("intermittent_multiplier", f(&|s| s.intermittent.map_or(f64::NAN, |m| m.largest)))?;
+    let visits = out.iter().map(|o| o.0.intermittent.map_or(0, |m| m.visits));
+    d.set_item("intermittent_visits", Array1::from_iter(visits).into_pyarray(py))?;
     // Their cells (zeros and NaN extents where there are none): input for `known_cells`. Without
     // any (no stationarity blocks, no irregular run) the cell array has no columns: 1.7 KB per
     // trajectory of zeros would outweigh every other column together.

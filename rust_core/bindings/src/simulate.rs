@@ -251,7 +251,9 @@ fn summaries(out: Vec<Result<TrajectoryResult, String>>) -> Vec<(Summary, String
 /// `stationary_tol`: the repetition tolerance that sets the stationarity floor, default `periodic_tol`;
 /// `approach_periods > 0`: a slow approach to a cycle is checked by shooting inside the run after that
 /// many periods of steady contraction (at `approach_rtol`, Newton tolerance `approach_tol`), and a
-/// stable orbit ends the run on it, output `approach`).
+/// stable orbit ends the run on it, output `approach`; the third check that finds the same unstable
+/// orbit, the run having left it between, ends the run as intermittent irregular motion, outputs
+/// `intermittent_period`, `intermittent_multiplier` and `intermittent_visits`).
 /// The core picks the path (lane-batched or scalar) and the grouping; results do not depend on it
 /// beyond integration accuracy, nor on the thread count at all. Every non-success status has a
 /// reason; Ctrl-C stops every thread (`KeyboardInterrupt`, the results are dropped).

@@ -397,11 +397,38 @@ pub struct SteadyOptions {
 pub enum ApproachVerdict {
     /// A stable orbit of the stop's period (to 1 %): its state on the section and its period.
     Stable { state0: State, period: f64 },
-    /// An unstable orbit of that period: its largest multiplier's modulus and its period.
-    Unstable { largest: f64, period: f64 },
+    /// An unstable orbit of that period: its largest multiplier's modulus, its period and the
+    /// amplitude of z's first harmonic on it (with the period, the orbit's identity whatever
+    /// section point the check started from).
+    Unstable { largest: f64, period: f64, a1: f64 },
     /// No orbit of that period (Newton failed, or converged on another period).
     Nothing,
 }
+
+/// Intermittent motion: laminar phases near one unstable cycle, each ended by a burst away from it
+/// and followed by a return (reinjection), as in Pomeau-Manneville intermittency. Slow-approach
+/// checks (`SteadyOptions::approach_periods`) found the same unstable orbit (period and A1 to
+/// [`SAME_SADDLE`]) [`INTERMITTENT_VISITS`] times, the run each time having left it by at least
+/// [`DEPART_TOL`] between. Sustained motion that keeps coming back to a saddle: irregular.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Intermittent {
+    /// Period of the unstable cycle [s].
+    pub period: f64,
+    /// Modulus of its largest Floquet multiplier (> 1).
+    pub largest: f64,
+    /// The laminar phases found near it.
+    pub visits: u32,
+}
+
+/// Laminar phases near one unstable cycle after which a run stops as intermittent ([`Intermittent`]).
+pub const INTERMITTENT_VISITS: u32 = 3;
+/// The repetition residual (relative, as the slow-approach test's) after the cycle's sections by
+/// which a run has left an unstable cycle between two visits: ten times [`APPROACH_TOL`], where a
+/// laminar phase ends.
+pub const DEPART_TOL: f64 = 10.0 * APPROACH_TOL;
+/// Two checks found the same unstable cycle where their periods and A1 agree to this (relative;
+/// each converged to the shooting tolerance, far below it).
+pub const SAME_SADDLE: f64 = 1e-3;
 
 /// Shooting from a slow approach's stop: the slider, the section state, the period there, the
 /// integration and Newton tolerances; the verdict and the work.
@@ -521,6 +548,9 @@ pub struct Summary {
     /// that shooting converged on a stable orbit of its period; `y_end`, the period and every
     /// cycle quantity are the orbit's (verified).
     pub approach: bool,
+    /// Irregular only: the run stopped as intermittent motion ([`Intermittent`]) rather than by
+    /// the stationarity test.
+    pub intermittent: Option<Intermittent>,
     /// Unsettled only: the newest section state's closest repetition ([`Nearest`]; `None` with
     /// fewer than two sections). A slowly attracting cycle that had not repeated to
     /// `periodic_tol` by `t_max` shows here, a start for shooting.
@@ -570,6 +600,7 @@ impl Summary {
             fingerprint: None,
             matched_known: false,
             approach: false,
+            intermittent: None,
             nearest: None,
         }
     }
@@ -655,6 +686,7 @@ pub(crate) fn summarize(s: &Slider, r: &RunResult, w: &SectionWatcher, opts: &St
         sum.outcome = SteadyOutcome::Irregular;
         sum.fingerprint = w.fingerprint;
         sum.matched_known = w.matched_known;
+        sum.intermittent = w.intermittent;
     } else {
         sum.outcome = SteadyOutcome::Unsettled;
         sum.status = Status::NotConverged;

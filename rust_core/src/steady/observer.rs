@@ -2,7 +2,10 @@
 //! check of a slow approach inside the run (`SteadyOptions::approach_periods`).
 
 use super::section::{Crossing, SectionWatcher};
-use super::{decay_amplitude, run_to_steady, ApproachVerdict, SteadyOptions, SteadyOutcome, KNOWN_MAX};
+use super::{
+    decay_amplitude, run_to_steady, ApproachVerdict, Intermittent, SteadyOptions, SteadyOutcome, DEPART_TOL,
+    INTERMITTENT_VISITS, KNOWN_MAX, SAME_SADDLE,
+};
 use crate::model::{idx, ContactMode, Slider, State};
 use crate::ode::{Control, Observer, StepView};
 
@@ -12,6 +15,60 @@ pub(crate) struct SteadyObserver {
     /// The slider and the run's options, for the slow-approach checks.
     s: Slider,
     opts: SteadyOptions,
+    /// The unstable cycle the newest check that found one found, and the run's visits to it.
+    saddle: Option<Saddle>,
+}
+
+/// An unstable cycle that a slow-approach check found: its identity and the run's visits to it
+/// (laminar phases), each counted once the run has left the cycle since the one before.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Saddle {
+    pub(super) period: f64,
+    pub(super) a1: f64,
+    pub(super) largest: f64,
+    /// Its sections per period: the repetition residual after these tells a departure.
+    pub(super) p: usize,
+    pub(super) visits: u32,
+    /// The residual after `p` sections exceeded [`DEPART_TOL`] since the newest visit.
+    pub(super) departed: bool,
+}
+
+impl Saddle {
+    /// A check found the unstable cycle (`period`, `a1`, `largest`, `p` sections per period):
+    /// `saddle` updated, and the intermittent motion where this is its [`INTERMITTENT_VISITS`]th
+    /// visit. The same cycle (period and A1 to [`SAME_SADDLE`]) counts a visit only where the run
+    /// left it since the one before; another cycle starts the count again.
+    pub(super) fn visit(
+        saddle: &mut Option<Saddle>,
+        period: f64,
+        a1: f64,
+        largest: f64,
+        p: usize,
+    ) -> Option<Intermittent> {
+        let same = |s: &Saddle| {
+            (s.period / period - 1.0).abs() <= SAME_SADDLE
+                && (s.a1 - a1).abs() <= SAME_SADDLE * s.a1.abs().max(a1.abs())
+        };
+        match saddle {
+            Some(s) if same(s) => {
+                if s.departed {
+                    (s.visits, s.departed) = (s.visits + 1, false);
+                }
+            }
+            _ => *saddle = Some(Saddle { period, a1, largest, p, visits: 1, departed: false }),
+        }
+        let s = saddle.as_ref().expect("set above");
+        (s.visits >= INTERMITTENT_VISITS).then_some(Intermittent {
+            period: s.period,
+            largest: s.largest,
+            visits: s.visits,
+        })
+    }
+
+    /// A section's repetition residual after the cycle's `p` sections: marks a departure.
+    pub(super) fn watch(&mut self, residual: f64) {
+        self.departed |= residual > DEPART_TOL;
+    }
 }
 
 /// A slow approach's check grows a deviation along an unstable orbit's largest multiplier this
@@ -26,6 +83,7 @@ impl SteadyObserver {
             decay_floor: 1e-6 * opts.decay_thresholds.map_or_else(|| decay_amplitude(opts, s), |t| t[idx::Z]),
             s: *s,
             opts: *opts,
+            saddle: None,
         }
     }
 
@@ -35,8 +93,10 @@ impl SteadyObserver {
     /// `tribosweep._cycles.check`, whose period and multiplicity are the flow's own, not the
     /// shooting's); otherwise the run goes on, held off cycles near an unstable orbit, without
     /// approach stops where shooting failed, found another period or the orbit did not repeat.
+    /// The [`INTERMITTENT_VISITS`]th visit to one unstable orbit stops the run as intermittent
+    /// (irregular, [`Intermittent`]).
     fn check_approach(&mut self) -> bool {
-        let (Some((_, period)), Some(check)) = (self.w.found, self.opts.approach_check) else { return true };
+        let (Some((p, period)), Some(check)) = (self.w.found, self.opts.approach_check) else { return true };
         let c = *self.w.get(0);
         let (verdict, work) = check(&self.s, &c.y, period, self.opts.approach_rtol, self.opts.approach_tol);
         self.w.extra += work;
@@ -57,7 +117,12 @@ impl SteadyObserver {
                 }
                 None
             }
-            ApproachVerdict::Unstable { largest, period } => {
+            ApproachVerdict::Unstable { largest, period, a1 } => {
+                if let Some(im) = Saddle::visit(&mut self.saddle, period, a1, largest, p) {
+                    self.w.reject_approach(None);
+                    (self.w.irregular, self.w.intermittent) = (true, Some(im));
+                    return true;
+                }
                 let grow = if largest > 1.0 { (LEAVE_GROWTH.ln() / largest.ln()).ceil() } else { 1000.0 };
                 Some(c.t + grow.clamp(4.0, 1000.0) * period)
             }
@@ -81,6 +146,9 @@ impl Observer<6, ContactMode> for SteadyObserver {
             self.w.peak_since = st.y1[idx::Z].abs();
             self.w.peaks_since = st.y1.abs();
             self.w.push(Crossing { t, y, peaks });
+            if let Some(sd) = self.saddle.as_mut() {
+                sd.watch(self.w.residual(sd.p));
+            }
             if self.w.approach && !self.check_approach() {
                 return Control::Continue;
             }

@@ -55,6 +55,8 @@ pub(crate) struct SectionWatcher {
     envelope: [Envelope; MAX_MULTIPLICITY + 1],
     /// The newest `found` is a slow approach's, to be checked by shooting.
     pub(super) approach: bool,
+    /// Irregular: stopped as intermittent motion (set by the observer).
+    pub(super) intermittent: Option<super::Intermittent>,
     /// A slow approach's check converged on a stable orbit: the summary of a run on it.
     pub(super) measured: Option<Box<super::Summary>>,
     /// The checks' work.
@@ -350,6 +352,7 @@ impl SectionWatcher {
             envelope: [Envelope::default(); MAX_MULTIPLICITY + 1],
             approach: false,
             measured: None,
+            intermittent: None,
             extra: Stats::default(),
         }
     }
@@ -380,7 +383,7 @@ impl SectionWatcher {
     /// The relative repetition residual of the newest section state against the one `d` crossings
     /// back: the largest compared component's difference in units of what [`Self::repeats`]
     /// allows per unit of `rel`.
-    fn residual(&self, d: usize) -> f64 {
+    pub(super) fn residual(&self, d: usize) -> f64 {
         let amp = self.span_amp(d);
         let (a, b) = (self.get(0), self.get(d));
         self.comps.iter().map(|&c| (a.y[c] - b.y[c]).abs() / amp[c].max(1e-6 * self.sizes[c])).fold(0.0, f64::max)
