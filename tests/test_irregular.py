@@ -348,3 +348,5 @@ def test_intermittent_motion_stops_before_t_max_with_its_unstable_cycle():
     assert hit, reason
     assert float(hit[1]) < 30.0 and abs(float(hit[2]) / orb["period"][0] - 1) < 1e-4, reason
     assert abs(float(hit[3]) - orb["moduli"][0, 0]) < 2e-3, reason
+    assert abs(float(ds.irregular_intermittent_period.values.ravel()[0]) / orb["period"][0] - 1) < 1e-4
+    assert abs(float(ds.irregular_intermittent_multiplier.values.ravel()[0]) - orb["moduli"][0, 0]) < 2e-3

@@ -184,6 +184,10 @@ POINT_VARIABLES: dict[str, tuple[str, str | None, str]] = {
     "cycle_verified": ("i1", None, "whether shooting converged the cycle the point's transient ended on to a stable "
                                    "periodic orbit, on which the cycle variables were then measured"),
     **_irregular.IRREGULAR_VARIABLES,
+    "irregular_intermittent_period": ("f8", "s", "intermittent irregular motion: period of the unstable cycle its "
+                                                 "laminar phases return to (NaN elsewhere)"),
+    "irregular_intermittent_multiplier": ("f8", "1", "intermittent irregular motion: modulus of that cycle's "
+                                                     "largest Floquet multiplier (> 1)"),
 }
 #: Variables of the cycle a point's own run ended on (a transient that ended periodic, or the
 #: describing function's cycle where sliding is unstable).

@@ -447,6 +447,11 @@ def transient(p: Points, *, start_on_mode: bool) -> None:
     irr = regime == REGIME["irregular"]
     if irr.any():
         irregular(p, sel[irr], np.asarray(summary["y_end"])[irr], t_max)
+    # Intermittent motion's unstable cycle, where the point stayed irregular after its measurement.
+    still = out["regime"][sel] == REGIME["irregular"]
+    for key in ("period", "multiplier"):
+        got = np.asarray(summary.get(f"intermittent_{key}", np.full(sel.size, np.nan)), dtype=np.float64)
+        out[f"irregular_intermittent_{key}"][sel] = np.where(still, got, np.nan)
 
 
 def _still_decaying(p: Points, pts: np.ndarray, amp: np.ndarray, candidate: np.ndarray, when: list[str]) -> np.ndarray:
