@@ -329,6 +329,8 @@ def test_intermittent_motion_stops_before_t_max_with_its_unstable_cycle():
                        approach_periods=10, approach_rtol=1e-9, approach_tol=1e-8)  # fmt: skip
     assert np.all(r["outcome"] == _codes.OUTCOME_NAMES.index("irregular")) and np.all(r["t_end"] < 30.0), r["t_end"]
     assert np.all(r["intermittent_visits"] == 3)
+    # Unstable by a flip: type III.
+    assert np.all(r["intermittent_instability"] == ts.INSTABILITY_NAMES.index("flip"))
     # The cycle against independent shootings at rtol 1e-11 (the run's checks: 1e-9) from where
     # each run stopped (its third laminar phase): converged, unstable, the same period and multiplier.
     orb = _core.periodic_orbits(m.values(), m.contact, m.friction_law, names, vals4, y0=r["y_end"],
@@ -337,16 +339,20 @@ def test_intermittent_motion_stops_before_t_max_with_its_unstable_cycle():
     np.testing.assert_allclose(r["intermittent_period"], orb["period"], rtol=1e-6)
     np.testing.assert_allclose(r["intermittent_multiplier"], orb["moduli"][:, 0], atol=1e-4)
     assert np.all(orb["moduli"][:, 0] > 1.02)
+    assert np.all(orb["instability"] == ts.INSTABILITY_NAMES.index("flip"))
     # The sweep says so, with the same cycle.
     ds = ts.sweep(m, normal_load=[load], arm_length=[arm], sliding_speed=[0.2], census=False, t_max=30.0,
                   progress=False)  # fmt: skip
     assert int(ds.regime.values.ravel()[0]) == REGIME["irregular"]
     assert int(ds.status.values.ravel()[0]) == ts.STATUS["success"]
     reason = str(ds.reason.values.ravel()[0])
-    hit = re.search(r"by t = ([\d.]+) s: intermittent, back near one unstable cycle \(period ([\d.e-]+) s, "
-                    r"largest Floquet multiplier modulus ([\d.]+)\) 3 times", reason)  # fmt: skip
+    hit = re.search(r"by t = ([\d.]+) s: intermittent, back near one unstable cycle \(period ([\d.e-]+) s, largest "
+                    r"Floquet multiplier modulus ([\d.]+), real and below -1: a flip, Pomeau-Manneville type III\) 3 "
+                    r"times", reason)  # fmt: skip
     assert hit, reason
     assert float(hit[1]) < 30.0 and abs(float(hit[2]) / orb["period"][0] - 1) < 1e-4, reason
     assert abs(float(hit[3]) - orb["moduli"][0, 0]) < 2e-3, reason
     assert abs(float(ds.irregular_intermittent_period.values.ravel()[0]) / orb["period"][0] - 1) < 1e-4
     assert abs(float(ds.irregular_intermittent_multiplier.values.ravel()[0]) - orb["moduli"][0, 0]) < 2e-3
+    kind = ds.irregular_intermittent_instability
+    assert int(kind.values.ravel()[0]) == 2 and kind.attrs["flag_meanings"].split()[2] == "flip"

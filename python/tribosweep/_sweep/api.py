@@ -268,7 +268,8 @@ def sweep(
         ``regime``, ``status``, ``reason``, ``decided_by``, ``bistable``, linear stability,
         cycle summary, irregular motion (``irregular_z_min``, ``irregular_z_max``,
         ``irregular_omega``, ``irregular_ftle``, ``irregular_ftle_se``, and for intermittent motion
-        ``irregular_intermittent_period``, ``irregular_intermittent_multiplier``; NaN elsewhere), wear and cost
+        ``irregular_intermittent_period``, ``irregular_intermittent_multiplier``,
+        ``irregular_intermittent_instability``; NaN or 0 elsewhere), wear and cost
         variables (see ``tribosweep._sweep.schema.POINT_VARIABLES``).
         With ``output`` the Dataset is opened lazily from the file.
 

@@ -188,6 +188,8 @@ POINT_VARIABLES: dict[str, tuple[str, str | None, str]] = {
                                                  "laminar phases return to (NaN elsewhere)"),
     "irregular_intermittent_multiplier": ("f8", "1", "intermittent irregular motion: modulus of that cycle's "
                                                      "largest Floquet multiplier (> 1)"),
+    "irregular_intermittent_instability": ("u1", None, "intermittent irregular motion: how that cycle is unstable "
+                                                       "(fold, flip, torus: Pomeau-Manneville types I, III, II)"),
 }
 #: Variables of the cycle a point's own run ended on (a transient that ended periodic, or the
 #: describing function's cycle where sliding is unstable).
@@ -216,6 +218,7 @@ FLAG_MEANINGS: dict[str, tuple[tuple[int, ...], tuple[str, ...]]] = {
     "orbit_stable": ((-1, 0, 1), ("not_computed", "unstable", "stable")),
     "cycle_verified": ((-1, 0, 1), ("no_transient_cycle", "not_verified", "verified")),
     "largest_cycle_verified": _census.VERIFIED_FLAGS,
+    "irregular_intermittent_instability": ((0, 1, 2, 3), ("not_intermittent", "fold", "flip", "torus")),
 }
 
 

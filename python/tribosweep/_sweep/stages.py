@@ -259,6 +259,13 @@ def shooting(p: Points, roots: Roots, *, every_root: bool, escalate: bool) -> No
                 reason[i] = "the disturbance reaches the saddle cycle: integrated"
 
 
+#: Intermittent motion's cycle by how it is unstable (the core's instability codes): the
+#: mechanism of Pomeau-Manneville's types.
+_INTERMITTENCY: dict[int, str] = {1: ", real and above 1: a fold, Pomeau-Manneville type I",
+                                  2: ", real and below -1: a flip, Pomeau-Manneville type III",
+                                  3: ", a complex pair: a torus, Pomeau-Manneville type II"}  # fmt: skip
+
+
 def classify(summary: dict, stable: np.ndarray, t_max: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Regime, status, reason and deciding stage of transient runs from their steady-state summaries.
 
@@ -295,8 +302,9 @@ def classify(summary: dict, stable: np.ndarray, t_max: float) -> tuple[np.ndarra
             when = (f"and stationary over three blocks of sections by t = {float(t_end[i]):.3g} s"
                     if name == "irregular" else f"by t_max = {t_max:g} s")  # fmt: skip
             if name == "irregular" and np.isfinite(im_period[i]):
+                kind = _INTERMITTENCY.get(int(summary.get("intermittent_instability", [0] * n)[i]), "")
                 when = (f"by t = {float(t_end[i]):.3g} s: intermittent, back near one unstable cycle (period "
-                        f"{float(im_period[i]):.5g} s, largest Floquet multiplier modulus {float(im_mult[i]):.4g}) "
+                        f"{float(im_period[i]):.5g} s, largest Floquet multiplier modulus {float(im_mult[i]):.4g}{kind}) "
                         f"{int(summary['intermittent_visits'][i])} times, leaving it in bursts between")  # fmt: skip
             reason[i] = f"bounded motion, neither periodic nor decayed {when}" + (
                 "" if not stable[i] else " (sliding is linearly stable: this motion coexists with it, or is a slow "
@@ -452,6 +460,8 @@ def transient(p: Points, *, start_on_mode: bool) -> None:
     for key in ("period", "multiplier"):
         got = np.asarray(summary.get(f"intermittent_{key}", np.full(sel.size, np.nan)), dtype=np.float64)
         out[f"irregular_intermittent_{key}"][sel] = np.where(still, got, np.nan)
+    kind = np.asarray(summary.get("intermittent_instability", np.zeros(sel.size)), dtype=np.uint8)
+    out["irregular_intermittent_instability"][sel] = np.where(still, kind, 0)
 
 
 def _still_decaying(p: Points, pts: np.ndarray, amp: np.ndarray, candidate: np.ndarray, when: list[str]) -> np.ndarray:

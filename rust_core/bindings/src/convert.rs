@@ -330,6 +330,9 @@ pub(crate) fn summaries_into(d: &Bound<'_, PyDict>, out: &[(Summary, String)]) -
     d.set_item("intermittent_multiplier", f(&|s| s.intermittent.map_or(f64::NAN, |m| m.largest)))?;
     let visits = out.iter().map(|o| o.0.intermittent.map_or(0, |m| m.visits));
     d.set_item("intermittent_visits", Array1::from_iter(visits).into_pyarray(py))?;
+    // How that cycle is unstable: `instability_names` codes 1-3 (fold, flip, torus); 0 otherwise.
+    let kinds = out.iter().map(|o| o.0.intermittent.map_or(0u8, |m| m.kind));
+    d.set_item("intermittent_instability", Array1::from_iter(kinds).into_pyarray(py))?;
     // Their cells (zeros and NaN extents where there are none): input for `known_cells`. Without
     // any (no stationarity blocks, no irregular run) the cell array has no columns: 1.7 KB per
     // trajectory of zeros would outweigh every other column together.

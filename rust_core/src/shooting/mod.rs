@@ -297,7 +297,12 @@ pub fn approach_check(s: &Slider, y: &State, period: f64, rtol: f64, tol: f64) -
     let same = orb.status == Status::Success && (orb.period / period - 1.0).abs() <= 1e-2;
     let verdict = match (same, orb.stable) {
         (true, true) => ApproachVerdict::Stable { state0: orb.state0, period: orb.period },
-        (true, false) => ApproachVerdict::Unstable { largest: orb.moduli[0], period: orb.period, a1: orb.harmonics.a1 },
+        (true, false) => ApproachVerdict::Unstable {
+            largest: orb.moduli[0],
+            period: orb.period,
+            a1: orb.harmonics.a1,
+            kind: orb.instability.code(),
+        },
         _ => ApproachVerdict::Nothing,
     };
     (verdict, orb.stats)

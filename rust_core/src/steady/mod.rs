@@ -397,10 +397,11 @@ pub struct SteadyOptions {
 pub enum ApproachVerdict {
     /// A stable orbit of the stop's period (to 1 %): its state on the section and its period.
     Stable { state0: State, period: f64 },
-    /// An unstable orbit of that period: its largest multiplier's modulus, its period and the
+    /// An unstable orbit of that period: its largest multiplier's modulus, its period, the
     /// amplitude of z's first harmonic on it (with the period, the orbit's identity whatever
-    /// section point the check started from).
-    Unstable { largest: f64, period: f64, a1: f64 },
+    /// section point the check started from) and how it is unstable (the code of
+    /// `shooting::Instability`: 1 fold, 2 flip, 3 torus).
+    Unstable { largest: f64, period: f64, a1: f64, kind: u8 },
     /// No orbit of that period (Newton failed, or converged on another period).
     Nothing,
 }
@@ -418,6 +419,10 @@ pub struct Intermittent {
     pub largest: f64,
     /// The laminar phases found near it.
     pub visits: u32,
+    /// How the cycle is unstable (`shooting::Instability`'s code: 1 fold, a real multiplier above
+    /// 1; 2 flip, below -1; 3 torus, a complex pair), the mechanism of Pomeau-Manneville's types
+    /// I, III and II.
+    pub kind: u8,
 }
 
 /// Laminar phases near one unstable cycle after which a run stops as intermittent ([`Intermittent`]).

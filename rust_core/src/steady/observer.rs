@@ -26,6 +26,8 @@ pub(super) struct Saddle {
     pub(super) period: f64,
     pub(super) a1: f64,
     pub(super) largest: f64,
+    /// How it is unstable ([`Intermittent::kind`]).
+    pub(super) kind: u8,
     /// Its sections per period: the repetition residual after these tells a departure.
     pub(super) p: usize,
     pub(super) visits: u32,
@@ -34,7 +36,7 @@ pub(super) struct Saddle {
 }
 
 impl Saddle {
-    /// A check found the unstable cycle (`period`, `a1`, `largest`, `p` sections per period):
+    /// A check found the unstable cycle (`period`, `a1`, `largest`, `kind`, `p` sections per period):
     /// `saddle` updated, and the intermittent motion where this is its [`INTERMITTENT_VISITS`]th
     /// visit. The same cycle (period and A1 to [`SAME_SADDLE`]) counts a visit only where the run
     /// left it since the one before; another cycle starts the count again.
@@ -43,6 +45,7 @@ impl Saddle {
         period: f64,
         a1: f64,
         largest: f64,
+        kind: u8,
         p: usize,
     ) -> Option<Intermittent> {
         let same = |s: &Saddle| {
@@ -55,13 +58,14 @@ impl Saddle {
                     (s.visits, s.departed) = (s.visits + 1, false);
                 }
             }
-            _ => *saddle = Some(Saddle { period, a1, largest, p, visits: 1, departed: false }),
+            _ => *saddle = Some(Saddle { period, a1, largest, kind, p, visits: 1, departed: false }),
         }
         let s = saddle.as_ref().expect("set above");
         (s.visits >= INTERMITTENT_VISITS).then_some(Intermittent {
             period: s.period,
             largest: s.largest,
             visits: s.visits,
+            kind: s.kind,
         })
     }
 
@@ -117,8 +121,8 @@ impl SteadyObserver {
                 }
                 None
             }
-            ApproachVerdict::Unstable { largest, period, a1 } => {
-                if let Some(im) = Saddle::visit(&mut self.saddle, period, a1, largest, p) {
+            ApproachVerdict::Unstable { largest, period, a1, kind } => {
+                if let Some(im) = Saddle::visit(&mut self.saddle, period, a1, largest, kind, p) {
                     self.w.reject_approach(None);
                     (self.w.irregular, self.w.intermittent) = (true, Some(im));
                     return true;
