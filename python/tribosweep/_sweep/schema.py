@@ -187,7 +187,8 @@ POINT_VARIABLES: dict[str, tuple[str, str | None, str]] = {
     "irregular_intermittent_period": ("f8", "s", "intermittent irregular motion: period of the unstable cycle its "
                                                  "laminar phases return to (NaN elsewhere)"),
     "irregular_intermittent_multiplier": ("f8", "1", "intermittent irregular motion: modulus of that cycle's "
-                                                     "largest Floquet multiplier (> 1)"),
+                                                     "largest non-trivial Floquet multiplier (the cycle is not "
+                                                     "stable: above 1, or within the shooting's tolerance of it)"),
     "irregular_intermittent_instability": ("u1", None, "intermittent irregular motion: how that cycle is unstable "
                                                        "(fold, flip, torus: Pomeau-Manneville types I, III, II)"),
 }

@@ -261,8 +261,8 @@ def shooting(p: Points, roots: Roots, *, every_root: bool, escalate: bool) -> No
 
 #: Intermittent motion's cycle by how it is unstable (the core's instability codes): the
 #: mechanism of Pomeau-Manneville's types.
-_INTERMITTENCY: dict[int, str] = {1: ", real and above 1: a fold, Pomeau-Manneville type I",
-                                  2: ", real and below -1: a flip, Pomeau-Manneville type III",
+_INTERMITTENCY: dict[int, str] = {1: ", real and positive: a fold, Pomeau-Manneville type I",
+                                  2: ", real and negative: a flip, Pomeau-Manneville type III",
                                   3: ", a complex pair: a torus, Pomeau-Manneville type II"}  # fmt: skip
 
 
@@ -304,7 +304,7 @@ def classify(summary: dict, stable: np.ndarray, t_max: float) -> tuple[np.ndarra
             if name == "irregular" and np.isfinite(im_period[i]):
                 kind = _INTERMITTENCY.get(int(summary.get("intermittent_instability", [0] * n)[i]), "")
                 when = (f"by t = {float(t_end[i]):.3g} s: intermittent, back near one unstable cycle (period "
-                        f"{float(im_period[i]):.5g} s, largest Floquet multiplier modulus {float(im_mult[i]):.4g}{kind}) "
+                        f"{float(im_period[i]):.5g} s, largest non-trivial Floquet multiplier modulus {float(im_mult[i]):.4g}{kind}) "
                         f"{int(summary['intermittent_visits'][i])} times, leaving it in bursts between")  # fmt: skip
             reason[i] = f"bounded motion, neither periodic nor decayed {when}" + (
                 "" if not stable[i] else " (sliding is linearly stable: this motion coexists with it, or is a slow "

@@ -298,7 +298,8 @@ pub fn approach_check(s: &Slider, y: &State, period: f64, rtol: f64, tol: f64) -
     let verdict = match (same, orb.stable) {
         (true, true) => ApproachVerdict::Stable { state0: orb.state0, period: orb.period },
         (true, false) => ApproachVerdict::Unstable {
-            largest: orb.moduli[0],
+            // The largest non-trivial multiplier (the trivial one, about 1, may come first).
+            largest: orb.moduli[(0..6).find(|&k| k != orb.trivial).unwrap_or(0)],
             period: orb.period,
             a1: orb.harmonics.a1,
             kind: orb.instability.code(),

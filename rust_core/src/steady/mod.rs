@@ -397,7 +397,7 @@ pub struct SteadyOptions {
 pub enum ApproachVerdict {
     /// A stable orbit of the stop's period (to 1 %): its state on the section and its period.
     Stable { state0: State, period: f64 },
-    /// An unstable orbit of that period: its largest multiplier's modulus, its period, the
+    /// An unstable orbit of that period: its largest non-trivial multiplier's modulus, its period, the
     /// amplitude of z's first harmonic on it (with the period, the orbit's identity whatever
     /// section point the check started from) and how it is unstable (the code of
     /// `shooting::Instability`: 1 fold, 2 flip, 3 torus).
@@ -415,7 +415,8 @@ pub enum ApproachVerdict {
 pub struct Intermittent {
     /// Period of the unstable cycle [s].
     pub period: f64,
-    /// Modulus of its largest Floquet multiplier (> 1).
+    /// Modulus of its largest non-trivial Floquet multiplier (above 1, or within the shooting's
+    /// stability tolerance of it: the cycle is not stable).
     pub largest: f64,
     /// The laminar phases found near it.
     pub visits: u32,
