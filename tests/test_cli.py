@@ -332,6 +332,20 @@ def test_info_counts_bistable_points_and_multi_period_cycles(tmp_path, capsys):
     assert "transient cycles checked by shooting: 1 verified (a stable orbit, measured on it), 1 not verified" in out
     assert "census largest cycles checked" not in out  # no census: nothing to say
     assert "bistable:" in out and "not_checked" in out and "coexisting" in out
+    assert "intermittent motion" not in out  # none: nothing to say
+
+
+def test_info_counts_intermittent_points_by_their_cycles_instability(tmp_path, capsys):
+    nc = tmp_path / "i.nc"
+    ds = ts.sweep(normal_load=[10.0, 30.0], arm_length=[0.05, 0.1], strategy="linear", progress=False)
+    ds["irregular_intermittent_instability"][0, 0, 0] = 2
+    ds["irregular_intermittent_instability"][1, 1, 0] = 2
+    ds["irregular_intermittent_instability"][1, 0, 0] = 1
+    ds.to_netcdf(nc)
+    code, out, _ = run(["info", nc], capsys)
+    assert code == 0
+    assert "intermittent motion (back near one unstable cycle between bursts): 3 points; the cycle's instability: " \
+        "fold 1, flip 2" in out
 
 
 def test_every_sweep_argument_is_a_cli_flag_and_a_config_key():

@@ -412,6 +412,14 @@ def describe(ds, path: str | None = None) -> str:
                          f"{int((f > 5 * se).sum())}, about 0 (within 3 SE: quasi-periodic, or slow) "
                          f"{int((np.abs(f) <= 3 * se).sum())}; dominant frequency {np.nanmin(w):.4g} .. "
                          f"{np.nanmax(w):.4g} rad/s")  # fmt: skip
+    if "irregular_intermittent_instability" in ds:
+        kind = np.asarray(ds.irregular_intermittent_instability.values).ravel()
+        if (kind > 0).any():
+            names = ds.irregular_intermittent_instability.attrs.get("flag_meanings", "").split()
+            counts = ", ".join(f"{names[k] if k < len(names) else k} {int((kind == k).sum())}"
+                               for k in np.unique(kind[kind > 0]))  # fmt: skip
+            lines.append(f"intermittent motion (back near one unstable cycle between bursts): {int((kind > 0).sum())} "
+                         f"points; the cycle's instability: {counts}")  # fmt: skip
     if "basin_fraction" in ds and "census_samples" in ds:
         k = np.asarray(ds.census_samples.values).ravel()
         if (k > 0).any():
