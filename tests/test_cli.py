@@ -318,16 +318,21 @@ def test_commands_registry_is_extensible():
         del cli.COMMANDS["hello"]
 
 
-def test_info_counts_bistable_points_and_multi_period_cycles(tmp_path, capsys):
-    nc = tmp_path / "m.nc"
+def _info_of_edited(tmp_path, capsys, edits: dict) -> str:
+    """`tribosweep info` of a small linear sweep with ``edits`` ({(variable, index): value}) written in."""
+    nc = tmp_path / "edited.nc"
     ds = ts.sweep(normal_load=[10.0, 30.0], arm_length=[0.05, 0.1], strategy="linear", progress=False)
-    ds["cycle_period_ratio"][1, 0, 0] = 2.03
-    ds["bistable"][0, 1, 0] = 1
-    ds["cycle_verified"][1, 0, 0] = 1
-    ds["cycle_verified"][1, 1, 0] = 0
+    for (var, idx), value in edits.items():
+        ds[var][idx] = value
     ds.to_netcdf(nc)
     code, out, _ = run(["info", nc], capsys)
     assert code == 0
+    return out
+
+
+def test_info_counts_bistable_points_and_multi_period_cycles(tmp_path, capsys):
+    out = _info_of_edited(tmp_path, capsys, {("cycle_period_ratio", (1, 0, 0)): 2.03, ("bistable", (0, 1, 0)): 1,
+                                             ("cycle_verified", (1, 0, 0)): 1, ("cycle_verified", (1, 1, 0)): 0})  # fmt: skip
     assert "cycles of several mode periods (period doubling, subharmonic): 1" in out
     assert "transient cycles checked by shooting: 1 verified (a stable orbit, measured on it), 1 not verified" in out
     assert "census largest cycles checked" not in out  # no census: nothing to say
@@ -336,14 +341,8 @@ def test_info_counts_bistable_points_and_multi_period_cycles(tmp_path, capsys):
 
 
 def test_info_counts_intermittent_points_by_their_cycles_instability(tmp_path, capsys):
-    nc = tmp_path / "i.nc"
-    ds = ts.sweep(normal_load=[10.0, 30.0], arm_length=[0.05, 0.1], strategy="linear", progress=False)
-    ds["irregular_intermittent_instability"][0, 0, 0] = 2
-    ds["irregular_intermittent_instability"][1, 1, 0] = 2
-    ds["irregular_intermittent_instability"][1, 0, 0] = 1
-    ds.to_netcdf(nc)
-    code, out, _ = run(["info", nc], capsys)
-    assert code == 0
+    kind = "irregular_intermittent_instability"
+    out = _info_of_edited(tmp_path, capsys, {(kind, (0, 0, 0)): 2, (kind, (1, 1, 0)): 2, (kind, (1, 0, 0)): 1})
     assert "intermittent motion (back near one unstable cycle between bursts): 3 points; the cycle's instability: " \
         "fold 1, flip 2" in out
 

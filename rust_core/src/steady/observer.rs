@@ -19,18 +19,15 @@ pub(crate) struct SteadyObserver {
     saddle: Option<Saddle>,
 }
 
-/// An unstable cycle that a slow-approach check found: its identity and the run's visits to it
-/// (laminar phases), each counted once the run has left the cycle since the one before.
+/// An unstable cycle that a slow-approach check found, as the run's intermittent motion would
+/// report it (its visits so far), with what tells it and a departure from it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) struct Saddle {
-    pub(super) period: f64,
+    pub(super) cycle: Intermittent,
+    /// z's first harmonic on it: with the period, its identity.
     pub(super) a1: f64,
-    pub(super) largest: f64,
-    /// How it is unstable ([`Intermittent::kind`]).
-    pub(super) kind: u8,
     /// Its sections per period: the repetition residual after these tells a departure.
     pub(super) p: usize,
-    pub(super) visits: u32,
     /// The residual after `p` sections exceeded [`DEPART_TOL`] since the newest visit.
     pub(super) departed: bool,
 }
@@ -49,24 +46,22 @@ impl Saddle {
         p: usize,
     ) -> Option<Intermittent> {
         let same = |s: &Saddle| {
-            (s.period / period - 1.0).abs() <= SAME_SADDLE
+            (s.cycle.period / period - 1.0).abs() <= SAME_SADDLE
                 && (s.a1 - a1).abs() <= SAME_SADDLE * s.a1.abs().max(a1.abs())
         };
         match saddle {
             Some(s) if same(s) => {
                 if s.departed {
-                    (s.visits, s.departed) = (s.visits + 1, false);
+                    (s.cycle.visits, s.departed) = (s.cycle.visits + 1, false);
                 }
             }
-            _ => *saddle = Some(Saddle { period, a1, largest, kind, p, visits: 1, departed: false }),
+            _ => {
+                let cycle = Intermittent { period, largest, visits: 1, kind };
+                *saddle = Some(Saddle { cycle, a1, p, departed: false });
+            }
         }
-        let s = saddle.as_ref().expect("set above");
-        (s.visits >= INTERMITTENT_VISITS).then_some(Intermittent {
-            period: s.period,
-            largest: s.largest,
-            visits: s.visits,
-            kind: s.kind,
-        })
+        let c = saddle.as_ref().expect("set above").cycle;
+        (c.visits >= INTERMITTENT_VISITS).then_some(c)
     }
 
     /// A section's repetition residual after the cycle's `p` sections: marks a departure.

@@ -402,20 +402,20 @@ fn a_run_is_intermittent_once_it_came_back_to_one_unstable_cycle_three_times_aft
     assert_eq!(Saddle::visit(&mut sd, period, a1, mu, 2, 6), None);
     sd.as_mut().unwrap().watch(0.5 * DEPART_TOL);
     assert_eq!(Saddle::visit(&mut sd, period * (1.0 + 1e-6), a1, mu, 2, 6), None);
-    assert_eq!(sd.unwrap().visits, 1);
+    assert_eq!(sd.unwrap().cycle.visits, 1);
     // A burst beyond DEPART_TOL, then the same cycle (period and A1 within SAME_SADDLE): the second.
     sd.as_mut().unwrap().watch(2.0 * DEPART_TOL);
     assert_eq!(Saddle::visit(&mut sd, period, a1 * (1.0 - 0.5 * SAME_SADDLE), mu, 2, 6), None);
-    assert_eq!(sd.unwrap().visits, 2);
+    assert_eq!(sd.unwrap().cycle.visits, 2);
     // Another cycle (A1 off by twice SAME_SADDLE) starts the count again, and so does a period off by as much.
     let mut other = sd;
     other.as_mut().unwrap().watch(1.0);
     assert_eq!(Saddle::visit(&mut other, period, a1 * (1.0 + 2.0 * SAME_SADDLE), mu, 2, 6), None);
-    assert_eq!(other.unwrap().visits, 1);
+    assert_eq!(other.unwrap().cycle.visits, 1);
     let mut other = sd;
     other.as_mut().unwrap().watch(1.0);
     assert_eq!(Saddle::visit(&mut other, period * (1.0 + 2.0 * SAME_SADDLE), a1, mu, 2, 6), None);
-    assert_eq!(other.unwrap().visits, 1);
+    assert_eq!(other.unwrap().cycle.visits, 1);
     // Left again and back: the third visit is intermittent motion, reported with the cycle.
     sd.as_mut().unwrap().watch(2.0 * DEPART_TOL);
     let im = Saddle::visit(&mut sd, period, a1, 1.05, 2, 6).expect("third visit");
