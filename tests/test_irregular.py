@@ -325,12 +325,20 @@ def test_intermittent_motion_stops_before_t_max_with_its_unstable_cycle():
     y0 = np.zeros((4, 6))
     y0[:, 0] = (1e-6, -2e-6, 5e-6, 2e-5)
     vals4 = np.repeat(vals, 4, axis=0)
-    r = _core.ensemble(m.values(), m.contact, m.friction_law, names, vals4, y0, 30.0, "dop853", 1e-8, kind="steady",
-                       approach_periods=10, approach_rtol=1e-9, approach_tol=1e-8)  # fmt: skip
+    # The public ensemble with the sweep's slow-approach checks (approach_periods; at rtol 1e-8
+    # they shoot at 1e-9 to Newton tolerance 1e-8).
+    ens = ts.ensemble(m, 30.0, dict(zip(names, vals4.T)), y0=y0, steady=True, approach_periods=10)
+    r = {k: ens[k].values for k in ("outcome", "t_end", "intermittent_visits", "intermittent_instability",
+                                    "intermittent_period", "intermittent_multiplier")}  # fmt: skip
+    r["y_end"] = np.column_stack([ens[f"{v}_end"].values for v in ("z", "z_dot", "x", "x_dot", "phi", "phi_dot")])
     assert np.all(r["outcome"] == _codes.OUTCOME_NAMES.index("irregular")) and np.all(r["t_end"] < 30.0), r["t_end"]
     assert np.all(r["intermittent_visits"] == 3)
     # Unstable by a flip: type III.
     assert np.all(r["intermittent_instability"] == ts.INSTABILITY_NAMES.index("flip"))
+    assert ens.intermittent_instability.attrs["flag_meanings"].split()[2] == "flip"
+    for text, t in zip(ens.reason.values, r["t_end"]):
+        assert text.startswith(f"bounded motion, neither periodic nor decayed by t = {t:.3g} s: intermittent") and (
+            "a flip, Pomeau-Manneville type III) 3 times" in text), text
     # The cycle against independent shootings at rtol 1e-11 (the run's checks: 1e-9) from where
     # each run stopped (its third laminar phase): converged, unstable, the same period and multiplier.
     orb = _core.periodic_orbits(m.values(), m.contact, m.friction_law, names, vals4, y0=r["y_end"],

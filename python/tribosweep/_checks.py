@@ -138,6 +138,14 @@ def block(name: str, value) -> int:
     return int(value)
 
 
+def approach_periods(name: str, value) -> int:
+    """An integer in [0, 10000]: periods per block of the slow-approach test, 0 for off."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not 0 <= value <= 10_000:
+        raise ValueError(f"{name} = {value!r} is out of range: must be an integer in [0, 10000] (periods per "
+                         "block of the slow-approach test; 0: off)")  # fmt: skip
+    return int(value)
+
+
 def switch_law(what: str, friction_law: str) -> None:
     """``what`` (a stick curve, a stop at a stick point) needs the switch friction law, the only one
     with a stick band: a ValueError naming both otherwise."""

@@ -50,7 +50,7 @@ from collections.abc import Callable, Mapping
 import numpy as np
 
 from . import _core
-from ._codes import STATUS, STATUS_NAMES
+from ._codes import OUTCOME_NAMES, STATUS, STATUS_NAMES
 from ._modes import static
 from ._settings import DEFAULTS, Integration, Irregular
 
@@ -112,6 +112,33 @@ def dominant_omega(z: np.ndarray, dt: float) -> np.ndarray:
             shift = 0.5 * (a - c) / den if den < 0 else 0.0
         out[i] = 2.0 * math.pi * (k[i] + shift) / (n * dt)
     return out
+
+
+#: Intermittent motion's cycle by how it is unstable (the core's instability codes): the
+#: mechanism of Pomeau-Manneville's types.
+INTERMITTENCY: dict[int, str] = {1: ", real and positive: a fold, Pomeau-Manneville type I",
+                                 2: ", real and negative: a flip, Pomeau-Manneville type III",
+                                 3: ", a complex pair: a torus, Pomeau-Manneville type II"}  # fmt: skip
+
+
+def stop_reason(summary: Mapping[str, np.ndarray], i: int, t_max: float, block: int | None = None) -> str:
+    """Why run ``i`` of a steady-state summary (the core's ``kind="steady"``) is sustained irregular
+    motion: outcome ``irregular`` (stationary over three blocks of sections, of ``block`` sections
+    each where given, or intermittent: back near one unstable cycle, between bursts, often
+    enough) or ``unsettled`` at ``t_max``."""
+    period = float(summary["intermittent_period"][i]) if "intermittent_period" in summary else math.nan
+    if OUTCOME_NAMES[int(summary["outcome"][i])] != "irregular":
+        return f"bounded motion, neither periodic nor decayed by t_max = {t_max:g} s"
+    t_end = float(summary["t_end"][i])
+    if math.isfinite(period):
+        kind = INTERMITTENCY.get(int(summary["intermittent_instability"][i]), "")
+        when = (f"by t = {t_end:.3g} s: intermittent, back near one unstable cycle (period {period:.5g} s, largest "
+                f"non-trivial Floquet multiplier modulus {float(summary['intermittent_multiplier'][i]):.4g}{kind}) "
+                f"{int(summary['intermittent_visits'][i])} times, leaving it in bursts between")  # fmt: skip
+    else:
+        size = " of" if block is None else f" of {block}"
+        when = f"and stationary over three blocks{size} sections by t = {t_end:.3g} s"
+    return f"bounded motion, neither periodic nor decayed {when}"
 
 
 #: Standard errors from 0 at which a point's exponent is decided (:func:`benettin`'s ``min_segments``).

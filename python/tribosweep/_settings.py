@@ -108,11 +108,7 @@ class Steady:
     def __post_init__(self):
         _set(self, "t_max", _checks.positive("t_max", self.t_max))
         _set(self, "periodic_tol", _checks.positive("periodic_tol", self.periodic_tol))
-        v = self.approach_periods
-        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or not 0 <= v <= 10_000:
-            raise ValueError(f"approach_periods = {v!r} is out of range: must be an integer in [0, 10000] (periods per "
-                             "block of the slow-approach test; 0: off)")
-        _set(self, "approach_periods", int(v))
+        _set(self, "approach_periods", _checks.approach_periods("approach_periods", self.approach_periods))
         if self.decay_amplitude is not None:
             _set(self, "decay_amplitude", _checks.positive("decay_amplitude", self.decay_amplitude))
 

@@ -7,7 +7,7 @@ from collections.abc import Sequence
 import numpy as np
 import xarray as xr
 
-from . import _checks, _core, _cycles, _settings
+from . import _checks, _core, _cycles, _irregular, _settings
 from ._codes import OUTCOME_NAMES, STATUS_NAMES, flag_attrs
 from ._model import PARAM_LONG_NAMES, PARAM_NAMES, PARAM_UNITS, SliderModel
 from ._settings import DEFAULTS
@@ -58,7 +58,8 @@ def _check_common(model, t_end, method, rtol, atol, t_eval):
 def _status_vars(out: dict, dims: tuple[str, ...]) -> dict:
     v = {
         "status": (dims, np.asarray(out["status"], dtype=np.uint8), flag_attrs(STATUS_NAMES, "status of the computation")),
-        "reason": (dims, np.asarray(out["reason"], dtype=str), {"long_name": "reason for a non-success status"}),
+        "reason": (dims, np.asarray(out["reason"], dtype=str), {"long_name": (
+            "reason for a non-success status; with steady=True also how an irregular or slow-approach run ended")}),
     }
     for k, text in _STAT_VARS.items():
         v[k] = (dims, np.asarray(out[k], dtype=np.int64), {"long_name": text, "units": "1"})
@@ -177,6 +178,8 @@ def ensemble(
     max_steps: int | None = None,
     max_events: int | None = None,
     check_cycles: bool = False,
+    irregular_block: int = 0,
+    approach_periods: int = 0,
 ) -> xr.Dataset:
     """Integrate many parameter sets of ``model`` in parallel (GIL released, Rust threads).
 
@@ -226,6 +229,24 @@ def ensemble(
         unsettled run whose closest repetition is within ``_cycles.NEAREST_TOL`` (1e-2) is shot
         from too: a stable orbit of that period becomes its outcome, ``periodic``, with a reason
         that says so (a slow approach).
+    irregular_block : int
+        With ``steady=True``: sections per block of the stationarity test that ends sustained
+        irregular motion early (outcome ``irregular``, with a reason): three blocks in a row whose
+        mean repetition residual agrees to 25 % and is at least 1e-3 of the characteristic sizes,
+        and each component's largest excursion to 5 % (or drifts by less). A sweep's transients use
+        128 (``DEFAULTS.irregular.transient_block``). 0 (default): such a run goes on to ``t_end``
+        (``unsettled``). Transient chaos that settles after three stationary blocks is called
+        irregular: the census, many disturbances per point, is what tells such points.
+    approach_periods : int
+        With ``steady=True``: periods per block of the slow-approach test (a sweep's transients: 10,
+        ``DEFAULTS.steady.approach_periods``; 0, the default: off). Once the repetition residual's
+        envelope has shrunk three blocks in a row to at most 1e-3, the run shoots from its section
+        inside the run (at ten times ``rtol``): a stable orbit of that period ends the run on it,
+        measured there (``approach`` true); near an unstable one the run goes on, and its third
+        return to the same unstable cycle after bursts ends it as intermittent (outcome
+        ``irregular``; ``intermittent_period``, ``intermittent_multiplier``,
+        ``intermittent_visits``, ``intermittent_instability``: Pomeau-Manneville's type I for a
+        fold, III for a flip, II for a torus).
 
     Returns
     -------
@@ -256,22 +277,38 @@ def ensemble(
         raise ValueError("t_eval cannot be combined with steady=True: a steady run returns a summary")
     if check_cycles and not steady:
         raise ValueError("check_cycles = True needs steady=True: only a run to steady state stops on a cycle")
+    irregular_block = _checks.block("irregular_block", irregular_block)
+    approach_periods = _checks.approach_periods("approach_periods", approach_periods)
+    for name, v in (("irregular_block", irregular_block), ("approach_periods", approach_periods)):
+        if v and not steady:
+            raise ValueError(f"{name} = {v} needs steady=True: only a run to steady state has these tests")
+    shoot_rtol = _cycles.check_rtol(rtol, DEFAULTS.shooting.rtol)
 
-    def run(idx, starts, restart=None):
+    def run(idx, starts, restart=None, approach=0):
+        # Slow-approach checks in the first runs only, as a sweep's transients: a restart goes on
+        # from an unstable cycle's neighbourhood to where the run really goes.
+        tests = dict(irregular_block=irregular_block, approach_periods=approach, approach_rtol=shoot_rtol,
+                     approach_tol=DEFAULTS.shooting.tol) if steady else {}  # fmt: skip
         return _core.ensemble(
             model.values(), model.contact, model.friction_law, names, np.ascontiguousarray(values[idx]),
             np.ascontiguousarray(np.atleast_2d(starts)), t_end, method, rtol, atol=atol, t_eval=t_eval,
             threads=threads, kind=kind, periodic_tol=periodic_tol, decay_amplitude=decay_amplitude, n_fourier=512,
-            max_steps=max_steps, max_events=max_events, restart=restart,
+            max_steps=max_steps, max_events=max_events, restart=restart, **tests,
         )  # fmt: skip
 
-    out = run(np.arange(n), y0)
+    out = run(np.arange(n), y0, approach=approach_periods)
     verified = None
     if check_cycles:
-        shoot_rtol = _cycles.check_rtol(rtol, DEFAULTS.shooting.rtol)
         out, verified = _cycles.check(out, lambda idx, y, p, z1, size: _cycles.shoot(
             model.values(), model.contact, model.friction_law, names, values[idx], y, p, z1, size, rtol=shoot_rtol,
             tol=DEFAULTS.shooting.tol, threads=threads), run, t_end)  # fmt: skip
+    if steady:
+        # A stationary or intermittent stop is an answer, as in a sweep: say which, and when.
+        irregular = np.flatnonzero(np.asarray(out["outcome"]) == OUTCOME_NAMES.index("irregular"))
+        if irregular.size:
+            out["reason"] = np.asarray(out["reason"], dtype=object)
+            for i in irregular:
+                out["reason"][i] = _irregular.stop_reason(out, int(i), t_end, irregular_block)
     dims = ("trajectory",)
     coords = {"trajectory": ("trajectory", np.arange(n))}
     for i, k in enumerate(names):
@@ -312,6 +349,23 @@ def ensemble(
             "units": "1", "long_name": "unsettled: section crossings of that closest repetition (0: none)"})
         data["nearest_period"] = (dims, out["nearest_period"], {
             "units": "s", "long_name": "unsettled: time over the crossings of that closest repetition"})
+        # The stationarity and slow-approach tests' findings (approach_periods, irregular_block).
+        data["approach"] = (dims, np.asarray(out["approach"], dtype=bool), {"long_name": (
+            "periodic: the run stopped on a slow approach that shooting inside the run converged to a stable orbit, "
+            "and its quantities were measured on the orbit")})  # fmt: skip
+        data["irregular_residual"] = (dims, out["irregular_residual"], {"units": "1", "long_name": (
+            "irregular (stationary): mean repetition residual of the section state over the three stationary "
+            "blocks, in characteristic sizes")})  # fmt: skip
+        data["intermittent_period"] = (dims, out["intermittent_period"], {"units": "s", "long_name": (
+            "intermittent: period of the unstable cycle the laminar phases returned to (NaN elsewhere)")})
+        data["intermittent_multiplier"] = (dims, out["intermittent_multiplier"], {"units": "1", "long_name": (
+            "intermittent: modulus of that cycle's largest non-trivial Floquet multiplier")})
+        data["intermittent_visits"] = (dims, out["intermittent_visits"], {"units": "1", "long_name": (
+            "intermittent: returns to that cycle counted, each after a burst (0 elsewhere)")})
+        data["intermittent_instability"] = (dims, np.asarray(out["intermittent_instability"], dtype=np.uint8),
+                                            flag_attrs(("not_intermittent", "fold", "flip", "torus"), (
+                                                "intermittent: how that cycle is unstable (fold, flip, torus: "
+                                                "Pomeau-Manneville types I, III, II)")))  # fmt: skip
         if verified is not None:
             data["cycle_verified"] = (dims, np.where(out["outcome"] == _cycles.PERIODIC, verified, -1).astype(np.int8),
                                       flag_attrs(("no_cycle", "not_verified", "verified"), "whether shooting "

@@ -259,13 +259,6 @@ def shooting(p: Points, roots: Roots, *, every_root: bool, escalate: bool) -> No
                 reason[i] = "the disturbance reaches the saddle cycle: integrated"
 
 
-#: Intermittent motion's cycle by how it is unstable (the core's instability codes): the
-#: mechanism of Pomeau-Manneville's types.
-_INTERMITTENCY: dict[int, str] = {1: ", real and positive: a fold, Pomeau-Manneville type I",
-                                  2: ", real and negative: a flip, Pomeau-Manneville type III",
-                                  3: ", a complex pair: a torus, Pomeau-Manneville type II"}  # fmt: skip
-
-
 def classify(summary: dict, stable: np.ndarray, t_max: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Regime, status, reason and deciding stage of transient runs from their steady-state summaries.
 
@@ -281,11 +274,8 @@ def classify(summary: dict, stable: np.ndarray, t_max: float) -> tuple[np.ndarra
     off = np.asarray(summary["fraction_off_disk"])
     vmin = np.asarray(summary["min_slip_velocity"])
     y_end = summary.get("y_end")
-    t_end = summary.get("t_end")
     names = [OUTCOME_NAMES[o] for o in outcome]
     n = len(names)
-    im_period = np.asarray(summary.get("intermittent_period", np.full(n, np.nan)))
-    im_mult = np.asarray(summary.get("intermittent_multiplier", np.full(n, np.nan)))
     regime = np.full(n, REGIME["failed"], dtype=np.uint8)
     decided = np.full(n, DECIDED_BY["transient"], dtype=np.uint8)
     reason = np.asarray(summary["reason"], dtype=str).astype(object)
@@ -299,14 +289,7 @@ def classify(summary: dict, stable: np.ndarray, t_max: float) -> tuple[np.ndarra
         elif (name == "unsettled" and st == "not_converged" and finite) or (name == "irregular" and finite):
             regime[i] = REGIME["irregular"]
             status[i] = STATUS["success"]
-            when = (f"and stationary over three blocks of sections by t = {float(t_end[i]):.3g} s"
-                    if name == "irregular" else f"by t_max = {t_max:g} s")  # fmt: skip
-            if name == "irregular" and np.isfinite(im_period[i]):
-                kind = _INTERMITTENCY.get(int(summary.get("intermittent_instability", [0] * n)[i]), "")
-                when = (f"by t = {float(t_end[i]):.3g} s: intermittent, back near one unstable cycle (period "
-                        f"{float(im_period[i]):.5g} s, largest non-trivial Floquet multiplier modulus {float(im_mult[i]):.4g}{kind}) "
-                        f"{int(summary['intermittent_visits'][i])} times, leaving it in bursts between")  # fmt: skip
-            reason[i] = f"bounded motion, neither periodic nor decayed {when}" + (
+            reason[i] = _irregular.stop_reason(summary, i, t_max) + (
                 "" if not stable[i] else " (sliding is linearly stable: this motion coexists with it, or is a slow "
                 "transient)")  # fmt: skip
         elif st != "success" or name in ("failed", "unsettled", "irregular"):
