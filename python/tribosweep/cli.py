@@ -246,8 +246,8 @@ def _add_sweep_arguments(p: argparse.ArgumentParser) -> None:
         "census": p.add_argument_group(
             "attractor census (also the [census] table: enabled, samples, t_max, disturbance_scale, rtol, "
             "recurrence)",
-            "auto: at stable points with a saddle cycle, K disturbances on the torsion and normal modes are each run "
-            "to their attractor; the sweep reports the fraction reaching sliding / a cycle / irregular motion / "
+            "auto: at stable points with a saddle cycle, and at unstable points whose transient reached a motion, K "
+            "disturbances on the torsion and normal modes are each run to their attractor; the sweep reports the fraction reaching sliding / a cycle / irregular motion / "
             "escape, with standard errors. It is most of an auto sweep's cost (about K runs of up to --census-t-max "
             "seconds each).",
         ),
@@ -423,9 +423,20 @@ def describe(ds, path: str | None = None) -> str:
     if "basin_fraction" in ds and "census_samples" in ds:
         k = np.asarray(ds.census_samples.values).ravel()
         if (k > 0).any():
-            bs = np.asarray(ds.basin_stability.values).ravel()[k > 0]
-            lines.append(f"attractor census: {int((k > 0).sum())} points, {int(k.max())} disturbances each; basin "
-                         f"stability median {np.median(bs):.2f} (min {bs.min():.2f}, max {bs.max():.2f})")  # fmt: skip
+            # Basin stability means something where sliding is stable; past it, what coexists.
+            unstable = np.asarray(ds.growth_rate.values).ravel() > 0 if "growth_rate" in ds else np.zeros(k.size, bool)
+            bs = np.asarray(ds.basin_stability.values).ravel()[(k > 0) & ~unstable]
+            text = f"attractor census: {int((k > 0).sum())} points, {int(k.max())} disturbances each"
+            if bs.size:
+                text += (f"; stable sliding ({bs.size}): basin stability median {np.median(bs):.2f} (min {bs.min():.2f}, "
+                         f"max {bs.max():.2f})")  # fmt: skip
+            past = (k > 0) & unstable
+            meanings = str(ds.bistable.attrs.get("flag_meanings", "")).split() if "bistable" in ds else []
+            if past.any() and "coexisting" in meanings:
+                code = np.asarray(ds.bistable.attrs["flag_values"])[meanings.index("coexisting")]
+                both = int((np.asarray(ds.bistable.values).ravel()[past] == code).sum())
+                text += f"; unstable sliding ({int(past.sum())}): more than one motion at {both}"
+            lines.append(text)
     from ._boundary import CURVE_KINDS
 
     curves = []

@@ -183,7 +183,9 @@ def sweep(
         Relative repetition tolerance that declares a cycle.
     census : bool
         ``auto``: take the attractor census (``tribosweep.census``) at stable points with a saddle
-        cycle: ``samples`` disturbances on the torsion and normal modes, each run to its attractor
+        cycle, and at unstable points whose transient reached a motion (a cycle, irregular motion
+        or an escape; the regime stays that motion, the census says what else coexists):
+        ``samples`` disturbances on the torsion and normal modes, each run to its attractor
         with the model's contact law; ``basin_fraction`` (with ``basin_fraction_se`` and its 95 %
         Wilson interval ``basin_fraction_low`` .. ``basin_fraction_high``) on the ``attractor``
         dimension (sliding, cycle, irregular, escape), ``basin_stability``,

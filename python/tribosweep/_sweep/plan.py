@@ -19,9 +19,10 @@ from .._model import PARAM_NAMES, PARAM_UNITS, SliderModel
 from .._settings import SweepSettings
 
 #: Version of the parts-directory layout (the resume manifest).
-PARTS_FORMAT: int = 6  # 2: the attractor census; 3: typed settings, "strategy" (was "method"), shooting settings;
+PARTS_FORMAT: int = 7  # 2: the attractor census; 3: typed settings, "strategy" (was "method"), shooting settings;
 # 4: text as UTF-8 bytes, the hash without the code identity (checked on its own), crashed points;
-# 5: mild_wear_fraction (wear from the census fractions); 6: irregular_intermittent_period/_multiplier/_instability
+# 5: mild_wear_fraction (wear from the census fractions); 6: irregular_intermittent_period/_multiplier/_instability;
+# 7: the census also where sliding is unstable
 
 #: The three physics dimensions, always present (length 1 at the seed value when not swept).
 PHYSICS_DIMS: tuple[str, ...] = ("normal_load", "arm_length", "sliding_speed")

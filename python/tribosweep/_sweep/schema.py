@@ -258,12 +258,14 @@ def point_specs(dims: tuple[str, ...], *, wear_rate: bool = False) -> list[VarSp
     by_name["basin_fraction"].attrs["comment"] = (
         "census: K disturbances on the torsion and normal modes (amplitudes up to disturbance_scale |z_st|, a "
         "Halton sequence seeded by the point's parameters), each run to its attractor; taken where sliding is "
-        "stable and a saddle cycle is predicted. "
+        "stable and a saddle cycle is predicted, and where sliding is unstable and the transient from its unstable "
+        "mode reached a motion (a cycle, irregular motion or an escape; there no disturbance returns to sliding). "
         + "; ".join(f"{k}: {v}" for k, v in ATTRACTOR_DOC.items())
     )
     by_name["regime"].attrs["comment"] = "; ".join(f"{k}: {v}" for k, v in REGIME_DOC.items())
     by_name["bistable"].attrs["comment"] = (
-        "derived from the attractor census: -1 not_checked (no census: sliding unstable, census off, or failed); "
+        "derived from the attractor census: -1 not_checked (no census: census off, the linear stage or the transient "
+        "failed, or every disturbance failed); "
         "0 one_attractor: every counted disturbance reached the same attractor; 1 coexisting: more than one "
         "attractor seen (steady sliding, each distinct cycle and irregular motion count; escapes do not), the "
         "evidence is basin_fraction; 2 no_saddle: stable sliding with no saddle cycle predicted by the describing "
@@ -292,9 +294,11 @@ def point_specs(dims: tuple[str, ...], *, wear_rate: bool = False) -> list[VarSp
     for name in ("largest_cycle_omega", "largest_cycle_a1", "largest_cycle_period_ratio",
                  "largest_cycle_fraction_off_disk"):  # fmt: skip
         by_name[name].attrs["comment"] = (
-            "a cycle that coexists with stable sliding: the census runs only where sliding is linearly stable and a "
-            "saddle cycle is predicted, and regime there stays steady_sliding (bistable says coexisting when the "
-            "census saw more than one attractor); measured on the orbit shooting converged where "
+            "the census cycle most disturbances reach: where sliding is linearly stable, a cycle that coexists with stable "
+            "sliding "
+            "(regime there stays steady_sliding; bistable says coexisting when the census saw more than one "
+            "attractor), where it is unstable not necessarily the cycle of regime and cycle_omega (the motion of "
+            "the transient from the unstable mode); measured on the orbit shooting converged where "
             "largest_cycle_verified is verified"
         )
     by_name["wall_time"].attrs["comment"] = "a measurement: differs between runs"

@@ -510,17 +510,28 @@ def irregular(p: Points, pts: np.ndarray, y_end: np.ndarray, t_max: float) -> No
         reason[pts[j]] += f"; largest FTLE {f:.3g} +- {se:.2g} 1/s"
 
 
+#: Regimes of a transient at unstable sliding that the census looks past: the motion one small
+#: disturbance reached (a cycle, irregular motion, an escape), where others may coexist.
+MOTION_REGIMES: tuple[int, ...] = (*CYCLE_REGIMES, REGIME["irregular"], REGIME["diverged"])
+
+
 def census(p: Points) -> None:
-    """Stage 5: the attractor census where a saddle cycle surrounds stable sliding.
+    """Stage 5: the attractor census where a saddle cycle surrounds stable sliding, and where
+    sliding is unstable and its transient reached a motion.
 
     K disturbances, each run to its attractor with the point's contact law; fractions with
-    standard errors. Stable points without a saddle have nothing to find (``no_saddle``).
+    standard errors. Stable points without a saddle have nothing to find (``no_saddle``). At an
+    unstable point the regime stays the motion that the transient from the unstable mode reached;
+    the census says what else the disturbances reach (another cycle, irregular motion, an
+    escape), and its words follow the transient's reason.
     """
     out, reason = p.out, p.reason
     ok = p.stable & ~p.lin_failed
     no_saddle = ok & ~np.isfinite(out["tidf_a1"])
     out["bistable"][no_saddle] = BISTABLE["no_saddle"]
-    cand = np.flatnonzero(ok & (out["regime"] == REGIME["steady_sliding"]) & np.isfinite(out["tidf_a1"]))
+    around = ok & (out["regime"] == REGIME["steady_sliding"]) & np.isfinite(out["tidf_a1"])
+    past = ~p.stable & ~p.lin_failed & np.isin(out["regime"], MOTION_REGIMES)
+    cand = np.flatnonzero(around | past)
     if not cand.size:
         return
     it, cs = p.settings.integration, p.settings.census
@@ -541,7 +552,8 @@ def census(p: Points) -> None:
     for j, i in enumerate(cand):
         nv = int(res["census_samples"][j])
         if nv == 0:
-            reason[i] = _census.failed_reason(per, j)
+            failed = _census.failed_reason(per, j)
+            reason[i] = f"{reason[i]}; {failed}" if past[i] and reason[i] else failed
             continue
         out["bistable"][i] = BISTABLE["coexisting"] if res["n_attractors"][j] > 1 else BISTABLE["one_attractor"]
         counts = np.rint(res["basin_fraction"][j] * nv).astype(int)
@@ -552,7 +564,10 @@ def census(p: Points) -> None:
             known = int(np.sum(per["matched"][j]))
             seen += (f" ({counts[2] - late - known} stationary, {known} by recurrence on a pilot's attractor, "
                      f"{late} at the census t_max)")
+        said = ""
         if res["n_attractors"][j] > 1:
-            reason[i] = f"coexisting attractors (census): {seen}"
+            said = f"coexisting attractors (census): {seen}"
         elif counts[0] < nv:
-            reason[i] = f"census: {seen}"
+            said = f"census: {seen}"
+        if said:
+            reason[i] = f"{reason[i]}; {said}" if past[i] and reason[i] else said
