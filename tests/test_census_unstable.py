@@ -65,3 +65,36 @@ def test_every_unstable_point_that_reached_a_motion_has_a_census():
     np.testing.assert_allclose(f.sum(axis=-1), 1.0, atol=1e-12)
     np.testing.assert_array_equal(f[..., SLIDING], 0.0)
     np.testing.assert_allclose(f * 8, np.rint(f * 8), atol=1e-9)
+
+
+def test_regime_fraction_says_how_many_disturbances_reach_the_label():
+    # Stable and unstable points of the switch law (loads on both sides of the Hopf curve; speeds
+    # where the friction curve falls and where it is nearly flat).
+    k = 16
+    ds = ts.sweep(LAW, normal_load=[25.6, 87.8, 134.4], arm_length=[0.0757, 0.127], sliding_speed=[0.2, 0.6],
+                  samples=k, t_max=20.0, progress=False)  # fmt: skip
+    st = ds.stack(p=ds.regime.dims).transpose("p", ...)
+    rf, se = st.regime_fraction.values, st.regime_fraction_se.values
+    frac, n = st.basin_fraction.values, st.census_samples.values
+    regime, stable = st.regime.values, st.growth_rate.values < 0
+    censused = n > 0
+    assert censused.sum() >= 6 and (stable & censused).any() and (~stable & censused).any()
+    assert np.all(np.isnan(rf[~censused]))
+    c = censused
+    # Binomial standard errors, fractions of the counted disturbances.
+    np.testing.assert_allclose(se[c], np.sqrt(rf[c] * (1 - rf[c]) / n[c]), rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(rf[c] * n[c], np.rint(rf[c] * n[c]), atol=1e-9)
+    # Steady sliding: the fraction that returns to it, basin_stability.
+    slide = c & (regime == REGIME["steady_sliding"])
+    np.testing.assert_array_equal(rf[slide], st.basin_stability.values[slide])
+    # Irregular motion: the fraction reaching it (an escape's, likewise, reads the escape fraction).
+    irr = c & (regime == REGIME["irregular"])
+    assert irr.any()
+    np.testing.assert_array_equal(rf[irr], frac[irr, IRREGULAR])
+    # A cycle: the samples on the transient's own cycle, at most all cycle samples.
+    cyc = c & np.isin(regime, [REGIME[k] for k in ("self_excited", "contact_loss", "stick_slip")])
+    assert cyc.any() and np.all(rf[cyc] <= frac[cyc, CYCLE] + 1e-12)
+    # Without the census it is unknown.
+    off = ts.sweep(LAW, normal_load=[87.8], arm_length=[0.0757], sliding_speed=[0.2], census=False, t_max=20.0,
+                   progress=False)  # fmt: skip
+    assert np.isnan(float(off.regime_fraction.squeeze()))

@@ -449,7 +449,8 @@ def run(
     out["largest_cycle_period_ratio"] = linear_frequency / out["largest_cycle_omega"]
     per_sample = {
         "outcome": outcome, "status": status, "attractor": attractor, "cycle": cycle, "omega": omega,
-        "z1_amplitude": a1, "multiplicity": mult, "fraction_off_disk": off, "max_abs_z": max_z,
+        "z1_amplitude": a1, "z2_amplitude": res["z2_amplitude"], "multiplicity": mult, "fraction_off_disk": off,
+        "max_abs_z": max_z,
         "t_end": res["t_end"], "matched": res["irregular_matched"],
         "n_rhs": res["n_rhs"].astype(np.int64), "y0": y0,
         "reason": res["reason"].astype(str),

@@ -41,7 +41,7 @@ def method(value: str) -> str:
 def state(name: str, value, n: int | None = None) -> np.ndarray:
     """A finite state array of shape (6,) or, with ``n``, (6,), (1, 6) or (n, 6) -> always 2-D."""
     a = np.asarray(value, dtype=np.float64)
-    ok_shapes = [(6,)] + ([(1, 6), (n, 6)] if n is not None else [])
+    ok_shapes = [(6,)] + ([(1, 6)] + ([(n, 6)] if n != 1 else []) if n is not None else [])
     if a.shape not in ok_shapes:
         want = " or ".join(str(s) for s in ok_shapes)
         raise ValueError(f"{name} has shape {a.shape}: must be {want}")

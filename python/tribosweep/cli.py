@@ -436,6 +436,9 @@ def describe(ds, path: str | None = None) -> str:
                 code = np.asarray(ds.bistable.attrs["flag_values"])[meanings.index("coexisting")]
                 both = int((np.asarray(ds.bistable.values).ravel()[past] == code).sum())
                 text += f"; unstable sliding ({int(past.sum())}): more than one motion at {both}"
+                if "regime_fraction" in ds:
+                    rf = np.asarray(ds.regime_fraction.values).ravel()[past]
+                    text += f", the regime reached by fewer than half the disturbances at {int((rf < 0.5).sum())}"
             lines.append(text)
     from ._boundary import CURVE_KINDS
 

@@ -151,6 +151,9 @@ POINT_VARIABLES: dict[str, tuple[str, str | None, str]] = {
     "reason": ("str", None, "reason for a failed or undetermined point (empty otherwise)"),
     "decided_by": ("u1", None, "analysis stage that decided the regime"),
     "bistable": ("i1", None, "coexistence of attractors seen by the census"),
+    "regime_fraction": ("f8", "1", "fraction of the census disturbances that reach the point's regime (NaN: no "
+                                   "census)"),
+    "regime_fraction_se": ("f8", "1", "binomial standard error of regime_fraction, sqrt(p (1 - p) / K)"),
     "growth_rate": ("f8", "s-1", "largest real part of the eigenvalues of steady sliding (> 0: unstable)"),
     "linear_frequency": ("f8", "rad s-1", "angular frequency of the least stable linear mode"),
     "normal_mode_frequency": ("f8", "Hz", "frequency Im(lambda_normal)/2 pi of the linearised normal mode"),
@@ -271,6 +274,14 @@ def point_specs(dims: tuple[str, ...], *, wear_rate: bool = False) -> list[VarSp
         "evidence is basin_fraction; 2 no_saddle: stable sliding with no saddle cycle predicted by the describing "
         "function, nothing to find. One attractor seen is no proof that nothing else coexists: a basin smaller "
         "than about 1/K of the disturbances is likely missed"
+    )
+    by_name["regime_fraction"].attrs["comment"] = (
+        "where sliding is stable, the fraction returning to steady sliding (basin_stability: the label, from a "
+        "small disturbance, is certain there by linear stability, and the fraction is the size of sliding's "
+        "basin); where it is unstable, the fraction reaching the motion its transient reached: the same cycle "
+        "(frequency within 1 % and the first two harmonics of z within 1 % of its z_half_range), irregular "
+        "motion, or an escape. There a small value marks a label that one run gave and most disturbances do not "
+        "(a chaotic transient's fate, or where the unstable mode leads that larger disturbances seldom reach)"
     )
     by_name["reason"].attrs["comment"] = "free text; empty for a point decided without trouble"
     by_name["z1_amplitude"].attrs["comment"] = (

@@ -510,6 +510,28 @@ def irregular(p: Points, pts: np.ndarray, y_end: np.ndarray, t_max: float) -> No
         reason[pts[j]] += f"; largest FTLE {f:.3g} +- {se:.2g} 1/s"
 
 
+def _regime_share(out: dict, i: int, per: Mapping[str, np.ndarray], j: int) -> tuple[float, float]:
+    """The fraction of point ``i``'s counted census samples (row ``j`` of ``per``) that reach its
+    regime, and its binomial standard error: sliding, irregular motion, an escape, or the
+    transient's own cycle (frequency within ``CYCLE_TOL`` and the first two harmonics of z within
+    ``CYCLE_TOL`` of its half range: :func:`tribosweep._cycles.cluster`'s test, less the third
+    harmonic, which the sweep does not keep)."""
+    a = per["attractor"][j]
+    nv = int(np.sum(a >= 0))
+    if nv == 0:
+        return np.nan, np.nan
+    regime = int(out["regime"][i])
+    kind = {REGIME["steady_sliding"]: 0, REGIME["irregular"]: 2, REGIME["diverged"]: 3}.get(regime, 1)
+    hit = a == kind
+    if regime in CYCLE_REGIMES and np.isfinite(out["cycle_omega"][i]):
+        omega, a1, a2, size = (float(out[k][i]) for k in ("cycle_omega", "z1_amplitude", "z2_amplitude", "z_half_range"))
+        tol, size = _census.CYCLE_TOL, max(size if np.isfinite(size) else max(a1, a2), 1e-12)
+        hit &= ((np.abs(per["omega"][j] - omega) <= tol * omega) & (np.abs(per["z1_amplitude"][j] - a1) <= tol * size)
+                & (np.abs(per["z2_amplitude"][j] - a2) <= tol * size))  # fmt: skip
+    p = float(np.sum(hit)) / nv
+    return p, float(np.sqrt(p * (1.0 - p) / nv))
+
+
 #: Regimes of a transient at unstable sliding that the census looks past: the motion one small
 #: disturbance reached (a cycle, irregular motion, an escape), where others may coexist.
 MOTION_REGIMES: tuple[int, ...] = (*CYCLE_REGIMES, REGIME["irregular"], REGIME["diverged"])
@@ -556,6 +578,7 @@ def census(p: Points) -> None:
             reason[i] = f"{reason[i]}; {failed}" if past[i] and reason[i] else failed
             continue
         out["bistable"][i] = BISTABLE["coexisting"] if res["n_attractors"][j] > 1 else BISTABLE["one_attractor"]
+        out["regime_fraction"][i], out["regime_fraction_se"][i] = _regime_share(out, i, per, j)
         counts = np.rint(res["basin_fraction"][j] * nv).astype(int)
         seen = ", ".join(f"{a} {c}/{nv}" for a, c in zip(_census.ATTRACTOR_NAMES, counts) if c)
         if counts[2]:
