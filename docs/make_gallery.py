@@ -3,7 +3,8 @@
 Every chart comes from the public API, on grids small enough to run in a minute or two on two cores:
 
 - ``regime_map.png``: the regime map of a normal load x arm length sweep at the seed's speed, with the
-  attractor census (hatched: another attractor coexists) and the Hopf curves the sweep stores;
+  attractor census (hatched: another attractor coexists; a ring: an unstable point's label that few
+  disturbances reach) and the Hopf curves the sweep stores;
 - ``facets.png``: a map over five sliding speeds with a Stribeck friction curve (one panel each, in rows);
 - ``basin_fraction.png``: the census's basin fractions of that sweep, one panel per attractor;
 - ``bifurcation.png``: the seed's unilateral cycles against the load (``ts.branch`` from the bouncing
@@ -138,13 +139,15 @@ def main(argv=None) -> int:
     t_sweeps = time.perf_counter() - t0
     save(regime_map(one), "regime_map.png",
          "Regime map: 15 loads x 5 arm lengths at the seed's 0.46 m/s, the attractor census at 16 disturbances per "
-         "point (hatched: another attractor coexists with stable sliding) and the curves the sweep stores: the Hopf "
-         "curve (sliding is unstable to its lower left) and the saddle cycle's grazing curve, here also its fold")
+         "point (hatched: another attractor coexists, with stable sliding or, where sliding is unstable, with the "
+         "motion its transient reached; a ring: fewer than half the disturbances reach that motion) and the curves "
+         "the sweep stores: the Hopf curve (sliding is unstable to its lower left) and the saddle cycle's grazing "
+         "curve, here also its fold")
     save(regime_map(five), "facets.png", "Regime map over five sliding speeds with a Stribeck friction curve "
          "(mu_static 0.3, no census): one panel per speed, in rows of four")
     save(variable_map(one, "basin_fraction"), "basin_fraction.png",
-         "Basin fractions of the regime map's census, one panel per attractor (white: no census there: sliding "
-         "is unstable, or no saddle cycle to find)")
+         "Basin fractions of the regime map's census, one panel per attractor (white: no census there: stable "
+         "sliding with no saddle cycle to find)")
     fig, _ = bifurcation()
     save(fig, "bifurcation.png", "The seed's bouncing cycle against the load (ts.branch both ways from the seed, "
          "ts.bifurcation_diagram): stable between its Neimark-Sacker points, it turns at folds at 140.6 and 19 N "

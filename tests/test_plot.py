@@ -85,3 +85,24 @@ def test_a_wide_grid_marks_multi_period_cycles_instead_of_labels_that_would_run_
     # A narrow grid keeps its "2T" labels.
     narrow = ds.isel(normal_load=slice(0, MAX_LABELLED_COLUMNS))
     assert sum(t.get_text() == "2T" for t in regime_map(narrow).axes[0].texts) == 2
+
+
+def test_unstable_points_whose_label_few_disturbances_reach_get_a_ring():
+    from tribosweep.plot import WEAK_LABEL, regime_map
+
+    ds = ts.sweep(normal_load=[10.0, 40.0, 90.0], arm_length=[0.05, 0.1], strategy="linear", progress=False)
+    grow = np.full(ds.regime.shape, -1.0)
+    frac = np.full(ds.regime.shape, 0.2)  # synthetic values: only unstable cells below WEAK_LABEL get a ring
+    grow[0, 0, 0] = grow[1, 1, 0] = grow[2, 1, 0] = 1.0
+    frac[2, 1, 0] = WEAK_LABEL  # at the threshold: no ring
+    ds["growth_rate"], ds["regime_fraction"] = (ds.regime.dims, grow), (ds.regime.dims, frac)
+    fig = regime_map(ds)
+    rings = [c for c in fig.axes[0].collections if c.get_offsets().shape[0] and np.allclose(c.get_facecolors(), 1.0)]
+    assert len(rings) == 1 and rings[0].get_offsets().shape == (2, 2)
+    xs = sorted(rings[0].get_offsets()[:, 0])
+    assert xs[0] < 25.0 < xs[1] < 65.0  # in the cells of 10 N and 40 N (edges at 25 and 65 N)
+    labels = [t.get_text() for leg in fig.legends for t in leg.get_texts()]
+    assert any(lbl.startswith("sliding unstable: fewer than half") for lbl in labels)
+    # Without the census's fractions: no ring, no legend entry.
+    plain = regime_map(ds.drop_vars("regime_fraction"))
+    assert not any(t.get_text().startswith("sliding unstable") for leg in plain.legends for t in leg.get_texts())

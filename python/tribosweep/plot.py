@@ -231,8 +231,9 @@ def regime_map(ds: xr.Dataset, *, x: str | None = None, y: str | None = None, fa
         if mark_points:
             present.add(_mark_points(ax, ds, x, y))
         if "bistable" in ds:
-            # Stable sliding coexisting with another motion: hatched, since the regime then depends
-            # on the initial disturbance (docs/model.md §6: the seed point is such a case).
+            # Coexisting attractors: hatched, since the regime then depends on the initial
+            # disturbance (docs/model.md §6: the seed point is such a case; past the stability
+            # boundary, a second cycle or irregular motion beside the transient's).
             b = ds.bistable.isel({d: 0 for d in rest})
             b = (b if fi is None else b.isel({facet: fi})).transpose(y, x).values
             xe, ye = _edges(ds[x].values), _edges(ds[y].values)
@@ -243,6 +244,20 @@ def regime_map(ds: xr.Dataset, *, x: str | None = None, y: str | None = None, fa
                     present.add(key)
                     ax.add_patch(Rectangle((xe[i], ye[j]), xe[i + 1] - xe[i], ye[j + 1] - ye[j], fill=False,
                                            hatch=hatch, edgecolor="k", lw=0.0))  # fmt: skip
+        if {"regime_fraction", "growth_rate"} <= set(ds.data_vars):
+            # Unstable points whose label (one transient's motion) most census disturbances do not
+            # reach: a ring in the cell's upper right corner.
+            sel = {d: 0 for d in rest}
+            frac, grow = ds.regime_fraction.isel(sel), ds.growth_rate.isel(sel)
+            if fi is not None:
+                frac, grow = frac.isel({facet: fi}), grow.isel({facet: fi})
+            weak = (frac.transpose(y, x).values < WEAK_LABEL) & (grow.transpose(y, x).values > 0)
+            if weak.any():
+                present.add("weak_label")
+                xe, ye = _edges(ds[x].values), _edges(ds[y].values)
+                jj, ii = np.nonzero(weak)
+                ax.scatter(xe[ii] + 0.8 * (xe[ii + 1] - xe[ii]), ye[jj] + 0.78 * (ye[jj + 1] - ye[jj]), s=20,
+                           marker="o", facecolors="w", edgecolors="k", linewidths=0.6, zorder=4)  # fmt: skip
         if "cycle_period_ratio" in ds:
             # Cycles of several mode periods (past a period doubling, or subharmonic bouncing).
             r = ds.cycle_period_ratio.isel({d: 0 for d in rest})
@@ -295,6 +310,11 @@ def regime_map(ds: xr.Dataset, *, x: str | None = None, y: str | None = None, fa
 
         handles.append(Line2D([], [], ls="none", marker="x", ms=3, mec="k", mew=0.6,
                               label="a cycle of 2 or more mode periods\n(period doubling, subharmonic)"))
+    if "weak_label" in present:
+        from matplotlib.lines import Line2D
+
+        handles.append(Line2D([], [], ls="none", marker="o", ms=4, mfc="w", mec="k", mew=0.6,
+                              label="sliding unstable: fewer than half\nthe census disturbances reach\nthis motion"))
     if "multi_period" in present:
         handles.append(Patch(facecolor="none", edgecolor="none", label="nT: a cycle of n mode periods\n(period doubling, subharmonic)"))
     fig.legend(handles=handles, loc="outside right center", fontsize=8, frameon=False)
@@ -304,6 +324,10 @@ def regime_map(ds: xr.Dataset, *, x: str | None = None, y: str | None = None, fa
     fig.suptitle(title, fontsize=10)
     return fig
 
+
+#: Census fraction below which an unstable point's label (its transient's motion) is marked on the
+#: regime map as one that most disturbances do not reach (``regime_fraction``).
+WEAK_LABEL: float = 0.5
 
 #: Widest grid (cells along x per panel) whose multi-period cycles are labelled "nT" in the cell;
 #: a wider one gets a mark per cell (a 3.6-inch panel leaves under 0.2 inch per cell past this).
