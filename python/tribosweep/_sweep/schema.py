@@ -305,11 +305,10 @@ def point_specs(dims: tuple[str, ...], *, wear_rate: bool = False) -> list[VarSp
     for name in ("largest_cycle_omega", "largest_cycle_a1", "largest_cycle_period_ratio",
                  "largest_cycle_fraction_off_disk"):  # fmt: skip
         by_name[name].attrs["comment"] = (
-            "the census cycle most disturbances reach: where sliding is linearly stable, a cycle that coexists with stable "
-            "sliding "
-            "(regime there stays steady_sliding; bistable says coexisting when the census saw more than one "
-            "attractor), where it is unstable not necessarily the cycle of regime and cycle_omega (the motion of "
-            "the transient from the unstable mode); measured on the orbit shooting converged where "
+            "the census cycle most disturbances reach: where sliding is linearly stable, a cycle that coexists "
+            "with stable sliding (regime there stays steady_sliding; bistable says coexisting when the census saw "
+            "more than one attractor); where it is unstable, not necessarily the cycle of regime and cycle_omega "
+            "(the motion of the transient from the unstable mode); measured on the orbit shooting converged where "
             "largest_cycle_verified is verified"
         )
     by_name["wall_time"].attrs["comment"] = "a measurement: differs between runs"
