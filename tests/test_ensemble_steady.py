@@ -79,8 +79,8 @@ def test_slow_approach_ends_on_the_orbit_that_shooting_finds():
     assert int(orb.status) == ts.STATUS["success"] and bool(orb.stable)
     assert abs(float(ds.omega[0]) / float(orb.omega) - 1) < 1e-8
     assert abs(float(ds.z1_amplitude[0]) / float(orb.A1) - 1) < 1e-7
-    # Its slowest non-trivial multiplier (a complex pair of modulus 0.9933; the trivial one, 1,
-    # comes first) is what made the approach slow.
+    # Its slowest non-trivial multiplier (a complex pair of modulus 0.9933, just below the trivial
+    # one, 1, which sorts last) is what made the approach slow.
     moduli = np.sort(orb.floquet_moduli.values)
     assert 0.99 < moduli[-2] < 0.999, moduli
 

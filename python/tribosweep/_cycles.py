@@ -305,14 +305,21 @@ def cluster(omega, mult, amps, size, tol: float) -> tuple[np.ndarray, list[int]]
     heads: list[int] = []
     for s in range(omega.size):
         for c, h in enumerate(heads):
-            if (mult[s] == mult[h] and abs(omega[s] - omega[h]) <= tol * omega[h]
-                    and np.max(np.abs(amps[s] - amps[h])) <= tol * max(size[h], 1e-12)):  # fmt: skip
+            if mult[s] == mult[h] and same_cycle(omega[s], amps[s], omega[h], amps[h], size[h], tol):
                 label[s] = c
                 break
         else:
             label[s] = len(heads)
             heads.append(s)
     return label, heads
+
+
+def same_cycle(omega, amps, ref_omega: float, ref_amps, size: float, tol: float):
+    """Whether cycles (``omega``, harmonic amplitudes of z ``amps`` on a last axis) are the cycle
+    ``(ref_omega, ref_amps)``: the frequency to ``tol`` and each harmonic to ``tol`` of ``size``,
+    the reference cycle's motion (half z's range). :func:`cluster`'s test, less the multiplicity."""
+    near = np.abs(np.asarray(amps) - np.asarray(ref_amps)) <= tol * max(size, 1e-12)
+    return (np.abs(omega - ref_omega) <= tol * ref_omega) & np.all(near, axis=-1)
 
 
 def harmonics(res: dict, idx) -> np.ndarray:

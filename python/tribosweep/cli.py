@@ -247,8 +247,8 @@ def _add_sweep_arguments(p: argparse.ArgumentParser) -> None:
             "attractor census (also the [census] table: enabled, samples, t_max, disturbance_scale, rtol, "
             "recurrence)",
             "auto: at stable points with a saddle cycle, and at unstable points whose transient reached a motion, K "
-            "disturbances on the torsion and normal modes are each run to their attractor; the sweep reports the fraction reaching sliding / a cycle / irregular motion / "
-            "escape, with standard errors. It is most of an auto sweep's cost (about K runs of up to --census-t-max "
+            "disturbances on the torsion and normal modes are each run to their attractor; the sweep reports the "
+            "fraction reaching sliding / a cycle / irregular motion / escape, with standard errors. It is most of an auto sweep's cost (about K runs of up to --census-t-max "
             "seconds each).",
         ),
     }

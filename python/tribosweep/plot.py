@@ -203,7 +203,6 @@ def regime_map(ds: xr.Dataset, *, x: str | None = None, y: str | None = None, fa
     from matplotlib.colors import BoundaryNorm, ListedColormap
 
     x, y, facet, rest = _choose_dims(ds, x, y, facet)
-    da = ds.regime.isel({d: 0 for d in rest})
     fixed = [f"{d} = {ds[d].values[0]:g} {ds[d].attrs.get('units', '')}".strip() for d in rest]
     fvals = [None] if facet is None else list(range(ds.sizes[facet]))
     n = len(fvals)
@@ -223,20 +222,24 @@ def regime_map(ds: xr.Dataset, *, x: str | None = None, y: str | None = None, fa
     cmap = ListedColormap([REGIME_COLORS[r] for r in REGIME_NAMES])
     norm = BoundaryNorm(np.arange(len(REGIME_NAMES) + 1) - 0.5, cmap.N)
     present = set()
+    xe, ye = _edges(ds[x].values), _edges(ds[y].values)
+
+    def panel(name: str, fi) -> np.ndarray:
+        """Variable ``name`` on panel ``fi``: ``(y, x)`` values at the first value of the other dims."""
+        v = ds[name].isel({d: 0 for d in rest})
+        return (v if fi is None else v.isel({facet: fi})).transpose(y, x).values
+
     for ax, fi in zip(axes, fvals):
-        sub = da if fi is None else da.isel({facet: fi})
-        z = sub.transpose(y, x).values
+        z = panel("regime", fi)
         present.update(np.unique(z).tolist())
-        ax.pcolormesh(_edges(ds[x].values), _edges(ds[y].values), z, cmap=cmap, norm=norm, shading="flat")
+        ax.pcolormesh(xe, ye, z, cmap=cmap, norm=norm, shading="flat")
         if mark_points:
             present.add(_mark_points(ax, ds, x, y))
         if "bistable" in ds:
             # Coexisting attractors: hatched, since the regime then depends on the initial
             # disturbance (docs/model.md §6: the seed point is such a case; past the stability
             # boundary, a second cycle or irregular motion beside the transient's).
-            b = ds.bistable.isel({d: 0 for d in rest})
-            b = (b if fi is None else b.isel({facet: fi})).transpose(y, x).values
-            xe, ye = _edges(ds[x].values), _edges(ds[y].values)
+            b = panel("bistable", fi)
             for code, (key, hatch, _) in _COEXISTING.items():
                 from matplotlib.patches import Rectangle
 
@@ -247,25 +250,18 @@ def regime_map(ds: xr.Dataset, *, x: str | None = None, y: str | None = None, fa
         if {"regime_fraction", "growth_rate"} <= set(ds.data_vars):
             # Unstable points whose label (one transient's motion) most census disturbances do not
             # reach: a ring in the cell's upper right corner.
-            sel = {d: 0 for d in rest}
-            frac, grow = ds.regime_fraction.isel(sel), ds.growth_rate.isel(sel)
-            if fi is not None:
-                frac, grow = frac.isel({facet: fi}), grow.isel({facet: fi})
-            weak = (frac.transpose(y, x).values < WEAK_LABEL) & (grow.transpose(y, x).values > 0)
+            weak = (panel("regime_fraction", fi) < WEAK_LABEL) & (panel("growth_rate", fi) > 0)
             if weak.any():
                 present.add("weak_label")
-                xe, ye = _edges(ds[x].values), _edges(ds[y].values)
                 jj, ii = np.nonzero(weak)
                 ax.scatter(xe[ii] + 0.8 * (xe[ii + 1] - xe[ii]), ye[jj] + 0.78 * (ye[jj + 1] - ye[jj]), s=20,
                            marker="o", facecolors="w", edgecolors="k", linewidths=0.6, zorder=4)  # fmt: skip
         if "cycle_period_ratio" in ds:
             # Cycles of several mode periods (past a period doubling, or subharmonic bouncing).
-            r = ds.cycle_period_ratio.isel({d: 0 for d in rest})
-            r = (r if fi is None else r.isel({facet: fi})).transpose(y, x).values
+            r = panel("cycle_period_ratio", fi)
             k = np.where(np.isfinite(r), np.rint(r), 0)
             multi = k >= 2
             if multi.any():
-                xe, ye = _edges(ds[x].values), _edges(ds[y].values)
                 if multi.shape[1] <= MAX_LABELLED_COLUMNS:
                     present.add("multi_period")
                     for j, i in zip(*np.nonzero(multi)):

@@ -513,9 +513,8 @@ def irregular(p: Points, pts: np.ndarray, y_end: np.ndarray, t_max: float) -> No
 def _regime_share(out: dict, i: int, per: Mapping[str, np.ndarray], j: int) -> tuple[float, float]:
     """The fraction of point ``i``'s counted census samples (row ``j`` of ``per``) that reach its
     regime, and its binomial standard error: sliding, irregular motion, an escape, or the
-    transient's own cycle (frequency within ``CYCLE_TOL`` and the first two harmonics of z within
-    ``CYCLE_TOL`` of its half range: :func:`tribosweep._cycles.cluster`'s test, less the third
-    harmonic, which the sweep does not keep)."""
+    transient's own cycle (:func:`tribosweep._cycles.same_cycle` on the first two harmonics of z:
+    the sweep keeps no third)."""
     a = per["attractor"][j]
     nv = int(np.sum(a >= 0))
     if nv == 0:
@@ -525,9 +524,9 @@ def _regime_share(out: dict, i: int, per: Mapping[str, np.ndarray], j: int) -> t
     hit = a == kind
     if regime in CYCLE_REGIMES and np.isfinite(out["cycle_omega"][i]):
         omega, a1, a2, size = (float(out[k][i]) for k in ("cycle_omega", "z1_amplitude", "z2_amplitude", "z_half_range"))
-        tol, size = _census.CYCLE_TOL, max(size if np.isfinite(size) else max(a1, a2), 1e-12)
-        hit &= ((np.abs(per["omega"][j] - omega) <= tol * omega) & (np.abs(per["z1_amplitude"][j] - a1) <= tol * size)
-                & (np.abs(per["z2_amplitude"][j] - a2) <= tol * size))  # fmt: skip
+        amps = np.stack([per["z1_amplitude"][j], per["z2_amplitude"][j]], axis=-1)
+        size = size if np.isfinite(size) else max(a1, a2)
+        hit &= _cycles.same_cycle(per["omega"][j], amps, omega, (a1, a2), size, _census.CYCLE_TOL)
     p = float(np.sum(hit)) / nv
     return p, float(np.sqrt(p * (1.0 - p) / nv))
 
