@@ -102,6 +102,7 @@ def ensemble(
     approach_periods: int = 0,
     approach_rtol: float | None = None,
     approach_tol: float | None = None,
+    checked_stops: bool = False,
 ) -> dict[str, Any]: ...
 def linear_stability(
     base: dict[str, float],

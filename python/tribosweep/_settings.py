@@ -89,7 +89,8 @@ class Steady:
         Amplitude below which a motion has decayed (default ``1e-3 |z_st|``).
     approach_periods : int
         ``auto`` transients: periods per block of the slow-approach test. Once the largest
-        repetition residual of the section state over a block has shrunk three blocks in a row,
+        repetition residual of the section state (``x`` left out: the check shoots on the whole
+        state) over a block has shrunk three blocks in a row,
         to at most 1e-3 (the core's ``APPROACH_TOL``), the run shoots from there, inside the run:
         a stable orbit of that period ends it, measured on the orbit (verified); near an unstable
         one it goes on with a hold, and where shooting fails, on without the test. 0: every run
@@ -180,7 +181,7 @@ class Census:
         The repetition tolerance at which a sample after its point's two pilots first stops on a
         cycle; every such stop is shot from, and the sample is on the stable orbit shooting
         converges to, measured there, or goes on from its stop at ``periodic_tol`` (see
-        ``tribosweep._census``). None (default): 1e-3 under speed-dependent friction, where
+        ``tribosweep._census``; ``x`` and ``xd`` need only repeat to ten times it). None (default): 1e-3 under speed-dependent friction, where
         the lightly damped ``x`` mode (multiplier 0.993 per period) holds a repetition to
         ``periodic_tol`` back by seconds (the switch-law Stribeck sweep's census 0.77-0.84x the
         time, no fraction moving by more than 1 standard error); ``periodic_tol`` (no first stops) under

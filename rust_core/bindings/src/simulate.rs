@@ -253,12 +253,13 @@ fn summaries(out: Vec<Result<TrajectoryResult, String>>) -> Vec<(Summary, String
 /// many periods of steady contraction (at `approach_rtol`, Newton tolerance `approach_tol`), and a
 /// stable orbit ends the run on it, output `approach`; the third check that finds the same unstable
 /// orbit, the run having left it between, ends the run as intermittent irregular motion, outputs
-/// `intermittent_period`, `intermittent_multiplier` and `intermittent_visits`).
+/// `intermittent_period`, `intermittent_multiplier` and `intermittent_visits`; `checked_stops`: the
+/// caller shoots from every periodic stop, so the repetition test compares `(z, zd, phi, phid)` only).
 /// The core picks the path (lane-batched or scalar) and the grouping; results do not depend on it
 /// beyond integration accuracy, nor on the thread count at all. Every non-success status has a
 /// reason; Ctrl-C stops every thread (`KeyboardInterrupt`, the results are dropped).
 #[pyfunction]
-#[pyo3(signature = (base, contact, friction_law, names, values, y0, t_end, method, rtol, *, atol=None, t_eval=None, threads=None, kind="final", periodic_tol=1e-5, decay_amplitude=None, n_fourier=512, max_steps=None, max_events=None, decay_amplitudes=None, watch_x=true, decay_thresholds=None, irregular_block=0, known_irregular=None, known_cells=None, known_cell_extent=None, restart=None, stationary_tol=None, approach_periods=0, approach_rtol=None, approach_tol=None))]
+#[pyo3(signature = (base, contact, friction_law, names, values, y0, t_end, method, rtol, *, atol=None, t_eval=None, threads=None, kind="final", periodic_tol=1e-5, decay_amplitude=None, n_fourier=512, max_steps=None, max_events=None, decay_amplitudes=None, watch_x=true, decay_thresholds=None, irregular_block=0, known_irregular=None, known_cells=None, known_cell_extent=None, restart=None, stationary_tol=None, approach_periods=0, approach_rtol=None, approach_tol=None, checked_stops=false))]
 #[allow(clippy::too_many_arguments)]
 fn ensemble<'py>(
     py: Python<'py>,
@@ -292,6 +293,7 @@ fn ensemble<'py>(
     approach_periods: usize,
     approach_rtol: Option<f64>,
     approach_tol: Option<f64>,
+    checked_stops: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let call = Call::rows(py, &base, contact, friction_law, &names, &values, threads)?;
     let n = call.len();
@@ -344,6 +346,7 @@ fn ensemble<'py>(
                 decay_amplitude,
                 n_fourier,
                 watch_x,
+                checked_stops,
                 irregular_block,
                 approach_periods,
                 approach_check: (approach_periods > 0).then_some(approach_check as ApproachCheck),

@@ -33,6 +33,47 @@ fn x_is_left_out_of_the_settling_tests_only_where_it_is_slaved() {
 }
 
 #[test]
+fn checked_stops_hold_x_to_a_looser_repetition_and_only_x() {
+    // A period-1 cycle whose x alone still rings down by `mu` a section from `a` times its size
+    // (the friction mode under a speed-dependent law: mu about 0.993). Relative to its amplitude
+    // (which includes the deviation), x repeats to (1 - mu) a r / (1 + a r), r = mu^n: the first
+    // section where that is within `tol`, before the two matches in a row.
+    let sizes = characteristic_sizes(&Slider::seed());
+    let ring = |c: usize, a: f64, mu: f64| {
+        move |n: usize| {
+            let mut y = State::from_fn(|k, _| sizes[k]);
+            y[c] += a * mu.powi(n as i32) * sizes[c];
+            y
+        }
+    };
+    let first = |a: f64, mu: f64, tol: f64| ((tol / (a * (1.0 - mu - tol))).ln() / mu.ln()).ceil() as usize;
+    let tol = 1e-3;
+    let strict = SteadyOptions { periodic_tol: tol, ..SteadyOptions::default() };
+    let checked = SteadyOptions { checked_stops: true, ..strict };
+    let stop = |o: &SteadyOptions, y| {
+        let (what, n) = watch(o, 3000, y);
+        assert_eq!(what, "periodic");
+        n
+    };
+    // Held to the tolerance, the stop waits for the slow ring-down (some 260 sections).
+    let n = stop(&strict, ring(idx::X, 1.0, 0.993));
+    assert!(n.abs_diff(first(1.0, 0.993, tol)) <= 4 && n > 200, "{n} against {}", first(1.0, 0.993, tol));
+    // Checked stops hold x to CHECKED_X_SLACK times the tolerance: a ring-down slower than 1 % a
+    // section does not hold them back at all ...
+    assert!(stop(&checked, ring(idx::X, 1.0, 0.993)) <= 8);
+    // ... a faster change of x does (5 % a section: 27 sections against 76).
+    let slack = CHECKED_X_SLACK * tol;
+    let n = stop(&checked, ring(idx::X, 1.0, 0.95));
+    assert!(n.abs_diff(first(1.0, 0.95, slack)) <= 4 && n > 20, "{n} against {}", first(1.0, 0.95, slack));
+    let n = stop(&strict, ring(idx::X, 1.0, 0.95));
+    assert!(n.abs_diff(first(1.0, 0.95, tol)) <= 4, "{n} against {}", first(1.0, 0.95, tol));
+    // The other components keep the tolerance: the same ring-down in z or phi is not let off.
+    for c in [idx::Z, idx::PHI] {
+        assert_eq!(stop(&strict, ring(c, 1.0, 0.993)), stop(&checked, ring(c, 1.0, 0.993)));
+    }
+}
+
+#[test]
 fn per_component_decay_thresholds_set_the_decay_test() {
     // A small torsion-mode motion of the seed (sliding stable, decaying at 0.33 1/s).
     let s = Slider::seed();
