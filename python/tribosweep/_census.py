@@ -363,8 +363,8 @@ def run(
                tol: float = periodic_tol) -> dict:  # fmt: skip
         """Runs to steady state of points ``rows`` (indices into ``sel``, one per run) from ``starts``,
         stopping on cycles that repeat to ``tol``. A looser ``tol`` than ``periodic_tol`` marks first
-        stops, each of which is shot from (:meth:`tribosweep._cycles.CensusCheck.resolve`): their
-        repetition compares ``(z, zd, phi, phid)`` only (the core's ``checked_stops``)."""
+        stops, each of which is shot from (:meth:`tribosweep._cycles.CensusCheck.resolve`): there ``x``
+        and ``xd`` need only repeat to ten times ``tol`` (the core's ``checked_stops``)."""
         return _core.ensemble(
             base, contact, friction_law, names, np.ascontiguousarray(values[rows]), np.ascontiguousarray(starts),
             float(t_max), integrator, float(rtol), atol=None if atol is None else np.asarray(atol, dtype=np.float64),

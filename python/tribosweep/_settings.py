@@ -181,11 +181,11 @@ class Census:
         The repetition tolerance at which a sample after its point's two pilots first stops on a
         cycle; every such stop is shot from, and the sample is on the stable orbit shooting
         converges to, measured there, or goes on from its stop at ``periodic_tol`` (see
-        ``tribosweep._census``; ``x`` and ``xd`` need only repeat to ten times it). None (default): 1e-3 under speed-dependent friction, where
-        the lightly damped ``x`` mode (multiplier 0.993 per period) holds a repetition to
-        ``periodic_tol`` back by seconds (the switch-law Stribeck sweep's census 0.77-0.84x the
-        time, no fraction moving by more than 1 standard error); ``periodic_tol`` (no first stops) under
-        constant friction, whose census compares the fast components only and settles within
+        ``tribosweep._census``; ``x`` and ``xd`` need only repeat to ten times it). None
+        (default): 1e-3 under speed-dependent friction, where the lightly damped ``x`` mode
+        (multiplier 0.993 per period) holds a repetition to ``periodic_tol`` back by seconds (the
+        switch-law Stribeck sweep's census 0.77-0.84x the time, no fraction moving by more than
+        1 standard error); ``periodic_tol`` (no first stops) under constant friction, whose census compares the fast components only and settles within
         a few periods (the 2,000-point grid took 42.0 s with first stops at 1e-3, against 36.7 s).
     recurrence : bool
         Let the samples after each point's two pilots stop as irregular once they keep to an

@@ -254,7 +254,8 @@ fn summaries(out: Vec<Result<TrajectoryResult, String>>) -> Vec<(Summary, String
 /// stable orbit ends the run on it, output `approach`; the third check that finds the same unstable
 /// orbit, the run having left it between, ends the run as intermittent irregular motion, outputs
 /// `intermittent_period`, `intermittent_multiplier` and `intermittent_visits`; `checked_stops`: the
-/// caller shoots from every periodic stop, so the repetition test compares `(z, zd, phi, phid)` only).
+/// caller shoots from every periodic stop, so `x` and `xd` need only repeat to `CHECKED_X_SLACK`
+/// (10) times `periodic_tol`).
 /// The core picks the path (lane-batched or scalar) and the grouping; results do not depend on it
 /// beyond integration accuracy, nor on the thread count at all. Every non-success status has a
 /// reason; Ctrl-C stops every thread (`KeyboardInterrupt`, the results are dropped).
