@@ -40,7 +40,10 @@ pub(crate) struct SectionWatcher {
     /// The components the repetition and decay tests compare (`SteadyOptions::watch_x`).
     pub(super) comps: &'static [usize],
     /// Factor on the repetition tolerance of `x` and `xd`: [`CHECKED_X_SLACK`] where every stop is
-    /// checked by shooting (`SteadyOptions::checked_stops`), else 1.
+    /// checked by shooting (`SteadyOptions::checked_stops`), else 1. It holds in the stop test and
+    /// in the reduction of its multiplicity alike: with `x` held to `REDUCE_TOL` in the reduction
+    /// alone, the Stribeck sweep's census found the same fractions but took 613 instead of 588
+    /// million right-hand sides (8.5 against 7.6 s: stops left at a multiple of their period).
     pub(super) x_slack: f64,
     /// The stationarity test of sustained irregular motion (`SteadyOptions::irregular_block`).
     stationary: Option<Stationarity>,
