@@ -45,9 +45,11 @@ type C64 = Complex<f64>;
 pub type Augmented = SVector<f64, 42>;
 
 mod floquet;
+mod newton;
 mod switches;
 use floquet::classify;
 pub use floquet::{Instability, INSTABILITY_NAMES};
+use newton::{shoot_impl, Newton};
 #[cfg(test)]
 use switches::missed_crossing;
 pub use switches::*;
@@ -199,7 +201,7 @@ pub fn guess_from_root(root: &Root) -> (State, f64) {
 /// frequency is a better guess than the return time of its approximate state).
 pub fn shoot_from_root(s: &Slider, root: &Root, opts: &ShootingOptions) -> PeriodicOrbit {
     let (y0, t) = guess_from_root(root);
-    shoot_impl(s, &y0, t, opts, false)
+    shoot_impl(s, &y0, t, opts, false, Newton::Full)
 }
 
 pub(crate) fn scales(s: &Slider) -> State {
@@ -291,9 +293,13 @@ pub(crate) const FREE: [usize; 5] = [idx::Z, idx::X, idx::XD, idx::PHI, idx::PHI
 /// The check of a run's slow approach ([`crate::steady::ApproachCheck`]): shooting from the section
 /// state `y` over `period` at integration tolerance `rtol` and Newton tolerance `tol` (20
 /// iterations at most, as `tribosweep._cycles.CHECK_MAX_ITER`), held to the period (1 %).
+///
+/// The stop is within [`crate::steady::APPROACH_TOL`] of the orbit and its period is the run's
+/// own repetition time, so the check starts Newton there (no first return) and iterates on the
+/// chord ([`Newton::Chord`]).
 pub fn approach_check(s: &Slider, y: &State, period: f64, rtol: f64, tol: f64) -> (ApproachVerdict, Stats) {
     let opts = ShootingOptions { rtol, tol, max_iter: 20, n_samples: 256, ..ShootingOptions::default() };
-    let orb = shoot(s, y, period, &opts);
+    let orb = shoot_impl(s, y, period, &opts, false, Newton::Chord);
     let same = orb.status == Status::Success && (orb.period / period - 1.0).abs() <= 1e-2;
     let verdict = match (same, orb.stable) {
         (true, true) => ApproachVerdict::Stable { state0: orb.state0, period: orb.period },
@@ -322,162 +328,7 @@ pub fn approach_check(s: &Slider, y: &State, period: f64, rtol: f64, tol: f64) -
 /// # Errors
 /// A failure is in `status` (see [`PeriodicOrbit::status`]), never a panic.
 pub fn shoot(s: &Slider, y0: &State, period: f64, opts: &ShootingOptions) -> PeriodicOrbit {
-    shoot_impl(s, y0, period, opts, true)
-}
-
-fn shoot_impl(s: &Slider, y0: &State, period: f64, opts: &ShootingOptions, refine_period: bool) -> PeriodicOrbit {
-    let mut stats = Stats::default();
-    let sz = scales(s);
-    let mut y = *y0;
-    if !period.is_finite() || period <= 0.0 || !y.iter().all(|v| v.is_finite()) {
-        return unconverged(Failure::InvalidStart { period }, f64::NAN, 0, stats);
-    }
-    if y[idx::ZD] != 0.0 {
-        match to_section(s, &y, 2.0 * period, opts, &mut stats) {
-            Some(v) => y = v,
-            None if crate::cancel::requested() => {
-                return unconverged(Failure::Cancelled { t: f64::NAN }, f64::NAN, 0, stats)
-            }
-            None => return unconverged(Failure::NoSection { horizon: 2.0 * period }, f64::NAN, 0, stats),
-        }
-    }
-    y[idx::ZD] = 0.0;
-    let mut t = if refine_period { first_return(s, &y, period, opts, &mut stats) } else { period };
-    let mut iterations = 0;
-    let eval = |y: &State, t: f64, rtol: f64, stats: &mut Stats| -> Result<(Flow, State, f64), Status> {
-        let mode0 = s.mode_at(y);
-        let fl = flow(s, y, mode0, t, opts, &options_42(s, rtol), stats)?;
-        let r = fl.y - y;
-        let rn = r.component_div(&sz).amax();
-        Ok((fl, r, rn))
-    };
-    // Graded accuracy: while far from the orbit the flow is integrated only as accurately as the
-    // next Newton iterate can use (1e-3 of the residual expected after a quadratic step, at most
-    // 1e-6; the first evaluation at 1e-7); convergence is only declared, and the monodromy matrix
-    // only kept, from an integration at `opts.rtol` (on the seed orbit: 4 integrations at 1e-7,
-    // 1e-6, 5e-10, 1e-11 instead of 4 at 1e-11).
-    let graded = |rn_prev: f64| (1e-3 * rn_prev * rn_prev).clamp(opts.rtol, 1e-6);
-    let mut rtol = opts.rtol.max(1e-7);
-    let (mut fl, mut r, mut rn) = match eval(&y, t, rtol, &mut stats) {
-        Ok(v) => v,
-        Err(st) => return unconverged(Failure::OrbitFlow { status: st, period: t }, f64::NAN, 0, stats),
-    };
-    let mut status = Status::NewtonNotConverged;
-    let mut stalled = false;
-    loop {
-        if crate::cancel::requested() {
-            status = Status::NotComputed;
-            break;
-        }
-        if !rn.is_finite() {
-            status = Status::NonFinite;
-            break;
-        }
-        let converged = rn <= opts.tol;
-        if converged || stalled {
-            if rtol > opts.rtol {
-                // Judge again at full accuracy before deciding. (After a failed line search: the
-                // residual was judged at a graded, lower accuracy; from a start already close to
-                // the orbit, such as a transient's section state, the accurate residual can be
-                // above the coarse one, so no step could beat it.)
-                rtol = opts.rtol;
-                stalled = false;
-                match eval(&y, t, rtol, &mut stats) {
-                    Ok(v) => (fl, r, rn) = v,
-                    Err(st) => {
-                        status = st;
-                        break;
-                    }
-                }
-                continue;
-            }
-            // At full accuracy: converged; or no step reduces the residual, which is then at the
-            // integration's noise floor, and within the small-step acceptance (100 tol) that is
-            // convergence too.
-            if converged || rn <= opts.tol * 100.0 {
-                status = Status::Success;
-            }
-            break;
-        }
-        if iterations >= opts.max_iter {
-            break;
-        }
-        iterations += 1;
-        // Scaled Newton matrix: rows by sizes, columns by sizes (state) and T (period).
-        let f_end = s.rhs(&fl.y, fl.mode);
-        let mut a = SMatrix::<f64, 6, 6>::zeros();
-        for (col, &j) in FREE.iter().enumerate() {
-            for i in 0..6 {
-                let m = fl.phi[(i, j)] - if i == j { 1.0 } else { 0.0 };
-                a[(i, col)] = m * sz[j] / sz[i];
-            }
-        }
-        for i in 0..6 {
-            a[(i, 5)] = f_end[i] * t / sz[i];
-        }
-        let rhs = -r.component_div(&sz);
-        let Some(du) = a.lu().solve(&rhs) else { break };
-        if !du.iter().all(|v| v.is_finite()) {
-            break;
-        }
-        let small_step = du.amax() <= opts.tol * 1e-2;
-        let rtol_next = graded(rn);
-        let mut lambda = 1.0;
-        let mut accepted = false;
-        for _ in 0..8 {
-            let mut yt = y;
-            for (col, &j) in FREE.iter().enumerate() {
-                yt[j] += lambda * du[col] * sz[j];
-            }
-            let tt = t * (1.0 + lambda * du[5]);
-            if let Ok((flt, rt, rnt)) = eval(&yt, tt, rtol_next, &mut stats) {
-                if rnt < rn || small_step {
-                    y = yt;
-                    t = tt;
-                    fl = flt;
-                    r = rt;
-                    rn = rnt;
-                    rtol = rtol_next;
-                    accepted = true;
-                    break;
-                }
-            }
-            lambda *= 0.5;
-        }
-        if !accepted {
-            stalled = true;
-            continue;
-        }
-        if small_step && rtol <= opts.rtol {
-            status = if rn <= opts.tol * 100.0 { Status::Success } else { Status::NewtonNotConverged };
-            break;
-        }
-    }
-    if status != Status::Success {
-        let failure = match status {
-            Status::NewtonNotConverged => {
-                Failure::Newton { iterations, max_iter: opts.max_iter, residual: rn, tol: opts.tol }
-            }
-            Status::NotComputed => Failure::Cancelled { t: f64::NAN },
-            other => Failure::OrbitFlow { status: other, period: t },
-        };
-        return unconverged(failure, rn, iterations, stats);
-    }
-    let mut orbit = analyse(s, &y, t, &fl, opts, &mut stats);
-    if orbit.status != Status::Success {
-        return unconverged(Failure::OrbitFlow { status: orbit.status, period: t }, rn, iterations, stats);
-    }
-    // Steady sliding is a "periodic orbit" of every period: Newton can end there from a poor
-    // guess. That is no cycle.
-    let swing = orbit.z_max - orbit.z_min;
-    let floor = 1e-6 * sz[idx::Z];
-    if swing.is_nan() || swing <= floor {
-        return unconverged(Failure::NoCycle { swing, floor }, rn, iterations, stats);
-    }
-    orbit.residual_norm = rn;
-    orbit.newton_iterations = iterations;
-    orbit.stats = stats;
-    orbit
+    shoot_impl(s, y0, period, opts, true, Newton::Full)
 }
 
 /// The result of a solve that found no orbit: NaN values (never the last iterate), the failure's

@@ -441,3 +441,75 @@ fn an_unconverged_orbit_has_no_values_and_says_why() {
     assert_eq!(c.status, Status::NotComputed);
     assert!(c.period.is_nan() && c.failure.is_some_and(|f| f.status() == Status::NotComputed));
 }
+
+#[test]
+fn the_chord_finds_the_orbit_and_the_verdict_of_newton() {
+    // A transient's slow-approach stop is within APPROACH_TOL = 1e-3 (scaled) of its orbit; the
+    // chord (one monodromy matrix, then flows of the state alone) must end where Newton ends,
+    // with the same stability (its cost is measured by the Stribeck bench). Two orbits: the issue-10 model's cycle with stick
+    // and contact loss under the switch law (72 N, 0.2 m/s; its friction mode's multiplier is
+    // near 1, where a kept matrix is least accurate against the Newton matrix's smallest
+    // singular value), stable; and the seed's period-1 bouncing orbit past its flip (80 N,
+    // mu = 0.4225, continued from 0.415 as in `period_doubling_is_flagged_by_the_flip_multiplier`),
+    // unstable.
+    use crate::model::FrictionLaw;
+    use crate::steady::{run_to_steady, SteadyOptions, SteadyOutcome, Tolerances};
+    let opts = ShootingOptions { rtol: 1e-9, tol: 1e-8, max_iter: 20, n_samples: 256, ..ShootingOptions::default() };
+    let on_cycle = |p: Params| {
+        let s = Slider::new(p).unwrap();
+        let y0 = State::new(s.z_st.abs(), 0.0, 0.0, 0.0, 0.0, 0.0);
+        let so = SteadyOptions { t_max: 40.0, tol: Tolerances::new(1e-9), periodic_tol: 1e-6, ..Default::default() };
+        let sum = run_to_steady(&s, &y0, &so);
+        assert_eq!(sum.outcome, SteadyOutcome::Periodic, "{:?}", sum.status);
+        let o = shoot(&s, &sum.y_end, sum.period, &opts);
+        assert_eq!(o.status, Status::Success);
+        (s, o)
+    };
+    let stribeck = Params {
+        contact: ContactModel::Unilateral,
+        friction_law: FrictionLaw::Switch,
+        mu_static: 0.3,
+        normal_load: 72.2,
+        omega_normal: 443.358,
+        omega_friction: 413.074,
+        omega_torsion: 724.756,
+        sliding_speed: 0.2,
+        ..Params::seed()
+    };
+    let bounce = Params { contact: ContactModel::Unilateral, normal_load: 80.0, mu: 0.415, ..Params::seed() };
+    let (_, before) = on_cycle(bounce);
+    let past = Slider::new(Params { mu: 0.4225, ..bounce }).unwrap();
+    let flip = shoot(&past, &before.state0, before.period, &opts);
+    assert!(flip.status == Status::Success && !flip.stable);
+    for ((s, on), stable) in [(on_cycle(stribeck), true), ((past, flip), false)] {
+        let sz = scales(&s);
+        let start = State::from_fn(|k, _| if k == idx::ZD { 0.0 } else { on.state0[k] + [1e-3, -1e-3][k % 2] * sz[k] });
+        let full = shoot_impl(&s, &start, on.period, &opts, false, Newton::Full);
+        let chord = shoot_impl(&s, &start, on.period, &opts, false, Newton::Chord);
+        eprintln!(
+            "{:?}: full {} iterations, {} rhs; chord {} iterations, {} rhs; moduli {:?} / {:?}",
+            s.p.friction_law,
+            full.newton_iterations,
+            full.stats.n_rhs,
+            chord.newton_iterations,
+            chord.stats.n_rhs,
+            full.moduli,
+            chord.moduli
+        );
+        assert_eq!((full.status, chord.status), (Status::Success, Status::Success));
+        assert_eq!((full.stable, chord.stable), (stable, stable));
+        // Against a solve to tol 1e-11 at rtol 1e-11: the chord stops once its step is below
+        // tol = 1e-8 as well as the residual, so its end is within about tol of the orbit. (Full
+        // Newton stops on the residual alone: the bouncing orbit's multiplier 0.998 leaves its
+        // end 1.7e-5 off along that direction for a residual of 1e-9.)
+        let fine = ShootingOptions { rtol: 1e-11, tol: 1e-11, ..opts };
+        let refo = shoot_impl(&s, &start, on.period, &fine, false, Newton::Full);
+        assert_eq!(refo.status, Status::Success);
+        let dy = (chord.state0 - refo.state0).component_div(&sz).amax();
+        let dt = chord.period / refo.period - 1.0;
+        eprintln!("chord: period {dt:e} relative, state {dy:e} (scaled) from the reference");
+        assert!(dt.abs() < 1e-8 && dy < 1e-6, "period {dt:e}, state {dy:e}");
+        let largest = |o: &PeriodicOrbit| o.moduli[(0..6).find(|&k| k != o.trivial).unwrap()];
+        assert!((largest(&chord) - largest(&refo)).abs() < 1e-4, "{} vs {}", largest(&chord), largest(&refo));
+    }
+}
