@@ -149,7 +149,7 @@ pub(super) struct Spectrum {
 pub(super) fn spectrum(phi: &Jacobian) -> Option<Spectrum> {
     let mut ev = eigenvalues(phi)?;
     ev.sort_by(|a, b| b.norm().total_cmp(&a.norm()).then(b.im.total_cmp(&a.im)));
-    let trivial = (0..6).min_by(|&a, &b| (ev[a] - 1.0).norm().total_cmp(&(ev[b] - 1.0).norm()))?;
+    let trivial = crate::shooting::trivial_index(&ev);
     let nt: Vec<C64> = (0..6).filter(|&k| k != trivial).map(|k| ev[k]).collect();
     let is_real = |c: &C64| c.im.abs() <= 1e-8 * c.norm().max(1.0);
     let count = |f: &dyn Fn(&C64) -> bool| nt.iter().filter(|c| f(c)).count() as u8;

@@ -3,6 +3,12 @@
 
 use super::C64;
 
+/// The trivial multiplier of an orbit: the index of the one nearest 1 (exactly 1 on the orbit, the
+/// flow's direction).
+pub(crate) fn trivial_index(ev: &[C64; 6]) -> usize {
+    (0..6).min_by(|&a, &b| (ev[a] - 1.0).norm().total_cmp(&(ev[b] - 1.0).norm())).unwrap_or(0)
+}
+
 /// How a periodic orbit is unstable: the kind of its largest non-trivial Floquet multiplier.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Instability {

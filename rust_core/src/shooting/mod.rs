@@ -48,6 +48,7 @@ mod floquet;
 mod newton;
 mod switches;
 use floquet::classify;
+pub(crate) use floquet::trivial_index;
 pub use floquet::{Instability, INSTABILITY_NAMES};
 use newton::{shoot_impl, Newton};
 #[cfg(test)]
@@ -541,7 +542,7 @@ fn analyse(s: &Slider, y0: &State, t: f64, fl: &Flow, opts: &ShootingOptions, st
     if let Some(ev) = eigenvalues(&fl.phi) {
         let mut ev = ev;
         ev.sort_by(|a, b| b.norm().total_cmp(&a.norm()).then(b.im.total_cmp(&a.im)));
-        let trivial = (0..6).min_by(|&a, &b| (ev[a] - 1.0).norm().total_cmp(&(ev[b] - 1.0).norm())).unwrap_or(0);
+        let trivial = trivial_index(&ev);
         out.multipliers = ev;
         out.moduli = ev.map(|e| e.norm());
         out.trivial = trivial;

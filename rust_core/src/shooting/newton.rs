@@ -135,6 +135,20 @@ pub(super) fn shoot_impl(
     // The scaled size of the last accepted step (the chord's convergence test).
     let mut last_step = f64::INFINITY;
     let mut prev_step = f64::INFINITY;
+    // The current iterate's flow again (at `rtol`, with `kept` as it now is), then the next round;
+    // a failed flow ends the solve.
+    macro_rules! reeval {
+        () => {
+            match eval(&y, t, rtol, &mut kept, &mut stats) {
+                Ok(v) => (fl, r, rn) = v,
+                Err(st) => {
+                    status = st;
+                    break;
+                }
+            }
+            continue
+        };
+    }
     loop {
         if crate::cancel::requested() {
             status = Status::NotComputed;
@@ -158,14 +172,7 @@ pub(super) fn shoot_impl(
                 // above the coarse one, so no step could beat it.)
                 rtol = opts.rtol;
                 stalled = false;
-                match eval(&y, t, rtol, &mut kept, &mut stats) {
-                    Ok(v) => (fl, r, rn) = v,
-                    Err(st) => {
-                        status = st;
-                        break;
-                    }
-                }
-                continue;
+                reeval!();
             }
             // At full accuracy: converged; or no step reduces the residual, which is then at the
             // integration's noise floor, and within the small-step acceptance (100 tol) that is
@@ -238,14 +245,7 @@ pub(super) fn shoot_impl(
         if refresh {
             kept = None;
             kept_here = true;
-            match eval(&y, t, rtol, &mut kept, &mut stats) {
-                Ok(v) => (fl, r, rn) = v,
-                Err(st) => {
-                    status = st;
-                    break;
-                }
-            }
-            continue;
+            reeval!();
         }
         if !accepted {
             stalled = true;
@@ -296,9 +296,7 @@ pub(super) fn shoot_impl(
 /// [`CHORD_MARGIN`] times the trivial one's distance from 1 (its error) and `stability_tol`.
 fn chord_says_stable(phi: &Jacobian, stability_tol: f64) -> bool {
     let Some(ev) = eigenvalues(phi) else { return false };
-    let Some(trivial) = (0..6).min_by(|&a, &b| (ev[a] - 1.0).norm().total_cmp(&(ev[b] - 1.0).norm())) else {
-        return false;
-    };
+    let trivial = trivial_index(&ev);
     let err = (ev[trivial] - 1.0).norm();
     (0..6).filter(|&k| k != trivial).all(|k| ev[k].norm() < 1.0 - CHORD_MARGIN * err - stability_tol)
 }

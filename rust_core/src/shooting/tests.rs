@@ -242,7 +242,7 @@ fn instability_is_the_kind_of_the_largest_nontrivial_multiplier() {
     let c = C64::new;
     // Sorted by modulus, descending, as `analyse` leaves them; the trivial one is 1.
     let judge = |ev: [C64; 6]| {
-        let trivial = (0..6).min_by(|&a, &b| (ev[a] - 1.0).norm().total_cmp(&(ev[b] - 1.0).norm())).unwrap();
+        let trivial = trivial_index(&ev);
         let stable = (0..6).filter(|&k| k != trivial).all(|k| ev[k].norm() < 1.0 - 1e-6);
         classify(&ev, trivial, stable)
     };
