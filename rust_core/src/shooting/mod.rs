@@ -23,7 +23,10 @@
 //! ends, so a hop of the pin shorter than one step (the seed bouncing cycle has a 0.19 ms hop,
 //! about one DOP853 step at rtol 1e-8 to 1e-11) goes unseen and the run follows another orbit.
 //! Every step is therefore checked on 8 interior points of its dense output; a step that hides a
-//! switch is redone from its start with steps capped at a quarter of it (local refinement).
+//! switch is redone from its start with steps capped at a quarter of it (local refinement). So is
+//! a step that ends in flight with the pin pressed into the disk: the pin landed while the law's
+//! force was tensile (it stays in flight at the gap event) and that force turned compressive again
+//! inside the same step, two crossings that cancel at the step's ends.
 //!
 //! The orbit is then sampled densely over one period (the 6-state integrated again, with the
 //! slider's own mode switching) for its harmonics, `z_max`, the fraction of the period with the

@@ -36,7 +36,7 @@ const CHORD_CONTRACTION: f64 = 0.3;
 
 /// The end of one period of the flow of the state alone (no variational equations), for the
 /// chord steps of [`Newton::Chord`]: `phi` is left NaN for the caller to fill.
-fn flow_state(
+pub(super) fn flow_state(
     s: &Slider,
     y0: &State,
     mode0: ContactMode,

@@ -513,3 +513,51 @@ fn the_chord_finds_the_orbit_and_the_verdict_of_newton() {
         assert!((largest(&chord) - largest(&refo)).abs() < 1e-4, "{} vs {}", largest(&chord), largest(&refo));
     }
 }
+
+#[test]
+fn a_pin_landing_under_tension_does_not_fly_through_the_disk() {
+    // The end of a chaotic run of the issue-10 switch-law sweep (150 N, 12.7 cm arm, 0.4 m/s; its
+    // frequencies as the sweep sets them): the pin is in flight, lands at 1.0 ms while the law's
+    // normal force is tensile (it stays in flight at the gap event), and that force turns
+    // compressive again inside the same step. Without checks inside the steps the shooting's flows
+    // missed both crossings and flew on through the disk to the 1 mm escape limit at 6.2 ms
+    // (`Diverged`). Each flow (the state alone, and with its variational equations) must follow
+    // the transients' own driver instead: within 1e-5 of the characteristic sizes after 10 ms.
+    let mut p = Params::seed();
+    p.contact = ContactModel::Unilateral;
+    p.friction_law = crate::model::FrictionLaw::Switch;
+    for (k, v) in [
+        ("omega_normal", 234.4899326505231),
+        ("omega_friction", 192.31907889927868),
+        ("omega_torsion", 487.1928411561178),
+        ("normal_load", 150.0),
+        ("sliding_speed", 0.4),
+        ("mu_static", 0.3),
+    ] {
+        p.set(k, v).unwrap();
+    }
+    let s = Slider::new(p).unwrap();
+    let y0 = State::from_column_slice(&[
+        7.214338537441294e-05,
+        -0.011065934757032178,
+        2.7619381516037394e-05,
+        0.0046263753049569055,
+        -0.004903329338366977,
+        4.511541282276206,
+    ]);
+    assert_eq!(s.mode_at(&y0), ContactMode::Free);
+    let (t, rtol) = (0.01, 1e-8);
+    let o = crate::steady::options_for(&s, &crate::steady::Tolerances::new(1e-11));
+    let reference = integrate(&s, Method::Dop853, 0.0, y0, t, &o, &mut crate::ode::NoObserver);
+    assert_eq!(reference.outcome, Outcome::Finished);
+    let sz = scales(&s);
+    let off = |y: &State| (y - reference.y).component_div(&sz).amax();
+    let opts = ShootingOptions { rtol, ..ShootingOptions::default() };
+    let mut st = Stats::default();
+    let alone = newton::flow_state(&s, &y0, s.mode_at(&y0), t, &opts, rtol, &mut st).expect("the state's flow");
+    let with_phi =
+        flow(&s, &y0, s.mode_at(&y0), t, &opts, &options_42(&s, rtol), &mut st).expect("the variational flow");
+    assert!(off(&alone.y) < 1e-5, "{:e}", off(&alone.y));
+    assert!(off(&with_phi.y) < 1e-5, "{:e}", off(&with_phi.y));
+    assert!(reference.y[idx::Z].abs() < 2e-4);
+}
