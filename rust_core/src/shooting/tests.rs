@@ -499,15 +499,15 @@ fn the_chord_finds_the_orbit_and_the_verdict_of_newton() {
         assert_eq!((full.status, chord.status), (Status::Success, Status::Success));
         assert_eq!((full.stable, chord.stable), (stable, stable));
         // Against a solve to tol 1e-11 at rtol 1e-11: the chord stops once its step is below
-        // tol = 1e-8 as well as the residual, so its end is within about tol of the orbit. (Full
-        // Newton ends 1.7e-5 off on the bouncing orbit at rtol 1e-9, 3e-8 at 1e-10: not for its
-        // stopping test, which the chord's step test leaves there too (measured), but because the
-        // flow with the variational equations ends a period 6.8e-8 (scaled) off at rtol 1e-9,
-        // against 6.0e-9 for the state's own flow: its error norm is the RMS over 42 components,
-        // the state's six weigh a seventh. Along the 0.998 multiplier that is 430x.)
+        // tol = 1e-8 as well as the residual, so its end is within about tol of the orbit. Full
+        // Newton's end is as good as its flows: 8.9e-7 here, 1.7e-5 when the flow with the
+        // variational equations let `Phi` into its error norm (`options_42`); along the orbit's
+        // 0.998 multiplier a flow's error is amplified about 430x.
         let fine = ShootingOptions { rtol: 1e-11, tol: 1e-11, ..opts };
         let refo = shoot_impl(&s, &start, on.period, &fine, false, Newton::Full);
         assert_eq!(refo.status, Status::Success);
+        let dyf = (full.state0 - refo.state0).component_div(&sz).amax();
+        assert!(dyf < 1e-5, "full Newton's state {dyf:e} from the reference");
         let dy = (chord.state0 - refo.state0).component_div(&sz).amax();
         let dt = chord.period / refo.period - 1.0;
         eprintln!("chord: period {dt:e} relative, state {dy:e} (scaled) from the reference");
