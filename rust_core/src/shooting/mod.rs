@@ -65,7 +65,8 @@ pub struct ShootingOptions {
     /// Integration method (DOP853 by default).
     pub method: Method,
     /// Relative tolerance of the integration; absolute tolerances are this times the slider's
-    /// characteristic sizes (`steady::characteristic_sizes`), and for `Phi[i][j]` their ratio.
+    /// characteristic sizes (`steady::characteristic_sizes`); the variational equations'
+    /// `Phi` follows on the state's steps (see `options_42`).
     pub rtol: f64,
     /// Most Newton iterations.
     pub max_iter: u32,
