@@ -66,6 +66,20 @@ impl OdeSystem<42> for Variational<'_> {
         OdeSystem::<6>::events(self.slider, t, &split(y).0, mode, g);
     }
 
+    // The slider's own rules for the steps and crossings (the stick band's step limit, the band
+    // edges counted one way), as in the transients' runs.
+    fn event_rates(&self, t: f64, y: &Augmented, f: &Augmented, mode: ContactMode, d: &mut [f64; MAX_EVENTS]) -> bool {
+        OdeSystem::<6>::event_rates(self.slider, t, &split(y).0, &split(f).0, mode, d)
+    }
+
+    fn step_limit(&self, y: &Augmented, f: &Augmented, mode: ContactMode) -> f64 {
+        OdeSystem::<6>::step_limit(self.slider, &split(y).0, &split(f).0, mode)
+    }
+
+    fn crossing_counts(&self, mode: ContactMode, i: usize, rising: bool) -> bool {
+        OdeSystem::<6>::crossing_counts(self.slider, mode, i, rising)
+    }
+
     fn on_event(&self, t: f64, y: &Augmented, mode: ContactMode, index: usize) -> EventAction<ContactMode> {
         OdeSystem::<6>::on_event(self.slider, t, &split(y).0, mode, index)
     }
@@ -212,6 +226,19 @@ impl OdeSystem<6> for Forced<'_> {
     #[inline]
     fn events(&self, t: f64, y: &State, mode: ContactMode, g: &mut [f64; MAX_EVENTS]) {
         OdeSystem::<6>::events(self.slider, t, y, mode, g);
+    }
+
+    // As `Variational`'s: the slider's own rules for the steps and crossings.
+    fn event_rates(&self, t: f64, y: &State, f: &State, mode: ContactMode, d: &mut [f64; MAX_EVENTS]) -> bool {
+        OdeSystem::<6>::event_rates(self.slider, t, y, f, mode, d)
+    }
+
+    fn step_limit(&self, y: &State, f: &State, mode: ContactMode) -> f64 {
+        OdeSystem::<6>::step_limit(self.slider, y, f, mode)
+    }
+
+    fn crossing_counts(&self, mode: ContactMode, i: usize, rising: bool) -> bool {
+        OdeSystem::<6>::crossing_counts(self.slider, mode, i, rising)
     }
 
     fn on_event(&self, t: f64, y: &State, mode: ContactMode, index: usize) -> EventAction<ContactMode> {
