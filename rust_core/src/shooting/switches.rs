@@ -16,9 +16,14 @@ pub struct Variational<'a> {
 
 #[inline]
 pub(super) fn split(y: &Augmented) -> (State, Jacobian) {
-    let x = State::from_fn(|i, _| y[i]);
     let phi = Jacobian::from_fn(|r, c| y[6 + 6 * c + r]);
-    (x, phi)
+    (head(y), phi)
+}
+
+/// The state part of `y` (the slider's own functions read only that, not `Phi`).
+#[inline]
+fn head(y: &Augmented) -> State {
+    State::from_fn(|i, _| y[i])
 }
 
 #[inline]
@@ -31,7 +36,7 @@ impl OdeSystem<42> for Variational<'_> {
 
     #[inline]
     fn rhs(&self, _t: f64, y: &Augmented, mode: ContactMode) -> Augmented {
-        let x = State::from_fn(|i, _| y[i]);
+        let x = head(y);
         let f = self.slider.rhs(&x, mode);
         let j = self.slider.jacobian(&x, mode);
         let mut out = Augmented::zeros();
@@ -63,17 +68,17 @@ impl OdeSystem<42> for Variational<'_> {
 
     #[inline]
     fn events(&self, t: f64, y: &Augmented, mode: ContactMode, g: &mut [f64; MAX_EVENTS]) {
-        OdeSystem::<6>::events(self.slider, t, &split(y).0, mode, g);
+        OdeSystem::<6>::events(self.slider, t, &head(y), mode, g);
     }
 
     // The slider's own rules for the steps and crossings (the stick band's step limit, the band
     // edges counted one way), as in the transients' runs.
     fn event_rates(&self, t: f64, y: &Augmented, f: &Augmented, mode: ContactMode, d: &mut [f64; MAX_EVENTS]) -> bool {
-        OdeSystem::<6>::event_rates(self.slider, t, &split(y).0, &split(f).0, mode, d)
+        OdeSystem::<6>::event_rates(self.slider, t, &head(y), &head(f), mode, d)
     }
 
     fn step_limit(&self, y: &Augmented, f: &Augmented, mode: ContactMode) -> f64 {
-        OdeSystem::<6>::step_limit(self.slider, &split(y).0, &split(f).0, mode)
+        OdeSystem::<6>::step_limit(self.slider, &head(y), &head(f), mode)
     }
 
     fn crossing_counts(&self, mode: ContactMode, i: usize, rising: bool) -> bool {
@@ -81,7 +86,7 @@ impl OdeSystem<42> for Variational<'_> {
     }
 
     fn on_event(&self, t: f64, y: &Augmented, mode: ContactMode, index: usize) -> EventAction<ContactMode> {
-        OdeSystem::<6>::on_event(self.slider, t, &split(y).0, mode, index)
+        OdeSystem::<6>::on_event(self.slider, t, &head(y), mode, index)
     }
 }
 
