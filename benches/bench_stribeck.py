@@ -6,12 +6,17 @@ the same process. Prints points/s, right-hand sides per point, where the points 
 regimes the two laws give at each point.
 
     python benches/bench_stribeck.py [--threads 2] [--repeat 2] [--stages]
+    python benches/bench_stribeck.py --scaling [--law switch] [--threads 2] [--repeat 3]
     python benches/bench_stribeck.py --settings [--law switch] [--out bench_out]
 
 ``--stages`` also prints, for the last run of each law, the wall time of its batched core calls by
 kind (``steady``: the transients; ``sampled``: the irregular points' measurement windows;
 ``final``: their Lyapunov-exponent segments, and the runs leaving an unstable cycle; ``shooting``:
 the check of every cycle a transient stopped on), with their right-hand sides and accepted steps.
+
+``--scaling`` instead runs one law's sweep on 1 thread and on ``--threads``, best of ``--repeat``
+each, and prints each stage's wall time on both with the ratio (how far each stage is from a
+perfect speed-up, and the points/s a perfect one would give).
 
 ``--settings`` instead runs one law's sweep over the transients' ``rtol`` x ``transient_irregular_block``
 against a reference run to ``t_max`` at rtol 1e-10 (:mod:`tribosweep.bench.sweep_settings`), prints
@@ -79,13 +84,37 @@ class StageClock:
         return "  stages: " + "; ".join(parts) + f"; outside the core calls {rest:.3f} s"
 
 
+def scaling(law: str, threads: int, repeat: int) -> str:
+    """One law's sweep on 1 thread and on ``threads``: the best run of each, its stages side by side."""
+    best: dict[int, tuple[float, StageClock]] = {}
+    for th in sorted({1, threads}):
+        for _ in range(max(repeat, 1)):
+            clock = StageClock()
+            with clock:
+                w, ds = run(law, th)
+            if th not in best or w < best[th][0]:
+                best[th] = (w, clock)
+    (w1, c1), (wn, cn) = best[1], best[threads]
+    n = int(ds.regime.size)
+    kinds = sorted(set(c1.rows) | set(cn.rows), key=lambda k: -c1.rows.get(k, [0.0])[0])
+    rows = [(k, c1.rows.get(k, [0.0])[0], cn.rows.get(k, [0.0])[0]) for k in kinds]
+    rows.append(("outside the core calls", w1 - sum(r[1] for r in rows), wn - sum(r[2] for r in rows)))
+    rows.append(("sweep", w1, wn))
+    lines = [f"{law} law, {n} points: 1 thread {n / w1:.1f} points/s, {threads} threads {n / wn:.1f} points/s "
+             f"({w1 / wn:.2f}x; a perfect {threads}x would give {threads * n / w1:.1f})",
+             f"| stage | 1 thread [s] | {threads} threads [s] | speed-up |", "|---|---|---|---|"]  # fmt: skip
+    lines += [f"| {k} | {t1:.3f} | {tn:.3f} | {t1 / tn:.2f}x |" for k, t1, tn in rows]
+    return "\n".join(lines)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--repeat", type=int, default=2, help="best of this many runs of each law")
     ap.add_argument("--stages", action="store_true", help="time the core calls of each law's last run by kind")
     ap.add_argument("--settings", action="store_true", help="speed against agreement over rtol x transient_irregular_block")
-    ap.add_argument("--law", default="switch", choices=("switch", "coulomb"), help="the law of --settings")
+    ap.add_argument("--scaling", action="store_true", help="each stage on 1 thread against --threads")
+    ap.add_argument("--law", default="switch", choices=("switch", "coulomb"), help="the law of --settings and --scaling")
     ap.add_argument("--out", default="bench_out", help="where --settings writes its chart")
     a = ap.parse_args(argv)
     print(f"{machine_line()}; threads {a.threads}")
@@ -95,6 +124,9 @@ def main(argv=None) -> int:
         res = sweep_settings(a.out, quick=a.repeat < 2, threads=a.threads, law=a.law)
         print(res["markdown"])
         print(f"chart: {res['files']['sweep_settings']}")
+        return 0
+    if a.scaling:
+        print(scaling(a.law, a.threads, a.repeat))
         return 0
     out = {}
     for law in ("coulomb", "switch"):
