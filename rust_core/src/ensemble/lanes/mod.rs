@@ -6,7 +6,8 @@
 //! generic lane kit `ode::lanes`; end states and samples 16 at a time in the AVX-512 copy,
 //! [`W_FINAL_AVX512`]; calls too small to fill every thread's set on fewer, [`lane_width`]), as
 //! [`super::batch`] does for the bilateral constant-`mu` end state, and refills a lane as soon as
-//! its trajectory ends. What it adds is everything the scalar driver
+//! its trajectory ends (on AVX-512, once the call's feed is dry, a thread's last running
+//! trajectory moves to a set of one lane: `dispatch_cpu`). What it adds is everything the scalar driver
 //! does around the step:
 //!
 //! - **Modes per lane.** Each lane knows whether its pin is on or off the disk and, under the
@@ -68,7 +69,7 @@ use crate::ode::lanes::W;
 use crate::ode::Method;
 use crate::steady::Tolerances;
 use run::run_impl;
-use state::Feed;
+use state::{Feed, Parked};
 
 /// Whether [`run_lanes`] integrates sliders with these parameters (the contact models and
 /// friction laws it knows).
@@ -301,6 +302,12 @@ fn dispatch(
 
 /// Out of line, as each of the copies it picks from: inlined into [`dispatch`], the twelve
 /// portable bodies made one function that LLVM's optimisation took minutes over.
+///
+/// On AVX-512 a thread's last running trajectory, once the call's feed is dry, finishes on a
+/// set of one lane ([`run_impl`]'s `narrow`), with the same bits: a round there costs 0.72 us
+/// against 1.28 on 8 lanes (the switch law's Stribeck transients forced onto each width, one
+/// thread), and on two threads each thread ran one such late run alone for 18-26 ms of the
+/// call's 233 (the longest run of the call alone: 80 ms on 8 lanes, 55 ms on 1).
 #[inline(never)]
 fn dispatch_cpu<const UNI: bool, const LAW: u8, const M8: bool>(
     sliders: &[Slider],
@@ -316,42 +323,51 @@ fn dispatch_cpu<const UNI: bool, const LAW: u8, const M8: bool>(
         if std::is_x86_feature_detected!("avx512f") {
             // SAFETY: the CPU supports the features the function is compiled for.
             return unsafe {
-                match width {
-                    W_FINAL_AVX512 => run_avx512::<UNI, LAW, M8, W_FINAL_AVX512>(sliders, y0s, t_end, tol, task, feed),
-                    W => run_avx512::<UNI, LAW, M8, W>(sliders, y0s, t_end, tol, task, feed),
-                    _ => run_avx512::<UNI, LAW, M8, W_NARROW>(sliders, y0s, t_end, tol, task, feed),
+                let (mut out, parked) = match width {
+                    W_FINAL_AVX512 => {
+                        run_avx512::<UNI, LAW, M8, W_FINAL_AVX512>(sliders, y0s, t_end, tol, task, feed, None, true)
+                    }
+                    W => run_avx512::<UNI, LAW, M8, W>(sliders, y0s, t_end, tol, task, feed, None, true),
+                    _ => run_avx512::<UNI, LAW, M8, W_NARROW>(sliders, y0s, t_end, tol, task, feed, None, true),
+                };
+                if parked.is_some() {
+                    out.extend(run_avx512::<UNI, LAW, M8, 1>(sliders, y0s, t_end, tol, task, feed, parked, false).0);
                 }
+                out
             };
         }
         if std::is_x86_feature_detected!("avx2") {
             // SAFETY: as above.
             return unsafe {
                 if width == W_NARROW {
-                    run_avx2::<UNI, LAW, M8, W_NARROW>(sliders, y0s, t_end, tol, task, feed)
+                    run_avx2::<UNI, LAW, M8, W_NARROW>(sliders, y0s, t_end, tol, task, feed, None, false).0
                 } else {
-                    run_avx2::<UNI, LAW, M8, W>(sliders, y0s, t_end, tol, task, feed)
+                    run_avx2::<UNI, LAW, M8, W>(sliders, y0s, t_end, tol, task, feed, None, false).0
                 }
             };
         }
     }
     if width == W_NARROW {
-        run_portable::<UNI, LAW, M8, W_NARROW>(sliders, y0s, t_end, tol, task, feed)
+        run_portable::<UNI, LAW, M8, W_NARROW>(sliders, y0s, t_end, tol, task, feed, None, false).0
     } else {
-        run_portable::<UNI, LAW, M8, W>(sliders, y0s, t_end, tol, task, feed)
+        run_portable::<UNI, LAW, M8, W>(sliders, y0s, t_end, tol, task, feed, None, false).0
     }
 }
 
 /// The portable copy (no CPU features beyond the target's baseline).
 #[inline(never)]
-pub(super) fn run_portable<const UNI: bool, const LAW: u8, const M8: bool, const N: usize>(
-    sliders: &[Slider],
+#[allow(clippy::too_many_arguments)]
+fn run_portable<'a, const UNI: bool, const LAW: u8, const M8: bool, const N: usize>(
+    sliders: &'a [Slider],
     y0s: &[State],
     t_end: f64,
     tol: &Tolerances,
-    task: Task<'_>,
-    feed: &Feed<'_>,
-) -> Vec<(usize, TrajectoryResult)> {
-    run_impl::<UNI, LAW, M8, N>(sliders, y0s, t_end, tol, task, feed)
+    task: Task<'a>,
+    feed: &Feed<'a>,
+    seed: Option<Parked<'a>>,
+    narrow: bool,
+) -> (Vec<(usize, TrajectoryResult)>, Option<Parked<'a>>) {
+    run_impl::<UNI, LAW, M8, N>(sliders, y0s, t_end, tol, task, feed, seed, narrow)
 }
 
 /// Lanes of the AVX-512 copy for end states (`Task::Final`) and samples (`Task::Sampled`): two
@@ -373,28 +389,34 @@ pub const W_FINAL_AVX512: usize = 16;
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
-unsafe fn run_avx512<const UNI: bool, const LAW: u8, const M8: bool, const N: usize>(
-    sliders: &[Slider],
+#[allow(clippy::too_many_arguments)]
+unsafe fn run_avx512<'a, const UNI: bool, const LAW: u8, const M8: bool, const N: usize>(
+    sliders: &'a [Slider],
     y0s: &[State],
     t_end: f64,
     tol: &Tolerances,
-    task: Task<'_>,
-    feed: &Feed<'_>,
-) -> Vec<(usize, TrajectoryResult)> {
-    run_impl::<UNI, LAW, M8, N>(sliders, y0s, t_end, tol, task, feed)
+    task: Task<'a>,
+    feed: &Feed<'a>,
+    seed: Option<Parked<'a>>,
+    narrow: bool,
+) -> (Vec<(usize, TrajectoryResult)>, Option<Parked<'a>>) {
+    run_impl::<UNI, LAW, M8, N>(sliders, y0s, t_end, tol, task, feed, seed, narrow)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn run_avx2<const UNI: bool, const LAW: u8, const M8: bool, const N: usize>(
-    sliders: &[Slider],
+#[allow(clippy::too_many_arguments)]
+unsafe fn run_avx2<'a, const UNI: bool, const LAW: u8, const M8: bool, const N: usize>(
+    sliders: &'a [Slider],
     y0s: &[State],
     t_end: f64,
     tol: &Tolerances,
-    task: Task<'_>,
-    feed: &Feed<'_>,
-) -> Vec<(usize, TrajectoryResult)> {
-    run_impl::<UNI, LAW, M8, N>(sliders, y0s, t_end, tol, task, feed)
+    task: Task<'a>,
+    feed: &Feed<'a>,
+    seed: Option<Parked<'a>>,
+    narrow: bool,
+) -> (Vec<(usize, TrajectoryResult)>, Option<Parked<'a>>) {
+    run_impl::<UNI, LAW, M8, N>(sliders, y0s, t_end, tol, task, feed, seed, narrow)
 }
 
 #[cfg(test)]

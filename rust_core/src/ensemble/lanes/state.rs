@@ -6,7 +6,7 @@ use super::slider::{Coef, Modes, NE};
 use crate::ensemble::{Task, TrajectoryResult};
 use crate::model::{idx, ContactMode, Slider, State};
 use crate::ode::controller::{initial_step, ModeSteps};
-use crate::ode::lanes::{Lw, Row, Rows, Vw, LN_ERR_FLOOR};
+use crate::ode::lanes::{lane_state, Lw, Row, Rows, Vw, LN_ERR_FLOOR};
 use crate::ode::{Control, Observer, OdeSystem, Options, Outcome, SampleStore, Sampler, Stats, StepView, MAX_EVENTS};
 use crate::steady::{
     end_status, options_for, run_failure, status_of, summarize, Extremes, ExtremesObserver, RunResult, SteadyObserver,
@@ -248,6 +248,89 @@ fn idle<const N: usize>(ln: &mut Lanes<'_, N>, l: usize) {
     ln.rest[l] = f64::NEG_INFINITY;
     ln.next_sample[l] = f64::INFINITY;
     ln.side[l] = None;
+}
+
+/// A running trajectory taken off its lanes between two steps, with everything the lane held:
+/// [`park`] on one set of lanes, [`unpark`] on a set of another width, where it goes on with the
+/// same bits (a lane's arithmetic does not depend on the lane count; the coefficients and mode
+/// masks are rebuilt from the side).
+pub(super) struct Parked<'a> {
+    y: State,
+    f: State,
+    /// `t, t_end, h, ln_err_old, min_n, max_gap, min_vr, max_z, peak, rest, next_sample`.
+    v: [f64; 11],
+    peaks: State,
+    rejected: bool,
+    counts: [u64; 3],
+    g0: [f64; NE],
+    pend: [bool; NE],
+    pend_t: [f64; NE],
+    side: Side<'a>,
+}
+
+/// Takes the trajectory of live lane `l` off the lanes (the lane is left idle).
+pub(super) fn park<'a, const N: usize>(ln: &mut Lanes<'a, N>, l: usize) -> Parked<'a> {
+    let side = ln.side[l].take().expect("park a live lane");
+    let v = [
+        ln.t[l],
+        ln.t_end[l],
+        ln.h[l],
+        ln.ln_err_old[l],
+        ln.min_n[l],
+        ln.max_gap[l],
+        ln.min_vr[l],
+        ln.max_z[l],
+        ln.peak[l],
+        ln.rest[l],
+        ln.next_sample[l],
+    ];
+    let p = Parked {
+        y: lane_state(&ln.y, l),
+        f: lane_state(&ln.f, l),
+        v,
+        peaks: lane_state(&ln.peaks, l),
+        rejected: ln.rejected[l],
+        counts: [ln.n_acc[l], ln.n_rej[l], ln.n_extra[l]],
+        g0: std::array::from_fn(|e| ln.g0[e][l]),
+        pend: std::array::from_fn(|e| ln.pend[e][l]),
+        pend_t: std::array::from_fn(|e| ln.pend_t[e][l]),
+        side,
+    };
+    idle(ln, l);
+    p
+}
+
+/// Puts a parked trajectory on lane `l` (idle) of `ln`.
+pub(super) fn unpark<'a, const N: usize>(ln: &mut Lanes<'a, N>, l: usize, p: Parked<'a>) {
+    let atol: [f64; 6] = std::array::from_fn(|k| p.side.opts.atol[k]);
+    ln.c.set(l, p.side.s, &atol);
+    ln.modes.set(l, p.side.mode);
+    for k in 0..6 {
+        ln.y[k][l] = p.y[k];
+        ln.f[k][l] = p.f[k];
+        ln.peaks[k][l] = p.peaks[k];
+    }
+    [
+        ln.t[l],
+        ln.t_end[l],
+        ln.h[l],
+        ln.ln_err_old[l],
+        ln.min_n[l],
+        ln.max_gap[l],
+        ln.min_vr[l],
+        ln.max_z[l],
+        ln.peak[l],
+        ln.rest[l],
+        ln.next_sample[l],
+    ] = p.v;
+    ln.rejected[l] = p.rejected;
+    [ln.n_acc[l], ln.n_rej[l], ln.n_extra[l]] = p.counts;
+    for e in 0..NE {
+        ln.g0[e][l] = p.g0[e];
+        ln.pend[e][l] = p.pend[e];
+        ln.pend_t[e][l] = p.pend_t[e];
+    }
+    ln.side[l] = Some(p.side);
 }
 
 /// Load the next trajectory that needs a step into lane `l` (trajectories that end before their
