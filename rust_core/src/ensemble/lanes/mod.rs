@@ -6,8 +6,8 @@
 //! generic lane kit `ode::lanes`; end states and samples 16 at a time in the AVX-512 copy,
 //! [`W_FINAL_AVX512`]; calls too small to fill every thread's set on fewer, [`lane_width`]), as
 //! [`super::batch`] does for the bilateral constant-`mu` end state, and refills a lane as soon as
-//! its trajectory ends (on AVX-512, once the call's feed is dry, a thread's last running
-//! trajectory moves to a set of one lane: `dispatch_cpu`). What it adds is everything the scalar driver
+//! its trajectory ends (on AVX-512, once the call's feed is dry, a thread's running trajectories
+//! move to narrower sets as they end, down to one lane: `dispatch_cpu`). What it adds is everything the scalar driver
 //! does around the step:
 //!
 //! - **Modes per lane.** Each lane knows whether its pin is on or off the disk and, under the
@@ -303,10 +303,11 @@ fn dispatch(
 /// Out of line, as each of the copies it picks from: inlined into [`dispatch`], the twelve
 /// portable bodies made one function that LLVM's optimisation took minutes over.
 ///
-/// On AVX-512 a thread's last running trajectory, once the call's feed is dry, finishes on a
-/// set of one lane ([`run_impl`]'s `narrow`), with the same bits: a round there costs 0.72 us
-/// against 1.28 on 8 lanes (the switch law's Stribeck transients forced onto each width, one
-/// thread), and on two threads each thread ran one such late run alone for 18-26 ms of the
+/// On AVX-512, once the call's feed is dry, a thread's running trajectories move to the
+/// narrowest set of lanes that holds them whenever that is at most half the set ([`run_impl`]'s
+/// `narrow`), down to one lane, with the same bits: a round costs about 0.72, 0.97, 1.09 and
+/// 1.28 us on 1, 2, 4 and 8 lanes (the switch law's Stribeck transients forced onto each width,
+/// one thread), and on two threads each thread ran one late long run alone for 18-26 ms of the
 /// call's 233 (the longest run of the call alone: 80 ms on 8 lanes, 55 ms on 1).
 #[inline(never)]
 fn dispatch_cpu<const UNI: bool, const LAW: u8, const M8: bool>(
@@ -323,15 +324,26 @@ fn dispatch_cpu<const UNI: bool, const LAW: u8, const M8: bool>(
         if std::is_x86_feature_detected!("avx512f") {
             // SAFETY: the CPU supports the features the function is compiled for.
             return unsafe {
-                let (mut out, parked) = match width {
-                    W_FINAL_AVX512 => {
-                        run_avx512::<UNI, LAW, M8, W_FINAL_AVX512>(sliders, y0s, t_end, tol, task, feed, None, true)
-                    }
-                    W => run_avx512::<UNI, LAW, M8, W>(sliders, y0s, t_end, tol, task, feed, None, true),
-                    _ => run_avx512::<UNI, LAW, M8, W_NARROW>(sliders, y0s, t_end, tol, task, feed, None, true),
+                macro_rules! go {
+                    ($n:expr, $seed:expr) => {
+                        run_avx512::<UNI, LAW, M8, { $n }>(sliders, y0s, t_end, tol, task, feed, $seed, true)
+                    };
+                }
+                let (mut out, mut parked) = match width {
+                    W_FINAL_AVX512 => go!(W_FINAL_AVX512, Vec::new()),
+                    W => go!(W, Vec::new()),
+                    _ => go!(W_NARROW, Vec::new()),
                 };
-                if parked.is_some() {
-                    out.extend(run_avx512::<UNI, LAW, M8, 1>(sliders, y0s, t_end, tol, task, feed, parked, false).0);
+                // The narrowest set that holds them, until every run has ended.
+                while !parked.is_empty() {
+                    let (o, p) = match parked.len() {
+                        1 => go!(1, parked),
+                        2 => go!(2, parked),
+                        3 | 4 => go!(W_NARROW, parked),
+                        _ => go!(W, parked),
+                    };
+                    out.extend(o);
+                    parked = p;
                 }
                 out
             };
@@ -340,17 +352,17 @@ fn dispatch_cpu<const UNI: bool, const LAW: u8, const M8: bool>(
             // SAFETY: as above.
             return unsafe {
                 if width == W_NARROW {
-                    run_avx2::<UNI, LAW, M8, W_NARROW>(sliders, y0s, t_end, tol, task, feed, None, false).0
+                    run_avx2::<UNI, LAW, M8, W_NARROW>(sliders, y0s, t_end, tol, task, feed, Vec::new(), false).0
                 } else {
-                    run_avx2::<UNI, LAW, M8, W>(sliders, y0s, t_end, tol, task, feed, None, false).0
+                    run_avx2::<UNI, LAW, M8, W>(sliders, y0s, t_end, tol, task, feed, Vec::new(), false).0
                 }
             };
         }
     }
     if width == W_NARROW {
-        run_portable::<UNI, LAW, M8, W_NARROW>(sliders, y0s, t_end, tol, task, feed, None, false).0
+        run_portable::<UNI, LAW, M8, W_NARROW>(sliders, y0s, t_end, tol, task, feed, Vec::new(), false).0
     } else {
-        run_portable::<UNI, LAW, M8, W>(sliders, y0s, t_end, tol, task, feed, None, false).0
+        run_portable::<UNI, LAW, M8, W>(sliders, y0s, t_end, tol, task, feed, Vec::new(), false).0
     }
 }
 
@@ -364,9 +376,9 @@ fn run_portable<'a, const UNI: bool, const LAW: u8, const M8: bool, const N: usi
     tol: &Tolerances,
     task: Task<'a>,
     feed: &Feed<'a>,
-    seed: Option<Parked<'a>>,
+    seed: Vec<Parked<'a>>,
     narrow: bool,
-) -> (Vec<(usize, TrajectoryResult)>, Option<Parked<'a>>) {
+) -> (Vec<(usize, TrajectoryResult)>, Vec<Parked<'a>>) {
     run_impl::<UNI, LAW, M8, N>(sliders, y0s, t_end, tol, task, feed, seed, narrow)
 }
 
@@ -397,9 +409,9 @@ unsafe fn run_avx512<'a, const UNI: bool, const LAW: u8, const M8: bool, const N
     tol: &Tolerances,
     task: Task<'a>,
     feed: &Feed<'a>,
-    seed: Option<Parked<'a>>,
+    seed: Vec<Parked<'a>>,
     narrow: bool,
-) -> (Vec<(usize, TrajectoryResult)>, Option<Parked<'a>>) {
+) -> (Vec<(usize, TrajectoryResult)>, Vec<Parked<'a>>) {
     run_impl::<UNI, LAW, M8, N>(sliders, y0s, t_end, tol, task, feed, seed, narrow)
 }
 
@@ -413,9 +425,9 @@ unsafe fn run_avx2<'a, const UNI: bool, const LAW: u8, const M8: bool, const N: 
     tol: &Tolerances,
     task: Task<'a>,
     feed: &Feed<'a>,
-    seed: Option<Parked<'a>>,
+    seed: Vec<Parked<'a>>,
     narrow: bool,
-) -> (Vec<(usize, TrajectoryResult)>, Option<Parked<'a>>) {
+) -> (Vec<(usize, TrajectoryResult)>, Vec<Parked<'a>>) {
     run_impl::<UNI, LAW, M8, N>(sliders, y0s, t_end, tol, task, feed, seed, narrow)
 }
 

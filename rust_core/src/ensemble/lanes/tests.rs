@@ -408,8 +408,9 @@ fn results_do_not_depend_on_the_batch() {
             // task: a lane's arithmetic does not depend on the lane count. `run_lanes` itself ran
             // each trajectory alone on `W_NARROW` lanes, and on 2 and 3 threads below the 13
             // take 8 lanes (`lane_width`), so every width the dispatch picks is compared too; on
-            // AVX-512 the dispatch moves a thread's last running trajectory onto one lane once the
-            // feed is dry (alone: from its first step), so that hand-over is compared too. Each copy is its own
+            // AVX-512 the dispatch moves a thread's running trajectories onto narrower sets once the
+            // feed is dry (alone: onto one lane from its first step), so those hand-overs are
+            // compared too. Each copy is its own
             // out-of-line function (`run_portable`): inlined into this test, the copies made one
             // function whose optimisation took most of the test binary's 19-minute build.
             // A fresh feed per call: a feed hands out each trajectory once.
@@ -417,7 +418,7 @@ fn results_do_not_depend_on_the_batch() {
                 ($u:literal, $c:expr, $m:literal, $n:expr) => {{
                     let feed = Feed::new(None);
                     let (res, _) =
-                        run_portable::<$u, { $c as u8 }, $m, { $n }>(&s, &y0, 0.1, &t, task, &feed, None, false);
+                        run_portable::<$u, { $c as u8 }, $m, { $n }>(&s, &y0, 0.1, &t, task, &feed, Vec::new(), false);
                     sorted(res)
                 }};
             }
