@@ -250,6 +250,26 @@ fn idle<const N: usize>(ln: &mut Lanes<'_, N>, l: usize) {
     ln.side[l] = None;
 }
 
+/// The per-lane scalars of lane `l` that a [`Parked`] trajectory carries, in its `v`'s order: an
+/// array to read, or to assign to.
+macro_rules! scalars {
+    ($ln:expr, $l:expr) => {
+        [
+            $ln.t[$l],
+            $ln.t_end[$l],
+            $ln.h[$l],
+            $ln.ln_err_old[$l],
+            $ln.min_n[$l],
+            $ln.max_gap[$l],
+            $ln.min_vr[$l],
+            $ln.max_z[$l],
+            $ln.peak[$l],
+            $ln.rest[$l],
+            $ln.next_sample[$l],
+        ]
+    };
+}
+
 /// A running trajectory taken off its lanes between two steps, with everything the lane held:
 /// [`park`] on one set of lanes, [`unpark`] on a set of another width, where it goes on with the
 /// same bits (a lane's arithmetic does not depend on the lane count; the coefficients and mode
@@ -271,19 +291,7 @@ pub(super) struct Parked<'a> {
 /// Takes the trajectory of live lane `l` off the lanes (the lane is left idle).
 pub(super) fn park<'a, const N: usize>(ln: &mut Lanes<'a, N>, l: usize) -> Parked<'a> {
     let side = ln.side[l].take().expect("park a live lane");
-    let v = [
-        ln.t[l],
-        ln.t_end[l],
-        ln.h[l],
-        ln.ln_err_old[l],
-        ln.min_n[l],
-        ln.max_gap[l],
-        ln.min_vr[l],
-        ln.max_z[l],
-        ln.peak[l],
-        ln.rest[l],
-        ln.next_sample[l],
-    ];
+    let v = scalars!(ln, l);
     let p = Parked {
         y: lane_state(&ln.y, l),
         f: lane_state(&ln.f, l),
@@ -310,19 +318,7 @@ pub(super) fn unpark<'a, const N: usize>(ln: &mut Lanes<'a, N>, l: usize, p: Par
         ln.f[k][l] = p.f[k];
         ln.peaks[k][l] = p.peaks[k];
     }
-    [
-        ln.t[l],
-        ln.t_end[l],
-        ln.h[l],
-        ln.ln_err_old[l],
-        ln.min_n[l],
-        ln.max_gap[l],
-        ln.min_vr[l],
-        ln.max_z[l],
-        ln.peak[l],
-        ln.rest[l],
-        ln.next_sample[l],
-    ] = p.v;
+    scalars!(ln, l) = p.v;
     ln.rejected[l] = p.rejected;
     [ln.n_acc[l], ln.n_rej[l], ln.n_extra[l]] = p.counts;
     for e in 0..NE {
