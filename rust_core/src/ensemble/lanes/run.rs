@@ -88,6 +88,7 @@ pub(super) fn run_impl<'a, const UNI: bool, const LAW: u8, const M8: bool, const
     let ne = n_events(LAW);
     let checks = UNI || LAW == SWITCH;
     let mut seed = seed;
+    assert!(seed.len() <= N, "run_impl: {} parked trajectories for {N} lanes", seed.len());
     for l in 0..N {
         match seed.pop() {
             Some(p) => unpark(&mut ln, l, p),
