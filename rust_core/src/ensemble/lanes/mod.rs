@@ -69,7 +69,7 @@ use crate::ode::lanes::W;
 use crate::ode::Method;
 use crate::steady::Tolerances;
 use run::run_impl;
-use state::{Feed, Parked};
+use state::{Feed, Input, Parked};
 
 /// Whether [`run_lanes`] integrates sliders with these parameters (the contact models and
 /// friction laws it knows).
@@ -319,6 +319,7 @@ fn dispatch_cpu<const UNI: bool, const LAW: u8, const M8: bool>(
     feed: &Feed<'_>,
     width: usize,
 ) -> Vec<(usize, TrajectoryResult)> {
+    let inp = Input::new(sliders, y0s, t_end, tol, task, feed);
     #[cfg(target_arch = "x86_64")]
     {
         if std::is_x86_feature_detected!("avx512f") {
@@ -326,7 +327,7 @@ fn dispatch_cpu<const UNI: bool, const LAW: u8, const M8: bool>(
             return unsafe {
                 macro_rules! go {
                     ($n:expr, $seed:expr) => {
-                        run_avx512::<UNI, LAW, M8, { $n }>(sliders, y0s, t_end, tol, task, feed, $seed, true)
+                        run_avx512::<UNI, LAW, M8, { $n }>(&inp, $seed, true)
                     };
                 }
                 let (mut out, mut parked) = match width {
@@ -352,34 +353,28 @@ fn dispatch_cpu<const UNI: bool, const LAW: u8, const M8: bool>(
             // SAFETY: as above.
             return unsafe {
                 if width == W_NARROW {
-                    run_avx2::<UNI, LAW, M8, W_NARROW>(sliders, y0s, t_end, tol, task, feed, Vec::new(), false).0
+                    run_avx2::<UNI, LAW, M8, W_NARROW>(&inp, Vec::new(), false).0
                 } else {
-                    run_avx2::<UNI, LAW, M8, W>(sliders, y0s, t_end, tol, task, feed, Vec::new(), false).0
+                    run_avx2::<UNI, LAW, M8, W>(&inp, Vec::new(), false).0
                 }
             };
         }
     }
     if width == W_NARROW {
-        run_portable::<UNI, LAW, M8, W_NARROW>(sliders, y0s, t_end, tol, task, feed, Vec::new(), false).0
+        run_portable::<UNI, LAW, M8, W_NARROW>(&inp, Vec::new(), false).0
     } else {
-        run_portable::<UNI, LAW, M8, W>(sliders, y0s, t_end, tol, task, feed, Vec::new(), false).0
+        run_portable::<UNI, LAW, M8, W>(&inp, Vec::new(), false).0
     }
 }
 
 /// The portable copy (no CPU features beyond the target's baseline).
 #[inline(never)]
-#[allow(clippy::too_many_arguments)]
 fn run_portable<'a, const UNI: bool, const LAW: u8, const M8: bool, const N: usize>(
-    sliders: &'a [Slider],
-    y0s: &[State],
-    t_end: f64,
-    tol: &Tolerances,
-    task: Task<'a>,
-    feed: &Feed<'a>,
+    inp: &Input<'a, '_>,
     seed: Vec<Parked<'a>>,
     narrow: bool,
 ) -> (Vec<(usize, TrajectoryResult)>, Vec<Parked<'a>>) {
-    run_impl::<UNI, LAW, M8, N>(sliders, y0s, t_end, tol, task, feed, seed, narrow)
+    run_impl::<UNI, LAW, M8, N>(inp, seed, narrow)
 }
 
 /// Lanes of the AVX-512 copy for end states (`Task::Final`) and samples (`Task::Sampled`): two
@@ -401,34 +396,22 @@ pub const W_FINAL_AVX512: usize = 16;
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
-#[allow(clippy::too_many_arguments)]
 unsafe fn run_avx512<'a, const UNI: bool, const LAW: u8, const M8: bool, const N: usize>(
-    sliders: &'a [Slider],
-    y0s: &[State],
-    t_end: f64,
-    tol: &Tolerances,
-    task: Task<'a>,
-    feed: &Feed<'a>,
+    inp: &Input<'a, '_>,
     seed: Vec<Parked<'a>>,
     narrow: bool,
 ) -> (Vec<(usize, TrajectoryResult)>, Vec<Parked<'a>>) {
-    run_impl::<UNI, LAW, M8, N>(sliders, y0s, t_end, tol, task, feed, seed, narrow)
+    run_impl::<UNI, LAW, M8, N>(inp, seed, narrow)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-#[allow(clippy::too_many_arguments)]
 unsafe fn run_avx2<'a, const UNI: bool, const LAW: u8, const M8: bool, const N: usize>(
-    sliders: &'a [Slider],
-    y0s: &[State],
-    t_end: f64,
-    tol: &Tolerances,
-    task: Task<'a>,
-    feed: &Feed<'a>,
+    inp: &Input<'a, '_>,
     seed: Vec<Parked<'a>>,
     narrow: bool,
 ) -> (Vec<(usize, TrajectoryResult)>, Vec<Parked<'a>>) {
-    run_impl::<UNI, LAW, M8, N>(sliders, y0s, t_end, tol, task, feed, seed, narrow)
+    run_impl::<UNI, LAW, M8, N>(inp, seed, narrow)
 }
 
 #[cfg(test)]

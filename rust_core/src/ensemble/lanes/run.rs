@@ -6,12 +6,10 @@ use super::slider::{
     event_rates_lanes, events_at, events_lanes, hidden_crossings, n_events, Coef, Modes, SliderRhs, EV_COMPS,
     EV_COMPS_CONST, NE, SWITCH, TANH,
 };
-use super::state::{
-    finish, park, refill, sync_from_side, sync_to_side, unpark, Feed, Input, Lanes, Parked, Side, Watch,
-};
+use super::state::{finish, park, refill, sync_from_side, sync_to_side, unpark, Input, Lanes, Parked, Side, Watch};
 use crate::cancel;
 use crate::ensemble::{Task, TrajectoryResult};
-use crate::model::{event, idx, slip_step_limit, ContactMode, Slider, State};
+use crate::model::{event, idx, slip_step_limit, ContactMode, State};
 use crate::ode::controller::{FAC_MAX, FAC_MIN, SAFETY};
 use crate::ode::dop853::Dop853Dense;
 use crate::ode::dopri5::Dopri5Dense;
@@ -23,7 +21,6 @@ use crate::ode::lanes::{
 use crate::ode::lanes::{Al, LaneDense};
 use crate::ode::stepper::StepDense;
 use crate::ode::{Control, Observer, OdeSystem, Options, Outcome, SampleStore, StepView, MAX_EVENTS};
-use crate::steady::Tolerances;
 use std::sync::atomic::Ordering::Relaxed;
 
 /// The portable path (the tests check that the SIMD copies agree bitwise).
@@ -33,24 +30,14 @@ use std::sync::atomic::Ordering::Relaxed;
 /// returned with the results so far, for a narrower set to finish (a round on 1, 2, 4 and 8
 /// lanes: about 0.72, 0.97, 1.09 and 1.28 us on the switch law's transients).
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
 pub(super) fn run_impl<'a, const UNI: bool, const LAW: u8, const M8: bool, const N: usize>(
-    sliders: &'a [Slider],
-    y0s: &[State],
-    t_end: f64,
-    tol: &Tolerances,
-    task: Task<'a>,
-    feed: &Feed<'a>,
+    inp: &Input<'a, '_>,
     seed: Vec<Parked<'a>>,
     narrow: bool,
 ) -> (Vec<(usize, TrajectoryResult)>, Vec<Parked<'a>>) {
-    let (t_end, tol) = match task {
-        Task::Steady { opts, .. } => (opts.t_max, opts.tol),
-        _ => (t_end, *tol),
-    };
-    let inp = Input { sliders, y0s, t_end, tol, task, feed };
-    let n = sliders.len();
-    let rtol = tol.rtol;
+    let (task, t_end) = (inp.task, inp.t_end);
+    let n = inp.sliders.len();
+    let rtol = inp.tol.rtol;
     let mut out: Vec<(usize, TrajectoryResult)> = Vec::with_capacity(n);
     let zero = [0.0; N];
     let mut ln = Lanes {
@@ -92,7 +79,7 @@ pub(super) fn run_impl<'a, const UNI: bool, const LAW: u8, const M8: bool, const
     for l in 0..N {
         match seed.pop() {
             Some(p) => unpark(&mut ln, l, p),
-            None => refill(&mut ln, l, &inp, &mut out),
+            None => refill(&mut ln, l, inp, &mut out),
         }
     }
 
@@ -180,7 +167,7 @@ pub(super) fn run_impl<'a, const UNI: bool, const LAW: u8, const M8: bool, const
                 };
                 let (t, y) = (ln.t[l], lane_state(&ln.y, l));
                 finish(&mut ln, l, t, y, hh[l], outcome, &mut out);
-                refill(&mut ln, l, &inp, &mut out);
+                refill(&mut ln, l, inp, &mut out);
             }
             continue;
         }
@@ -379,7 +366,7 @@ pub(super) fn run_impl<'a, const UNI: bool, const LAW: u8, const M8: bool, const
                 let outcome = if ordinary { Outcome::StepTooSmall } else { Outcome::NonFinite };
                 let (t, y) = (ln.t[l], lane_state(&ln.y, l));
                 finish(&mut ln, l, t, y, h_new, outcome, &mut out);
-                refill(&mut ln, l, &inp, &mut out);
+                refill(&mut ln, l, inp, &mut out);
             }
         }
 
@@ -526,7 +513,7 @@ pub(super) fn run_impl<'a, const UNI: bool, const LAW: u8, const M8: bool, const
                 sync_from_side(&mut ln, l, steady, sampled);
                 if let Some(outcome) = ev.end {
                     finish(&mut ln, l, ev.t1, ev.y1, hh[l], outcome, &mut out);
-                    refill(&mut ln, l, &inp, &mut out);
+                    refill(&mut ln, l, inp, &mut out);
                     continue;
                 }
                 if let Some(sw) = ev.switched {
@@ -540,7 +527,7 @@ pub(super) fn run_impl<'a, const UNI: bool, const LAW: u8, const M8: bool, const
                     sd.stats.n_rhs += 1;
                     if !f.iter().all(|v| v.is_finite()) {
                         finish(&mut ln, l, t, y1, hh[l], Outcome::NonFinite, &mut out);
-                        refill(&mut ln, l, &inp, &mut out);
+                        refill(&mut ln, l, inp, &mut out);
                         continue;
                     }
                     let mut g = [0.0; MAX_EVENTS];
@@ -582,7 +569,7 @@ pub(super) fn run_impl<'a, const UNI: bool, const LAW: u8, const M8: bool, const
                     }
                     if last[l] {
                         finish(&mut ln, l, t_new[l], y1, hh[l], Outcome::Finished, &mut out);
-                        refill(&mut ln, l, &inp, &mut out);
+                        refill(&mut ln, l, inp, &mut out);
                     }
                 }
             }

@@ -145,6 +145,24 @@ pub(super) struct Input<'a, 'b> {
     pub(super) feed: &'b Feed<'a>,
 }
 
+impl<'a, 'b> Input<'a, 'b> {
+    /// A call's input; a run to a steady state ends at its options' `t_max`, at their tolerances.
+    pub(super) fn new(
+        sliders: &'a [Slider],
+        y0s: &'b [State],
+        t_end: f64,
+        tol: &Tolerances,
+        task: Task<'a>,
+        feed: &'b Feed<'a>,
+    ) -> Self {
+        let (t_end, tol) = match task {
+            Task::Steady { opts, .. } => (opts.t_max, opts.tol),
+            _ => (t_end, *tol),
+        };
+        Input { sliders, y0s, t_end, tol, task, feed }
+    }
+}
+
 pub(super) fn sync_to_side<const N: usize>(
     min_n: &Lw<N>,
     max_gap: &Lw<N>,

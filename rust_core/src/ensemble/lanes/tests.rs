@@ -417,8 +417,8 @@ fn results_do_not_depend_on_the_batch() {
             macro_rules! go {
                 ($u:literal, $c:expr, $m:literal, $n:expr) => {{
                     let feed = Feed::new(None);
-                    let (res, _) =
-                        run_portable::<$u, { $c as u8 }, $m, { $n }>(&s, &y0, 0.1, &t, task, &feed, Vec::new(), false);
+                    let inp = Input::new(&s, &y0, 0.1, &t, task, &feed);
+                    let (res, _) = run_portable::<$u, { $c as u8 }, $m, { $n }>(&inp, Vec::new(), false);
                     sorted(res)
                 }};
             }
