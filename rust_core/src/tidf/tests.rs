@@ -40,6 +40,25 @@ fn jacobian_matches_finite_differences() {
     }
 }
 
+/// The scan's `g` alone agrees with the full closed form's over the search box and beyond it,
+/// for both readings, both signs of `g` and both orientations of `(c, s)`: the scan finds the
+/// same sign changes.
+#[test]
+fn the_scans_g_is_the_closed_forms() {
+    let s = Slider::seed();
+    for variant in [Variant::Consistent, Variant::DeadLoad] {
+        let t = Tidf::new(&s, variant);
+        let (mut pos, mut neg) = (0, 0);
+        for k in 0..4000 {
+            let w = 50.0 * (6000.0f64 / 50.0).powf(k as f64 / 3999.0);
+            let (g, full) = (t.reduced_g(w), t.reduced(w).g);
+            assert!((g - full).abs() <= 1e-12 * full.abs(), "{variant:?} w = {w}: {g} against {full}");
+            (pos, neg) = (pos + usize::from(full > 0.0), neg + usize::from(full < 0.0));
+        }
+        assert!(pos > 100 && neg > 100, "{variant:?}: both signs of g on the grid ({pos}, {neg})");
+    }
+}
+
 #[test]
 fn seed_physical_root_matches_model_md() {
     let search = seed_search(Variant::Consistent);
@@ -252,16 +271,25 @@ fn canonical_form_is_invariant() {
 
 #[test]
 fn two_harmonic_max_is_accurate() {
-    let (a0, a1, a2, th) = (1e-6, 2e-5, 6e-6, 4.2);
-    let brute = (0..200_000)
-        .map(|i| {
-            let p = 2.0 * PI * i as f64 / 200_000.0;
-            a0 + a1 * p.sin() + a2 * (2.0 * p + th).sin()
-        })
-        .fold(f64::NEG_INFINITY, f64::max);
-    let m = two_harmonic_max(a0, a1, a2, th);
-    // the sampled maximum is below the true one by up to f'' h^2 / 8 ~ 5e-15 here
-    assert!(m >= brute && m - brute < 1e-14, "{m} vs {brute}");
+    // One maximum (A2 < A1/4), and two (A2 large: the second harmonic dominates), at several phases.
+    for (a0, a1, a2, th) in [
+        (1e-6, 2e-5, 6e-6, 4.2),
+        (-3e-6, 1e-5, 2e-6, 0.3),
+        (0.0, 1e-5, 4e-5, 1.0),
+        (2e-6, 5e-6, 3e-5, 5.9),
+        (0.0, -1e-5, 4e-5, 3.0),
+    ] {
+        let brute = (0..200_000)
+            .map(|i| {
+                let p = 2.0 * PI * i as f64 / 200_000.0;
+                a0 + a1 * p.sin() + a2 * (2.0 * p + th).sin()
+            })
+            .fold(f64::NEG_INFINITY, f64::max);
+        let m = two_harmonic_max(a0, a1, a2, th);
+        // the sampled maximum is below the true one by up to f'' h^2 / 8 ~ 1e-14 here
+        let scale = a1.abs() + a2.abs();
+        assert!(m >= brute - 1e-15 * scale && m - brute < 1e-9 * scale, "{a1} {a2} {th}: {m} vs {brute}");
+    }
 }
 
 #[test]
