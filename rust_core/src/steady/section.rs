@@ -406,7 +406,11 @@ impl SectionWatcher {
 
     /// [`Self::residual`] over the components `comps`.
     fn residual_over(&self, d: usize, comps: &[usize]) -> f64 {
-        let amp = self.span_amp(d);
+        self.residual_within(d, comps, &self.span_amp(d))
+    }
+
+    /// [`Self::residual_over`] with the span's amplitude `amp` given (as [`Self::repeats_within`]).
+    fn residual_within(&self, d: usize, comps: &[usize], amp: &State) -> f64 {
         let (a, b) = (self.get(0), self.get(d));
         comps.iter().map(|&c| (a.y[c] - b.y[c]).abs() / amp[c].max(1e-6 * self.sizes[c])).fold(0.0, f64::max)
     }
@@ -543,10 +547,18 @@ impl SectionWatcher {
     fn slow_approach(&mut self) -> bool {
         let n = self.n_seen;
         let t = self.get(0).t;
+        // The sup of the newest p crossings' peaks, grown with p (as `check` grows it; `span_amp`
+        // per p folded 36 states per section, a tenth of the observer's time).
+        let mut amp = State::zeros();
         for p in 1..=MAX_MULTIPLICITY {
             // In (z, zd, phi, phid): the check that follows shoots on the whole state, and x's
             // light damping would hold the trigger back (see `SteadyOptions::approach_periods`).
-            let r = if n > 2 * p { self.residual_over(p, &NOT_X) } else { f64::NAN };
+            let r = if n > 2 * p {
+                amp = amp.sup(&self.get(p - 1).peaks);
+                self.residual_within(p, &NOT_X, &amp)
+            } else {
+                f64::NAN
+            };
             if !self.envelope[p].add(r, self.approach_periods * p) || t < self.hold {
                 continue;
             }
