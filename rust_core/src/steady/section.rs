@@ -548,7 +548,7 @@ impl SectionWatcher {
         let n = self.n_seen;
         let t = self.get(0).t;
         // The sup of the newest p crossings' peaks, grown with p (as `check` grows it; `span_amp`
-        // per p folded 36 states per section, a tenth of the observer's time).
+        // per p folded 36 states per section).
         let mut amp = State::zeros();
         for p in 1..=MAX_MULTIPLICITY {
             // In (z, zd, phi, phid): the check that follows shoots on the whole state, and x's
