@@ -303,12 +303,15 @@ fn dispatch(
 /// Out of line, as each of the copies it picks from: inlined into [`dispatch`], the twelve
 /// portable bodies made one function that LLVM's optimisation took minutes over.
 ///
-/// On AVX-512, once the call's feed is dry, a thread's running trajectories move to the
+/// On AVX-512 and on AVX2, once the call's feed is dry, a thread's running trajectories move to the
 /// narrowest set of lanes that holds them whenever that is at most half the set ([`run_impl`]'s
 /// `narrow`), down to one lane, with the same bits: a round costs about 0.72, 0.97, 1.09 and
 /// 1.28 us on 1, 2, 4 and 8 lanes (the switch law's Stribeck transients forced onto each width,
 /// one thread), and on two threads each thread ran one late long run alone for 18-26 ms of the
-/// call's 233 (the longest run of the call alone: 80 ms on 8 lanes, 55 ms on 1).
+/// call's 233 (the longest run of the call alone: 80 ms on 8 lanes, 55 ms on 1). AVX2 parks the
+/// same way since 2026-11-28: the sweep's two transient calls, replayed on two threads in one
+/// process with both builds loaded and interleaved (Zen 3, AVX2, 12 rounds), took 0.905x as long
+/// (median of the per-round ratios), on one thread the same within the noise, with the same bits.
 #[inline(never)]
 fn dispatch_cpu<const UNI: bool, const LAW: u8, const M8: bool>(
     sliders: &[Slider],
@@ -352,11 +355,24 @@ fn dispatch_cpu<const UNI: bool, const LAW: u8, const M8: bool>(
         if std::is_x86_feature_detected!("avx2") {
             // SAFETY: as above.
             return unsafe {
-                if width == W_NARROW {
-                    run_avx2::<UNI, LAW, M8, W_NARROW>(&inp, Vec::new(), false).0
-                } else {
-                    run_avx2::<UNI, LAW, M8, W>(&inp, Vec::new(), false).0
+                macro_rules! go {
+                    ($n:expr, $seed:expr) => {
+                        run_avx2::<UNI, LAW, M8, { $n }>(&inp, $seed, true)
+                    };
                 }
+                let (mut out, mut parked) =
+                    if width == W_NARROW { go!(W_NARROW, Vec::new()) } else { go!(W, Vec::new()) };
+                while !parked.is_empty() {
+                    let (o, p) = match parked.len() {
+                        1 => go!(1, parked),
+                        2 => go!(2, parked),
+                        3 | 4 => go!(W_NARROW, parked),
+                        _ => go!(W, parked),
+                    };
+                    out.extend(o);
+                    parked = p;
+                }
+                out
             };
         }
     }

@@ -408,7 +408,7 @@ fn results_do_not_depend_on_the_batch() {
             // task: a lane's arithmetic does not depend on the lane count. `run_lanes` itself ran
             // each trajectory alone on `W_NARROW` lanes, and on 2 and 3 threads below the 13
             // take 8 lanes (`lane_width`), so every width the dispatch picks is compared too; on
-            // AVX-512 the dispatch moves a thread's running trajectories onto narrower sets once the
+            // AVX-512 and AVX2 the dispatch moves a thread's running trajectories onto narrower sets once the
             // feed is dry (alone: onto one lane from its first step), so those hand-overs are
             // compared too. Each copy is its own
             // out-of-line function (`run_portable`): inlined into this test, the copies made one
