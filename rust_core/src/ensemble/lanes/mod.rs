@@ -323,57 +323,36 @@ fn dispatch_cpu<const UNI: bool, const LAW: u8, const M8: bool>(
     width: usize,
 ) -> Vec<(usize, TrajectoryResult)> {
     let inp = Input::new(sliders, y0s, t_end, tol, task, feed);
+    // `$run` on `width` lanes, then its parked runs on the narrowest set that holds them, until
+    // every run has ended.
+    #[cfg(target_arch = "x86_64")]
+    macro_rules! run_parked {
+        ($run:ident, $($w:pat => $n:expr),+) => {{
+            let (mut out, mut parked) = match width {
+                $($w => $run::<UNI, LAW, M8, { $n }>(&inp, Vec::new(), true),)+
+            };
+            while !parked.is_empty() {
+                let (o, p) = match parked.len() {
+                    1 => $run::<UNI, LAW, M8, 1>(&inp, parked, true),
+                    2 => $run::<UNI, LAW, M8, 2>(&inp, parked, true),
+                    3 | 4 => $run::<UNI, LAW, M8, W_NARROW>(&inp, parked, true),
+                    _ => $run::<UNI, LAW, M8, W>(&inp, parked, true),
+                };
+                out.extend(o);
+                parked = p;
+            }
+            out
+        }};
+    }
     #[cfg(target_arch = "x86_64")]
     {
         if std::is_x86_feature_detected!("avx512f") {
             // SAFETY: the CPU supports the features the function is compiled for.
-            return unsafe {
-                macro_rules! go {
-                    ($n:expr, $seed:expr) => {
-                        run_avx512::<UNI, LAW, M8, { $n }>(&inp, $seed, true)
-                    };
-                }
-                let (mut out, mut parked) = match width {
-                    W_FINAL_AVX512 => go!(W_FINAL_AVX512, Vec::new()),
-                    W => go!(W, Vec::new()),
-                    _ => go!(W_NARROW, Vec::new()),
-                };
-                // The narrowest set that holds them, until every run has ended.
-                while !parked.is_empty() {
-                    let (o, p) = match parked.len() {
-                        1 => go!(1, parked),
-                        2 => go!(2, parked),
-                        3 | 4 => go!(W_NARROW, parked),
-                        _ => go!(W, parked),
-                    };
-                    out.extend(o);
-                    parked = p;
-                }
-                out
-            };
+            return unsafe { run_parked!(run_avx512, W_FINAL_AVX512 => W_FINAL_AVX512, W => W, _ => W_NARROW) };
         }
         if std::is_x86_feature_detected!("avx2") {
             // SAFETY: as above.
-            return unsafe {
-                macro_rules! go {
-                    ($n:expr, $seed:expr) => {
-                        run_avx2::<UNI, LAW, M8, { $n }>(&inp, $seed, true)
-                    };
-                }
-                let (mut out, mut parked) =
-                    if width == W_NARROW { go!(W_NARROW, Vec::new()) } else { go!(W, Vec::new()) };
-                while !parked.is_empty() {
-                    let (o, p) = match parked.len() {
-                        1 => go!(1, parked),
-                        2 => go!(2, parked),
-                        3 | 4 => go!(W_NARROW, parked),
-                        _ => go!(W, parked),
-                    };
-                    out.extend(o);
-                    parked = p;
-                }
-                out
-            };
+            return unsafe { run_parked!(run_avx2, W_NARROW => W_NARROW, _ => W) };
         }
     }
     if width == W_NARROW {
