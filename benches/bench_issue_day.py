@@ -27,6 +27,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+from bench_stribeck import AXES  # the issue's grid, one definition for both benches
+
 ROOT = Path(__file__).resolve().parent.parent
 
 CHILD = r"""
@@ -34,8 +36,7 @@ import inspect, json, sys, time
 import numpy as np
 import tribosweep as ts
 law, repeat, threads = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
-axes = dict(normal_load=np.linspace(10, 150, 10), arm_length=np.linspace(0.05, 0.127, 4),
-            sliding_speed=np.linspace(0.2, 1.0, 5))
+axes = {k: np.array(v) for k, v in json.loads(sys.argv[4]).items()}
 model = ts.SliderModel(contact="unilateral", friction_law=law, mu_static=0.3)
 params = inspect.signature(ts.sweep).parameters
 kw = dict(census=False) if "census" in params else dict(check_bistability=False)
@@ -78,7 +79,8 @@ def child(law: str, repeat: int, threads: int, path: Path | None) -> dict:
     env.pop("PYTHONPATH", None)
     if path is not None:
         env["PYTHONPATH"] = str(path)
-    out = subprocess.run([sys.executable, "-c", CHILD, law, str(repeat), str(threads)], env=env, check=True,
+    axes = json.dumps({k: [float(x) for x in v] for k, v in AXES.items()})
+    out = subprocess.run([sys.executable, "-c", CHILD, law, str(repeat), str(threads), axes], env=env, check=True,
                          capture_output=True, text=True, cwd=path or ROOT / "benches")  # fmt: skip
     res = json.loads(out.stdout.strip().splitlines()[-1])
     want = path is not None
