@@ -615,6 +615,14 @@ def test_auto_agrees_with_transient_where_the_transient_settles():
     # and reaches it under inputs moved by ulps and rtol by 1 %.
     settled = (full.status.values.ravel() == ts.STATUS["success"]) & ~np.isin(
         rt, [REGIME["unstable_undetermined"], REGIME["irregular"]]) & robust
+    # auto's own transient (from the unstable mode, not the transient strategy's start) is one
+    # trajectory too: where its census says that most disturbances reach another regime, the one
+    # it reached is the fate of one chaotic run (on this grid, 70 N at mu 0.4: an escape at 3.5 s,
+    # which 1 of the census's 32 samples shares; 31 reach the cycle the transient strategy finds).
+    # Its last-bit fate is no verdict; elsewhere auto's regime is what most disturbances reach.
+    by_run = auto.decided_by.values.ravel() == _codes.DECIDED_BY["transient"]
+    minority = by_run & (auto.regime_fraction.values.ravel() < 0.5)
+    settled &= ~minority
     assert settled.sum() >= 8, settled
     assert np.array_equal(ra[settled], rt[settled]), (ra, rt)
     # auto decides many points without integrating, and without the bistability question (which

@@ -325,7 +325,7 @@ impl SegObs<'_> {
 
     /// `|v_r|` at `x` into the segment's smallest (sliding contact only).
     fn slip_at(&mut self, x: &State) {
-        if self.mode == ContactMode::Contact {
+        if self.mode.slips() {
             self.w.slip_min = self.w.slip_min.min(self.s.slip_velocity(x).abs());
         }
     }
@@ -381,7 +381,7 @@ impl Observer<48, ContactMode> for SegObs<'_> {
             let yk = if k == SUB { *st.y1 } else { st.dense.eval(tk) };
             let rk = self.rates(&yk);
             // v_r's extremes (the last rate) matter in sliding contact only.
-            let n_rates = if self.mode == ContactMode::Contact { 3 } else { 2 };
+            let n_rates = if self.mode.slips() { 3 } else { 2 };
             for (which, (&a, &b)) in prev.1.iter().zip(&rk).enumerate().take(n_rates) {
                 if (a > 0.0 && b <= 0.0) || (a < 0.0 && b >= 0.0) {
                     let up = a > 0.0;
@@ -404,7 +404,7 @@ impl Observer<48, ContactMode> for SegObs<'_> {
             prev = (tk, rk);
         }
         let vr1 = self.s.slip_velocity(&state_of(st.y1));
-        if self.mode == ContactMode::Contact {
+        if self.mode.slips() {
             let crossed = self.s.slip_velocity(&state_of(st.y0)) * vr1 <= 0.0;
             self.w.slip_min = if crossed { 0.0 } else { self.w.slip_min.min(vr1.abs()) };
         }
@@ -460,13 +460,13 @@ pub(crate) fn segment(
         z_max: y0[idx::Z],
         z_min: y0[idx::Z],
         slip_min: match mode {
-            ContactMode::Contact => m.s.slip_velocity(y0).abs(),
+            ContactMode::Contact | ContactMode::SlipBack => m.s.slip_velocity(y0).abs(),
             ContactMode::Free => f64::INFINITY,
             _ => 0.0,
         },
     };
     let (t_off, dt, n) = samples.unwrap_or((0.0, 0.0, 0));
-    let slip = m.s.p.friction_law == FrictionLaw::Switch && mode == ContactMode::Contact;
+    let slip = m.s.p.friction_law == FrictionLaw::Switch && mode.slips();
     let slip_sign = if slip { m.s.slip_velocity(y0).signum() } else { 0.0 };
     // The slip field of the segment's direction, continued past v_r = 0 (`with_slip_sign`).
     let signed;

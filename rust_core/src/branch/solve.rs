@@ -258,7 +258,7 @@ impl Ctx<'_> {
             let include_start = i == 0 && mode != ContactMode::Free;
             let sg =
                 segment(&model, mode, &y, tau, &fs, samples, &mut z, include_start, &mut self.stats).map_err(|st| {
-                    if st == Status::EventMissed && mode == ContactMode::Contact {
+                    if st == Status::EventMissed && mode.slips() {
                         fail(
                             st,
                             format!(

@@ -51,8 +51,8 @@ pub enum FrictionLaw {
     /// `mu(v) = mu_k + (mu_s - mu_k) exp(-|v|/v_s)`, with `mu_k` chosen so that `mu(V) = mu`.
     Coulomb = 1,
     /// Event-driven stick-slip, the switch model of Leine et al. (1998), with the same Stribeck
-    /// curve. Outside the band `|v_r| <= eta` (slip, mode `Contact`) the total friction force is
-    /// `mu(v_r) N sign(v_r)`; inside it the pin sticks (mode `Stick`: the force that keeps
+    /// curve. Outside the band `|v_r| <= eta` (slip: mode `Contact` forwards, `SlipBack` backwards)
+    /// the total friction force is `mu(v_r) N sign(v_r)`; inside it the pin sticks (mode `Stick`: the force that keeps
     /// `d v_r/dt = 0`, while that is within `mu_s N`) or is in transition (mode `Transition`: the
     /// static bound `mu_s N sign(F_req)`). The dynamic force subtracts `mu(V) F_st` as `Coulomb` does.
     Switch = 2,
@@ -60,14 +60,24 @@ pub enum FrictionLaw {
 
 /// Contact and friction state: selects the smooth branch of the right-hand side.
 ///
-/// The bilateral model is never `Free`; only the switch friction law uses `Stick` and
+/// The bilateral model is never `Free`; only the switch friction law uses `SlipBack`, `Stick` and
 /// `Transition` (with the other laws an in-contact state is always `Contact`). Stick is impossible
 /// off the disk, so every mode but `Free` is "in contact" ([`ContactMode::in_contact`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum ContactMode {
-    /// The contact law acts (`zc <= 0` and `N >= 0`) and the pin slides; with the switch law the
-    /// sliding velocity is outside the stick band, `|v_r| > eta`.
+    /// The contact law acts (`zc <= 0` and `N >= 0`) and the pin slides; with the switch law it
+    /// slides forwards, `v_r > eta`.
     Contact,
+    /// Switch law: in contact, sliding backwards, `v_r < -eta` (the pin faster than the disk).
+    ///
+    /// Slip's two directions are two modes, as in Leine et al.'s switch model, so that each has a
+    /// smooth field: friction `sign mu(sign v_r) N` with the phase's own `sign`, continued past
+    /// `v_r = 0` (`Slider::mu_signed`). With the sign taken from `v_r` at each evaluation, the
+    /// stages of a step that reached past zero met the force reversed; the error estimate of such
+    /// a step was 1e3-1e5, and every approach to stick was cut into geometrically shrinking steps,
+    /// a third of them rejected. A slip phase ends in the band (an event) before `v_r` can change
+    /// sign, so its direction is fixed from its start.
+    SlipBack,
     /// No normal force: the pin is off the disk (`zc > 0`) or the law would pull (`N < 0`).
     Free,
     /// Switch law: in contact, `|v_r| <= eta`, and the friction force that keeps `d v_r/dt = 0`
@@ -84,6 +94,12 @@ impl ContactMode {
     #[inline(always)]
     pub fn in_contact(self) -> bool {
         self != ContactMode::Free
+    }
+
+    /// True in the slip modes (`Contact`, `SlipBack`): in contact, outside the stick band.
+    #[inline(always)]
+    pub fn slips(self) -> bool {
+        matches!(self, ContactMode::Contact | ContactMode::SlipBack)
     }
 }
 

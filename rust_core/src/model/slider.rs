@@ -85,13 +85,16 @@ impl Slider {
         self
     }
 
-    /// The sign of the slip friction at sliding velocity `v_r`: the fixed one, or `v_r`'s own.
+    /// The sign of the slip friction in slip mode `mode`: the fixed one ([`Slider::with_slip_sign`]),
+    /// or the mode's own (`Contact` +1, `SlipBack` -1).
     #[inline]
-    fn slip_sign_at(&self, v_r: f64) -> f64 {
+    fn slip_sign_in(&self, mode: ContactMode) -> f64 {
         if self.slip_sign != 0.0 {
             self.slip_sign
+        } else if mode == ContactMode::SlipBack {
+            -1.0
         } else {
-            v_r.signum()
+            1.0
         }
     }
 
@@ -210,8 +213,10 @@ impl Slider {
     /// In-contact mode at `y`: `Contact` for the constant and tanh laws; for the switch law
     /// `Contact` (slip) outside the stick band, else [`Slider::band_regime`].
     pub fn contact_regime(&self, y: &State) -> ContactMode {
-        if self.p.friction_law != FrictionLaw::Switch || self.slip_velocity(y).abs() > self.p.stick_band {
+        if self.p.friction_law != FrictionLaw::Switch {
             ContactMode::Contact
+        } else if self.slip_velocity(y).abs() > self.p.stick_band {
+            slip_mode(self.slip_velocity(y))
         } else {
             self.band_regime(y)
         }
@@ -227,7 +232,7 @@ impl Slider {
         if req.abs() <= self.p.mu_static * n {
             ContactMode::Stick
         } else if req.signum() * self.slip_velocity(y) >= self.p.stick_band * (1.0 - EDGE_TOL) {
-            ContactMode::Contact
+            slip_mode(req)
         } else {
             ContactMode::Transition
         }
@@ -262,8 +267,8 @@ impl Slider {
     #[inline(never)]
     fn switch_friction(&self, y: &State, v_r: f64, normal: f64, mode: ContactMode) -> f64 {
         match mode {
-            ContactMode::Contact => {
-                let sg = self.slip_sign_at(v_r);
+            ContactMode::Contact | ContactMode::SlipBack => {
+                let sg = self.slip_sign_in(mode);
                 self.mu_signed(sg * v_r) * normal * sg - self.static_friction
             }
             ContactMode::Free => -self.static_friction,
@@ -321,11 +326,11 @@ impl Slider {
                 d
             }
             FrictionLaw::Switch => match mode {
-                ContactMode::Contact => {
+                ContactMode::Contact | ContactMode::SlipBack => {
                     // mu(v_r) N sign(v_r): d/dv of mu(v) sign(v) is the slope in |v| (in
-                    // sign v, continued past zero: `with_slip_sign`).
+                    // sign v, continued past zero: the mode's sign, or `with_slip_sign`'s).
                     let v = self.slip_velocity(y);
-                    let sg = self.slip_sign_at(v);
+                    let sg = self.slip_sign_in(mode);
                     let normal = p.normal_load + self.dynamic_law_force(y);
                     let dg = self.mu_slope_signed(sg * v);
                     let mut d = dfz * (self.mu_signed(sg * v) * sg);
@@ -448,17 +453,6 @@ impl OdeSystem<6> for Slider {
         true
     }
 
-    /// Slip under the switch law: [`slip_step_limit`].
-    fn step_limit(&self, y: &State, f: &State, mode: ContactMode) -> f64 {
-        if self.p.friction_law != FrictionLaw::Switch || mode != ContactMode::Contact {
-            return f64::INFINITY;
-        }
-        // The rate written out as the lanes write it (not `slip_velocity_gradient().dot(f)`),
-        // so that both paths cap a step by the same bits.
-        let sl = self.p.torsion_sign * self.p.moment_arm;
-        slip_step_limit(self.slip_velocity(y), -(f[idx::XD] + sl * f[idx::PHID]), self.p.stick_band)
-    }
-
     /// The switch law's band edges count one way per mode: in slip only entries into the band
     /// (`BAND_HI` falling, `BAND_LO` rising), in a transition only exits. The other way acts on
     /// nothing (`friction_after_switch` keeps the mode) and is an artefact: stick that ends in
@@ -472,7 +466,7 @@ impl OdeSystem<6> for Slider {
             _ => return true,
         };
         match mode {
-            ContactMode::Contact => inward,
+            ContactMode::Contact | ContactMode::SlipBack => inward,
             ContactMode::Transition => !inward,
             _ => true,
         }
@@ -504,22 +498,14 @@ impl OdeSystem<6> for Slider {
     }
 }
 
-/// The longest step to attempt in slip under the switch law, from the sliding velocity `vr` and
-/// its rate `a` at the step start, `eta` the stick band: where `v_r` heads into the band, the
-/// time its linear prediction takes to reach the band's middle half, `(|v_r| - eta/2) / |a|`
-/// (unlimited otherwise). The slip force `mu(v_r) N sign(v_r)` reverses at `v_r = 0`, inside the
-/// band, which the band-edge event ends slip before; a step whose stages reached it had an error
-/// estimate of 1e3-1e5 and was rejected, often several times over, at every approach to stick.
-/// Aimed at the band, the step that crosses the edge ends before the reversal. On the
-/// issue-10 Stribeck sweep's irregular point (41 N, 5 cm, 0.2 m/s, 5 s from 1 um, rtol 1e-6)
-/// DOP853's rejected steps fell from 4,269 to 48 and its right-hand sides from 244,628 to
-/// 174,544 (DP5: 188,584 to 157,097), below the tanh law's (203,948 and 174,054).
+/// The switch law's slip mode in the direction of `sign` (of `v_r`, or of the force driving it
+/// out of the band): `Contact` forwards, `SlipBack` backwards.
 #[inline]
-pub(crate) fn slip_step_limit(vr: f64, a: f64, eta: f64) -> f64 {
-    if vr * a < 0.0 && vr.abs() > eta {
-        (vr.abs() - 0.5 * eta) / a.abs()
+pub(crate) fn slip_mode(sign: f64) -> ContactMode {
+    if sign < 0.0 {
+        ContactMode::SlipBack
     } else {
-        f64::INFINITY
+        ContactMode::Contact
     }
 }
 
@@ -528,7 +514,7 @@ pub(crate) fn slip_step_limit(vr: f64, a: f64, eta: f64) -> f64 {
 #[inline]
 pub(crate) fn switch_live(mode: ContactMode) -> (bool, bool) {
     match mode {
-        ContactMode::Contact => (true, false),
+        ContactMode::Contact | ContactMode::SlipBack => (true, false),
         ContactMode::Transition => (true, true),
         ContactMode::Stick => (false, true),
         ContactMode::Free => (false, false),
@@ -583,15 +569,18 @@ impl Slider {
     fn friction_after_switch(&self, y: &State, mode: ContactMode, index: usize) -> ContactMode {
         let f = Slider::rhs(self, y, mode);
         match (mode, index) {
-            (ContactMode::Contact | ContactMode::Transition, event::BAND_HI | event::BAND_LO) => {
+            (
+                ContactMode::Contact | ContactMode::SlipBack | ContactMode::Transition,
+                event::BAND_HI | event::BAND_LO,
+            ) => {
                 let edge = if index == event::BAND_HI { 1.0 } else { -1.0 };
                 let outwards = edge * self.slip_velocity_gradient().dot(&f) > 0.0;
                 match (mode, outwards) {
                     // Entering from slip: stick, or a transition across the band (never back to the edge
                     // just crossed, since mu_s >= mu(v): `band_regime` returns `Contact` only for a
                     // grazing entry, which then keeps slipping).
-                    (ContactMode::Contact, false) => self.band_regime(y),
-                    (ContactMode::Transition, true) => ContactMode::Contact,
+                    (ContactMode::Contact | ContactMode::SlipBack, false) => self.band_regime(y),
+                    (ContactMode::Transition, true) => slip_mode(edge),
                     _ => mode,
                 }
             }
@@ -613,7 +602,7 @@ impl Slider {
     pub(crate) fn band_exit(&self, y: &State) -> ContactMode {
         let req = self.required_friction(y);
         if req.signum() * self.slip_velocity(y) >= self.p.stick_band * (1.0 - EDGE_TOL) {
-            ContactMode::Contact
+            slip_mode(req)
         } else {
             ContactMode::Transition
         }

@@ -149,11 +149,11 @@ fn stick_force_holds_the_sliding_velocity() {
 fn switch_modes_and_slip_friction() {
     let s = switch_slider();
     let eta = s.p.stick_band;
-    // Outside the band: slip with the Stribeck force in the direction of v_r.
-    for v in [3e-3, -3e-3] {
+    // Outside the band: slip with the Stribeck force in the direction of v_r, a mode per direction.
+    for (v, mode) in [(3e-3, ContactMode::Contact), (-3e-3, ContactMode::SlipBack)] {
         let y = state_with_slip(&s, v, 0.0, 0.0);
-        assert_eq!(s.mode_at(&y), ContactMode::Contact);
-        let f = s.forces(&y, ContactMode::Contact);
+        assert_eq!(s.mode_at(&y), mode);
+        let f = s.forces(&y, mode);
         let total = f.friction + s.mu_of(s.p.sliding_speed) * s.p.normal_load;
         assert!(close(total, s.mu_of(v) * f.normal * v.signum(), 1e-14), "{total}");
     }
@@ -174,8 +174,9 @@ fn switch_modes_and_slip_friction() {
     // Stick ends at the bound with v_r on the edge the force drives it to: slip at once.
     let req_sign = s.required_friction(&y).signum();
     let y_edge = state_with_slip(&s, req_sign * eta, -1e-3, 0.0);
-    assert_eq!(s.band_regime(&y_edge), ContactMode::Contact);
-    assert_eq!(s.band_exit(&y_edge), ContactMode::Contact);
+    let slip = if req_sign > 0.0 { ContactMode::Contact } else { ContactMode::SlipBack };
+    assert_eq!(s.band_regime(&y_edge), slip);
+    assert_eq!(s.band_exit(&y_edge), slip);
     let y_far = state_with_slip(&s, -req_sign * eta, -1e-3, 0.0);
     assert_eq!(s.band_exit(&y_far), ContactMode::Transition);
 }
@@ -185,20 +186,25 @@ fn switch_slip_field_of_one_direction_is_the_law_on_its_side_and_smooth_across_z
     let s = switch_slider();
     for sign in [1.0, -1.0] {
         let f = s.with_slip_sign(sign);
-        // On its own side, the law's field and Jacobian bit for bit.
-        for v in [3e-3, 1e-7] {
+        // The law's slip mode of that direction (`Contact` forwards, `SlipBack` backwards).
+        let own = if sign > 0.0 { ContactMode::Contact } else { ContactMode::SlipBack };
+        // On its own side, and past zero, the law's field and Jacobian of that mode bit for bit.
+        for v in [3e-3, 1e-7, -1e-7] {
             let y = state_with_slip(&s, sign * v, 2e-6, 1e-3);
-            assert_eq!(f.rhs(&y, ContactMode::Contact), s.rhs(&y, ContactMode::Contact), "v = {v}");
-            assert_eq!(f.jacobian(&y, ContactMode::Contact), s.jacobian(&y, ContactMode::Contact));
+            assert_eq!(f.rhs(&y, ContactMode::Contact), s.rhs(&y, own), "v = {v}");
+            assert_eq!(f.jacobian(&y, ContactMode::Contact), s.jacobian(&y, own));
         }
-        // Across zero (+-1e-9 m/s): the law's force jumps by 2 mu_s N; the continued one has no jump, and its
-        // Jacobian is the central difference of its field on both sides (analytic, 1e-6 relative).
-        let force = |sl: &Slider, v: f64| sl.forces(&state_with_slip(&s, v, 0.0, 0.0), ContactMode::Contact).friction;
+        // Across zero (+-1e-9 m/s): the law's force (its mode following the sign of v_r) jumps by
+        // 2 mu_s N; each slip mode's field is continued, with no jump, and its Jacobian is the
+        // central difference of its field on both sides (analytic, 1e-6 relative).
+        let force = |sl: &Slider, v: f64, m: ContactMode| sl.forces(&state_with_slip(&s, v, 0.0, 0.0), m).friction;
         let h = 1e-9;
-        let jump = |sl: &Slider| (force(sl, h) - force(sl, -h)).abs();
+        let law_jump = (force(&s, h, ContactMode::Contact) - force(&s, -h, ContactMode::SlipBack)).abs();
+        let jump = |sl: &Slider, m: ContactMode| (force(sl, h, m) - force(sl, -h, m)).abs();
         let normal = s.forces(&state_with_slip(&s, h, 0.0, 0.0), ContactMode::Contact).normal;
-        assert!(close(jump(&s), 2.0 * s.p.mu_static * normal, 1e-6), "{} {normal}", jump(&s));
-        assert!(jump(&f) < 1e-6 * jump(&s), "{}", jump(&f)); // O(h): the slope times 2h
+        assert!(close(law_jump, 2.0 * s.p.mu_static * normal, 1e-6), "{law_jump} {normal}");
+        assert!(jump(&f, ContactMode::Contact) < 1e-6 * law_jump, "{}", jump(&f, ContactMode::Contact)); // O(h)
+        assert!(jump(&s, own) < 1e-6 * law_jump, "{}", jump(&s, own));
         for v in [-2e-4, 2e-4] {
             let y = state_with_slip(&s, sign * v, 0.0, 0.0);
             let j = f.jacobian(&y, ContactMode::Contact);

@@ -77,10 +77,6 @@ impl OdeSystem<42> for Variational<'_> {
         OdeSystem::<6>::event_rates(self.slider, t, &head(y), &head(f), mode, d)
     }
 
-    fn step_limit(&self, y: &Augmented, f: &Augmented, mode: ContactMode) -> f64 {
-        OdeSystem::<6>::step_limit(self.slider, &head(y), &head(f), mode)
-    }
-
     fn crossing_counts(&self, mode: ContactMode, i: usize, rising: bool) -> bool {
         OdeSystem::<6>::crossing_counts(self.slider, mode, i, rising)
     }
@@ -236,10 +232,6 @@ impl OdeSystem<6> for Forced<'_> {
     // As `Variational`'s: the slider's own rules for the steps and crossings.
     fn event_rates(&self, t: f64, y: &State, f: &State, mode: ContactMode, d: &mut [f64; MAX_EVENTS]) -> bool {
         OdeSystem::<6>::event_rates(self.slider, t, y, f, mode, d)
-    }
-
-    fn step_limit(&self, y: &State, f: &State, mode: ContactMode) -> f64 {
-        OdeSystem::<6>::step_limit(self.slider, y, f, mode)
     }
 
     fn crossing_counts(&self, mode: ContactMode, i: usize, rising: bool) -> bool {

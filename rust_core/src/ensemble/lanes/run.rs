@@ -9,7 +9,7 @@ use super::slider::{
 use super::state::{finish, park, refill, sync_from_side, sync_to_side, unpark, Input, Lanes, Parked, Side, Watch};
 use crate::cancel;
 use crate::ensemble::{Task, TrajectoryResult};
-use crate::model::{event, idx, slip_step_limit, ContactMode, State};
+use crate::model::{event, idx, ContactMode, State};
 use crate::ode::controller::{FAC_MAX, FAC_MIN, SAFETY};
 use crate::ode::dop853::Dop853Dense;
 use crate::ode::dopri5::Dopri5Dense;
@@ -129,15 +129,7 @@ pub(super) fn run_impl<'a, const UNI: bool, const LAW: u8, const M8: bool, const
         let mut floor = zero;
         let mut bad = false;
         for l in 0..N {
-            // Slip under the switch law: the scalar driver's `OdeSystem::step_limit`.
-            let m = &ln.modes;
-            let h = if LAW == SWITCH && m.contact[l] & !m.stick[l] & !m.trans[l] {
-                let (c, y, f) = (&ln.c, &ln.y, &ln.f);
-                let vr = c.v[l] - (y[idx::XD][l] + c.sl[l] * y[idx::PHID][l]);
-                ln.h[l].min(slip_step_limit(vr, -(f[idx::XD][l] + c.sl[l] * f[idx::PHID][l]), c.eta[l]))
-            } else {
-                ln.h[l]
-            };
+            let h = ln.h[l];
             let rem = ln.t_end[l] - ln.t[l];
             let la = h >= rem || 1.01 * h >= rem;
             last[l] = la;

@@ -46,11 +46,13 @@ pub(super) struct Modes<const N: usize> {
     pub(super) contact: [bool; N],
     pub(super) stick: [bool; N],
     pub(super) trans: [bool; N],
+    /// Slipping backwards (`ContactMode::SlipBack`): the slip force's sign is -1.
+    pub(super) back: [bool; N],
 }
 
 impl<const N: usize> Modes<N> {
     pub(super) fn new() -> Self {
-        Modes { contact: [true; N], stick: [false; N], trans: [false; N] }
+        Modes { contact: [true; N], stick: [false; N], trans: [false; N], back: [false; N] }
     }
 
     #[inline]
@@ -58,6 +60,7 @@ impl<const N: usize> Modes<N> {
         self.contact[l] = mode.in_contact();
         self.stick[l] = mode == ContactMode::Stick;
         self.trans[l] = mode == ContactMode::Transition;
+        self.back[l] = mode == ContactMode::SlipBack;
     }
 
     /// The switch law's live event functions in lane `l` (`model::switch_live`): the band edges
@@ -215,7 +218,13 @@ pub(super) fn rhs<const UNI: bool, const LAW: u8, const N: usize>(
         for l in 0..N {
             let v = c.v[l] - (y[3][l] + c.sl[l] * y[5][l]);
             vr[l] = v;
-            a[l] = -v.abs() * c.inv_vs[l];
+            // The switch law's slip field has its mode's sign, continued past v_r = 0
+            // (`Slider::mu_signed`): sign v_r = |v_r| exactly wherever the signs agree.
+            a[l] = if LAW == SWITCH {
+                -blend((m.back[l] as u64).wrapping_neg(), -v, v) * c.inv_vs[l]
+            } else {
+                -v.abs() * c.inv_vs[l]
+            };
         }
         let ea = exp_lanes_by::<true, N>(&a);
         if LAW == TANH {
@@ -237,7 +246,8 @@ pub(super) fn rhs<const UNI: bool, const LAW: u8, const N: usize>(
             for l in 0..N {
                 let mu = c.mu_k[l] + c.dmu[l] * ea[l];
                 let normal = c.fst[l] + fz[l];
-                let slip = mu * normal * 1.0f64.copysign(vr[l]) - c.stat[l];
+                let sg = blend((m.back[l] as u64).wrapping_neg(), -1.0, 1.0);
+                let slip = mu * normal * sg - c.stat[l];
                 let st = stick_force(c, y, l);
                 let tr = c.mu_s[l] * normal * 1.0f64.copysign(st + c.stat[l]) - c.stat[l];
                 // Selected by masks: written as `if stick {..} else if trans {..}`, LLVM kept a
