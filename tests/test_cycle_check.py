@@ -103,6 +103,38 @@ def test_a_checked_cycle_agrees_with_an_independent_scipy_cycle(bouncing):
     assert float(_first(ds, "cycle_omega")) / omega_ref - 1 == pytest.approx(0, abs=1e-7)
 
 
+def test_the_transients_find_at_their_tolerance_and_the_check_measures_at_rtols(bouncing, monkeypatch):
+    # The transient runs at transient_rtol (1e-6 by default); the check (shooting) and the run on
+    # the converged orbit that measures the cycle at ten times tighter than rtol: the measured
+    # cycle does not follow the transients' tolerance.
+    ds, (omega_ref, a1_ref) = bouncing
+    seen = []
+    real_ens, real_orb = _core.ensemble, _core.periodic_orbits
+
+    def ens(*args, **kw):
+        seen.append((kw.get("kind"), args[8]))
+        return real_ens(*args, **kw)
+
+    def orb(*args, **kw):
+        seen.append(("shooting", kw["rtol"]))
+        return real_orb(*args, **kw)
+
+    monkeypatch.setattr(_core, "ensemble", ens)
+    monkeypatch.setattr(_core, "periodic_orbits", orb)
+    tight = _sweep(transient_rtol=1e-8)
+    assert seen == [("steady", 1e-8), ("shooting", 1e-9), ("steady", 1e-9)]
+    seen.clear()
+    loose = _sweep(rtol=1e-7)
+    assert seen == [("steady", 1e-6), ("shooting", 1e-8), ("steady", 1e-8)]
+    assert tight.attrs["solver_transient_rtol"] == 1e-8 and loose.attrs["solver_transient_rtol"] == 1e-6
+    # Both stops are shot to the same orbit: the amplitude moves by the shooting's own tolerances
+    # (Newton 1e-8, integration 1e-9), not by the transients' 1e-6 against 1e-8.
+    for d in (ds, tight):
+        assert ts.labels(d.cycle_verified).values.ravel()[0] == "verified"
+    assert float(_first(ds, "z1_amplitude")) / float(_first(tight, "z1_amplitude")) - 1 == pytest.approx(0, abs=1e-7)
+    assert float(_first(tight, "z1_amplitude")) / a1_ref - 1 == pytest.approx(0, abs=1e-6)
+
+
 def test_without_the_check_the_transients_stop_is_measurably_off(bouncing, monkeypatch):
     # What the check is for: the transient's own cycle, where it stopped (5.8e-4 off here; about
     # periodic_tol / (1 - |mu|) with |mu| about 0.98).

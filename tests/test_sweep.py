@@ -15,7 +15,7 @@ import xarray as xr
 import tribosweep as ts
 from tribosweep import _census, _codes, _core
 from tribosweep._codes import REGIME
-from tribosweep._settings import SweepSettings
+from tribosweep._settings import DEFAULTS, SweepSettings
 from tribosweep._sweep import chunk as _chunk
 from tribosweep._sweep import plan as _plan
 from tribosweep._sweep import runner as _runner
@@ -98,6 +98,7 @@ def test_bad_extra_axes(extra, match):
         ({"disturbance_scale": -1.0}, "disturbance_scale"),
         ({"census_t_max": 0.0}, "census_t_max"),
         ({"census_rtol": 1.5}, r"census_rtol = 1.5 is out of range: must be in \[1e-15, 1\)"),
+        ({"transient_rtol": 1.5}, r"transient_rtol = 1.5 is out of range: must be in \[1e-15, 1\)"),
         ({"irregular_block": -1}, r"irregular_block = -1 is out of range: must be an integer in \[0, "),
         ({"transient_irregular_block": 2.5}, r"transient_irregular_block = 2.5 is out of range: must be an integer in "),
     ],
@@ -589,7 +590,8 @@ def robust_transient_regimes(kw: dict) -> tuple[np.ndarray, np.ndarray]:
     A transient is one trajectory from one small disturbance. Where it passes near a basin
     boundary (at 140 N, mu 0.4 it either settles on the stick-slip cycle or escapes), its regime
     flips with the last bit of a float. Robust: the same with the loads moved by +-1 and +-2 ulps
-    and rtol moved by +-1 %; only those regimes are single-run facts a test may compare.
+    and the transients' tolerance (``transient_rtol``) moved by +-1 %; only those regimes are
+    single-run facts a test may compare.
     """
     from conftest import RTOL_FACTORS, ULPS, moved
 
@@ -600,7 +602,8 @@ def robust_transient_regimes(kw: dict) -> tuple[np.ndarray, np.ndarray]:
     for k in ULPS:
         robust &= ts.sweep(strategy="transient", **(kw | dict(normal_load=moved(loads, k)))).regime.values.ravel() == rt
     for f in RTOL_FACTORS:
-        robust &= ts.sweep(strategy="transient", **(kw | dict(rtol=1e-8 * f))).regime.values.ravel() == rt
+        moved_rtol = dict(transient_rtol=DEFAULTS.steady.rtol * f)
+        robust &= ts.sweep(strategy="transient", **(kw | moved_rtol)).regime.values.ravel() == rt
     return ref, robust
 
 

@@ -57,13 +57,16 @@ def test_numbers_and_chart(small, png_size):
     d = res["numbers"]
     assert d["points"] == 4 and len(d["rows"]) == 1 and len(d["floor"]) == 2
     row = d["rows"][0]
-    assert (row["rtol"], row["block"]) == (1e-6, 256)
+    assert (row["transient_rtol"], row["block"]) == (1e-6, 256)
     assert 0 <= row["regimes_differ"] <= 4 and row["points_per_s"] > 0 and row["rhs_per_point"] > 0
     # A looser rtol costs fewer right-hand sides than the reference at 1e-10 run to t_max.
     assert row["rhs_per_point"] < d["reference_rhs_per_point"]
-    # Cycle amplitudes at rtol 1e-6 against 1e-10: errors of the order of the tolerance, not of the cycle.
+    # Cycle amplitudes found by transients at 1e-6 are measured on the orbit at the checks' 1e-9,
+    # against the reference's 1e-10 (median 2e-9 on the whole grid). Of the corner's two cycles,
+    # one has a first harmonic of 0.24 um beside the other's 35 um: 6e-9 and 3.7e-6 off (that is
+    # 1e-12 m, and 3.5e-6 with the transients at 1e-8), a median of 1.9e-6.
     if row["cycles_same"]:
-        assert row["a1_error_median"] < 1e-4
+        assert row["a1_error_median"] < 1e-5
     # The chart (10.5 x 4.8 in at 100 dpi) plots each row at its numbers, and the table lists it.
     assert png_size(out / "sweep_settings.png") == (1050, 480)
     assert "| 1e-06 | 256 |" in res["markdown"]

@@ -72,9 +72,11 @@ def rows(summary: dict) -> dict:
 
 
 def check_rtol(rtol: float, shooting_rtol: float) -> float:
-    """The checks' integration tolerance: ten times tighter than the runs' own (1e-9 by default), so
-    the orbit is as accurate as the runs and its multipliers have digits to spare; never tighter
-    than ``shooting_rtol`` (1e-10, for the describing function's roots)."""
+    """The checks' integration tolerance: ten times tighter than the measurement tolerance ``rtol``
+    (1e-9 by default), so the orbit is as accurate as a run at ``rtol`` and its multipliers have
+    digits to spare; never tighter than ``shooting_rtol`` (1e-10, for the describing function's
+    roots). It does not follow the tolerance of the transients that found the cycle (a sweep's
+    ``transient_rtol``): they find, the check measures."""
     return max(0.1 * float(rtol), float(shooting_rtol))
 
 
@@ -144,12 +146,14 @@ def merge(s: dict, idx: np.ndarray, r: dict, t0: np.ndarray, skip: tuple[str, ..
     s["t_end"][idx] = t0 + r["t_end"]
 
 
-def check(summary: dict, shoot, steady, t_max: float) -> tuple[dict, np.ndarray]:
+def check(summary: dict, shoot, steady, t_max: float, measure=None) -> tuple[dict, np.ndarray]:
     """The cycles that the runs of ``summary`` stopped on, checked and converged by shooting.
 
     ``shoot(idx, y_end, period, z1, z_size)``: :func:`shoot` for the runs ``idx``;
     ``steady(idx, y0, restart=None)``: runs to steady state of the runs ``idx`` from ``y0`` (the
-    core's summary), each with its own ``(t_max, hold)`` under ``restart``.
+    core's summary), each with its own ``(t_max, hold)`` under ``restart``; ``measure(idx, y0)``:
+    the runs started on stable orbits that measure them (default ``steady``; a sweep measures at
+    its checks' tolerance what its transients, at their own, only found).
 
     - **stable orbit**: a run started on it measures it (every cycle quantity of the summary,
       from the same Fourier integrals as the first run's, on the orbit itself);
@@ -164,6 +168,7 @@ def check(summary: dict, shoot, steady, t_max: float) -> tuple[dict, np.ndarray]
     row, shooting included), and per row whether its cycle was verified (a stable orbit that
     shooting converged and a run on it measured).
     """
+    measure = steady if measure is None else measure
     s = rows(summary)
     n = len(s["outcome"])
     verified = np.zeros(n, dtype=bool)
@@ -183,7 +188,7 @@ def check(summary: dict, shoot, steady, t_max: float) -> tuple[dict, np.ndarray]
             notes[todo[j]].append(f"the cycle is the run's stop, not verified: {orbs['note'][j]}")
         good = todo[orbs["stable"]]
         if good.size:
-            verified[good] = _measure(steady, s, good, orbs["state0"][orbs["stable"]])
+            verified[good] = _measure(measure, s, good, orbs["state0"][orbs["stable"]])
         u = orbs["unstable"]
         todo = _leave(steady, s, todo[u], orbs["moduli"][u], orbs["period"][u], t_max, notes)
     for i in todo:  # still stopping near unstable cycles after CHECK_ROUNDS checks
@@ -193,7 +198,7 @@ def check(summary: dict, shoot, steady, t_max: float) -> tuple[dict, np.ndarray]
     stuck = np.zeros(n, dtype=bool)
     stuck[todo] = True
     if "nearest_residual" in s:
-        verified |= _slow_approach(shoot, steady, s, ~stuck, notes)
+        verified |= _slow_approach(shoot, measure, s, ~stuck, notes)
     for i, parts in enumerate(notes):
         if parts:
             s["reason"][i] = "; ".join(([s["reason"][i]] if s["reason"][i] else []) + parts)
@@ -217,7 +222,7 @@ def slow_note(t: float, residual: float, mult: int, mu: float) -> str:
             f"multiplier {mu:.4g})")  # fmt: skip
 
 
-def _slow_approach(shoot, steady, s: dict, eligible: np.ndarray, notes: list[list[str]]) -> np.ndarray:
+def _slow_approach(shoot, measure, s: dict, eligible: np.ndarray, notes: list[list[str]]) -> np.ndarray:
     """Runs of ``s`` that reached ``t_max`` unsettled, shot from their newest section state where it
     nearly repeated (:func:`slow_candidates`); a stable orbit of that period is measured and becomes
     the run's outcome. Returns per row whether it did (verified)."""
@@ -232,7 +237,7 @@ def _slow_approach(shoot, steady, s: dict, eligible: np.ndarray, notes: list[lis
     if not good.size:
         return done
     mu = slowest_multiplier(orbs["moduli"][orbs["stable"]])
-    measured = _measure(steady, s, good, orbs["state0"][orbs["stable"]], stop_quantities=False)
+    measured = _measure(measure, s, good, orbs["state0"][orbs["stable"]], stop_quantities=False)
     for i, m in zip(good[measured], mu[measured]):
         notes[i].append(slow_note(float(s["t_end"][i]), s["nearest_residual"][i], s["nearest_multiplicity"][i], m))
         s["outcome"][i], s["status"][i], s["reason"][i] = PERIODIC, STATUS["success"], ""
@@ -240,7 +245,7 @@ def _slow_approach(shoot, steady, s: dict, eligible: np.ndarray, notes: list[lis
     return done
 
 
-def _measure(steady, s: dict, idx: np.ndarray, state0: np.ndarray, stop_quantities: bool = True) -> np.ndarray:
+def _measure(measure, s: dict, idx: np.ndarray, state0: np.ndarray, stop_quantities: bool = True) -> np.ndarray:
     """The cycle quantities of ``s`` at rows ``idx``, measured by runs started on their converged orbits.
 
     Such a run stops once its section state repeats, two periods in. Its limit is the runs'
@@ -250,7 +255,7 @@ def _measure(steady, s: dict, idx: np.ndarray, state0: np.ndarray, stop_quantiti
     Returns which runs repeated (the others keep the first run's quantities, with a reason; with
     ``stop_quantities=False`` there are none: they are left as they were, without one).
     """
-    m = rows(steady(idx, state0))
+    m = rows(measure(idx, state0))
     s["n_rhs"][idx] += m["n_rhs"]
     done = m["outcome"] == PERIODIC
     for key in CYCLE_KEYS:

@@ -99,14 +99,30 @@ class Steady:
         from a repetition to 1e-3 to one to 1e-5. Measured (2026-11-28): the Stribeck sweep at
         491-508 -> 563-578 points/s (switch law, right-hand sides -14 %; tanh law -11 %, 443 ->
         448), the 2,000-point grid's transients 1.52 -> 1.18 s, no regime changed.
+    rtol : float
+        Relative tolerance of the transients (``transient_rtol``, 1e-6; the integrator is
+        ``integrator``'s), in (0, 1). A transient finds which attractor a point reaches; it does
+        not measure it: a cycle it stops on is converged by shooting and measured on the orbit at
+        the checks' tolerance (ten times tighter than ``rtol``, 1e-9 by default), and irregular
+        motion is measured over a window at ``rtol``, so the tolerance here sets no reported
+        number, only where a chaotic transient happens to end (as the census's ``census_rtol``).
+        On the issue-10 Stribeck sweep (``python benches/bench_stribeck.py --settings``,
+        2026-11-29) its regimes at 1e-6 differ from the reference (every transient to ``t_max``
+        at 1e-10) in as many points as the reference differs from itself at rtol +-1 %, at 0.70x
+        the right-hand sides of 1e-8.
     """
 
     t_max: float = 100.0
     periodic_tol: float = 1e-5
     decay_amplitude: float | None = None
     approach_periods: int = 10
+    rtol: float = 1e-6
 
     def __post_init__(self):
+        try:
+            _set(self, "rtol", _checks.rtol(self.rtol))
+        except ValueError as e:
+            raise ValueError(str(e).replace("rtol", "transient_rtol", 1)) from None
         _set(self, "t_max", _checks.positive("t_max", self.t_max))
         _set(self, "periodic_tol", _checks.positive("periodic_tol", self.periodic_tol))
         _set(self, "approach_periods", _checks.approach_periods("approach_periods", self.approach_periods))
@@ -332,6 +348,7 @@ _FLAT: tuple[tuple[str, str, str], ...] = (
     ("atol", "integration", "atol"),
     ("periodic_tol", "steady", "periodic_tol"),
     ("approach_periods", "steady", "approach_periods"),
+    ("transient_rtol", "steady", "rtol"),
     ("decay_amplitude", "steady", "decay_amplitude"),
     ("census", "census", "enabled"),
     ("samples", "census", "samples"),

@@ -110,7 +110,10 @@ def _positive_int(text: str) -> int:
 _SETTINGS: dict[str, tuple[str, object, str, str]] = {
     "t_max": ("integration", float, "S", "longest transient run [s]"),
     "integrator": ("integration", str, "NAME", "time integrator: dop853, dopri5 or rodas4"),
-    "rtol": ("integration", float, "R", "relative tolerance of every run"),
+    "rtol": ("integration", float, "R", "relative tolerance of what is measured: irregular motion's window, and the "
+             "cycles' shooting checks at ten times tighter"),
+    "transient_rtol": ("integration", float, "R", "relative tolerance of the transients, which find each point's "
+                       "attractor (1e-6)"),
     "atol": ("integration", "floats", "A", "absolute tolerance: one value or six (default rtol x each state's size)"),
     "periodic_tol": ("integration", float, "R", "relative repetition tolerance that declares a cycle"),
     "approach_periods": ("integration", int, "M", "periods per block of the test that checks an auto transient's "

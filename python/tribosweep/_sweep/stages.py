@@ -326,19 +326,22 @@ def _escape_reason(summary: dict, i: int) -> str:
 
 
 def run_steady(p: Points, sel: np.ndarray, y0: np.ndarray, decay: np.ndarray | None = None,
-               restart: np.ndarray | None = None, approach: bool = False) -> dict:  # fmt: skip
+               restart: np.ndarray | None = None, approach: bool = False, rtol: float | None = None) -> dict:  # fmt: skip
     """Runs to steady state of the points ``sel`` from ``y0`` (one row, or one per point), in the core.
 
     ``restart``: per run ``(t_max, hold)``, runs that go on from where earlier ones stopped (the
     core's ``restart``); default: the settings' ``t_max`` and no hold. ``approach``: a slow
     approach to a cycle is checked by shooting inside the run after ``approach_periods`` periods
     of steady contraction, at the checks' tolerances (the transients' first runs; a run that
-    stops so is on a stable orbit, measured there: its check is done).
+    stops so is on a stable orbit, measured there at those tolerances: its check is done).
+    ``rtol``: default the transients' ``transient_rtol`` (runs that find an attractor); runs that
+    measure an orbit pass the checks' tolerance.
     """
     it, st = p.settings.integration, p.settings.steady
     return _core.ensemble(
         p.base, p.contact, p.friction_law, p.names, np.ascontiguousarray(p.values[sel]),
-        np.ascontiguousarray(y0, dtype=np.float64), float(st.t_max), it.integrator, float(it.rtol),
+        np.ascontiguousarray(y0, dtype=np.float64), float(st.t_max), it.integrator,
+        float(st.rtol if rtol is None else rtol),
         atol=None if it.atol is None else np.asarray(it.atol, dtype=np.float64), threads=p.threads, kind="steady",
         periodic_tol=float(st.periodic_tol), decay_amplitude=st.decay_amplitude, n_fourier=512,
         restart=None if restart is None else np.ascontiguousarray(restart, dtype=np.float64),
@@ -352,8 +355,8 @@ def run_steady(p: Points, sel: np.ndarray, y0: np.ndarray, decay: np.ndarray | N
 def check_cycles(p: Points, sel: np.ndarray, summary: dict) -> tuple[dict, np.ndarray]:
     """Stage 4a: the cycles that the transients of ``sel`` stopped on, checked and converged by shooting.
 
-    :func:`tribosweep._cycles.check` with the sweep's settings (shooting at ten times the
-    transients' tolerance), the work charged to the points. A transient's stop near a slowly
+    :func:`tribosweep._cycles.check` with the sweep's settings (shooting at ten times tighter than
+    ``rtol``, whatever the transients' ``transient_rtol``), the work charged to the points. A transient's stop near a slowly
     attracting cycle is ``periodic_tol / (1 - |mu|)`` from it (the Stribeck sweep's amplitudes were
     up to 0.7 % off); one in a laminar phase of intermittent motion repeats near an unstable cycle.
     Returns the summary with the checked rows replaced and per run whether its cycle was verified.
@@ -368,13 +371,14 @@ def check_cycles(p: Points, sel: np.ndarray, summary: dict) -> tuple[dict, np.nd
         p.charge(sel[idx], t1)
         return out
 
-    def steady(idx, y0, restart=None):
+    def steady(idx, y0, restart=None, measure=False):
         t1 = time.perf_counter()
-        out = run_steady(p, sel[idx], y0, restart=restart)
+        out = run_steady(p, sel[idx], y0, restart=restart, rtol=rtol if measure else None)
         p.charge(sel[idx], t1)
         return out
 
-    return _cycles.check(summary, shoot, steady, float(p.settings.steady.t_max))
+    return _cycles.check(summary, shoot, steady, float(p.settings.steady.t_max),
+                         measure=lambda idx, y0: steady(idx, y0, measure=True))  # fmt: skip
 
 
 def transient(p: Points, *, start_on_mode: bool) -> None:

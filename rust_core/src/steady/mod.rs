@@ -393,7 +393,8 @@ pub struct SteadyOptions {
     /// integration tolerance and Newton tolerance. Shooting lives above this module, which
     /// hands it in (`crate::shooting::approach_check`), so that the modules stay a hierarchy.
     pub approach_check: Option<ApproachCheck>,
-    /// Integration tolerance of the approach checks.
+    /// Integration tolerance of the approach checks, and of the run on a stable orbit that
+    /// measures it (the run's own `tol` only found the cycle).
     pub approach_rtol: f64,
     /// Newton tolerance of the approach checks.
     pub approach_tol: f64,

@@ -3,8 +3,8 @@
 
 use super::section::{Crossing, SectionWatcher};
 use super::{
-    decay_amplitude, run_to_steady, ApproachVerdict, Intermittent, SteadyOptions, SteadyOutcome, DEPART_TOL,
-    INTERMITTENT_VISITS, KNOWN_MAX, SAME_SADDLE,
+    decay_amplitude, run_to_steady, ApproachVerdict, Intermittent, SteadyOptions, SteadyOutcome, Tolerances,
+    DEPART_TOL, INTERMITTENT_VISITS, KNOWN_MAX, SAME_SADDLE,
 };
 use crate::model::{idx, ContactMode, Slider, State};
 use crate::ode::{Control, Observer, StepView};
@@ -101,11 +101,14 @@ impl SteadyObserver {
         self.w.extra += work;
         let hold = match verdict {
             ApproachVerdict::Stable { state0, .. } => {
+                // Measured at the check's tolerance: the run's own only found the cycle (a
+                // sweep's transients run looser than what it reports).
                 let on = SteadyOptions {
                     approach_periods: 0,
                     irregular_block: 0,
                     hold: 0.0,
                     known_irregular: [None; KNOWN_MAX],
+                    tol: Tolerances { rtol: self.opts.approach_rtol, ..self.opts.tol },
                     ..self.opts
                 };
                 let m = run_to_steady(&self.s, &state0, &on);
