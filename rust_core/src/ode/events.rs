@@ -340,7 +340,8 @@ where
     O: Observer<N, S::Mode>,
     D: StepDense<N>,
 {
-    let mut found: [Option<Found<N, S::Mode>>; MAX_EVENTS] = [None; MAX_EVENTS];
+    // One slot per function, and as many again for crossings seen after a `Continue` event.
+    let mut found: [Option<Found<N, S::Mode>>; 2 * MAX_EVENTS] = [None; 2 * MAX_EVENTS];
     let mut n_found = 0;
     let pend_before = *pend;
     let mut t_check = [f64::NEG_INFINITY; MAX_EVENTS];
@@ -403,11 +404,18 @@ where
         }
     }
 
-    // Actions in time order, up to the first truncating one.
+    // Actions in time order, up to the first truncating one. An event that changes nothing
+    // (`Continue`) is a point inside the step where every function can be read: one that crossed
+    // and came back before it looked unchanged at the step's ends, and may now show a crossing
+    // between the event and the end, which is then located and acted on in its turn. In
+    // particular a pin that meets the disk with the law in tension (`GAP`, no landing) lands
+    // where the law turns compressive (`NORMAL`); within one long free-flight step that turn
+    // can lie inside a dip of the law force that the step's ends and interior checks miss.
     let mut n_proc = 0;
     let mut trunc = false;
-    for slot in found.iter_mut().take(n_found) {
-        let e = slot.as_mut().expect("filled above");
+    let mut g_e = [0.0; MAX_EVENTS];
+    while n_proc < n_found {
+        let e = found[n_proc].as_mut().expect("filled above");
         if e.t < t_new {
             e.y = dense.eval(e.t);
         }
@@ -416,6 +424,30 @@ where
         if !matches!(e.action, EventAction::Continue) {
             trunc = true;
             break;
+        }
+        let (te, ye) = (e.t, e.y);
+        if te >= t_new {
+            continue;
+        }
+        sys.events(te, &ye, mode, &mut g_e);
+        for j in 0..n_ev {
+            // Not a function just crossed here or earlier in the step (its value at `te` is its
+            // own root's rounding), nor one still guarded after an earlier event, nor one whose
+            // crossing is already queued.
+            let seen = found[..n_found].iter().flatten().any(|f| f.index == j);
+            if seen || te < t_check[j] || g_e[j] == 0.0 || g_e[j].is_nan() || n_found == found.len() {
+                continue;
+            }
+            if crosses(g_e[j], g1[j]) && sys.crossing_counts(mode, j, g_e[j] < 0.0) {
+                let tj = locate_from(|tt| g_at(j, tt), te, g_e[j], t_new, g1[j], opts.event_tol, None);
+                let mut b = n_found;
+                found[b] = Some(Found { t: tj, index: j, y: *y_new, action: EventAction::Continue });
+                n_found += 1;
+                while b > n_proc && found[b - 1].map(|f| f.t) > found[b].map(|f| f.t) {
+                    found.swap(b - 1, b);
+                    b -= 1;
+                }
+            }
         }
     }
     let (t1, y1) = if trunc {
