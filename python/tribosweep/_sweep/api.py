@@ -186,9 +186,9 @@ def sweep(
         Relative tolerance of the transients (1e-6), which find the attractor a point reaches:
         every number reported of it is measured afterwards at ``rtol`` (a cycle by shooting on
         the orbit, irregular motion over its window), so this sets only where a chaotic transient
-        happens to end. On the issue-10 Stribeck sweep its regimes at 1e-6 differ from transients
-        at 1e-10 run to ``t_max`` no more than those differ from themselves at rtol +-1 %, at 0.70x
-        the right-hand sides of 1e-8 (see ``tribosweep._settings.Steady``).
+        happens to end. On the issue-10 Stribeck sweep no regime at 1e-6 differs from transients
+        at 1e-10 run to ``t_max``, at 0.73x the right-hand sides of 1e-8 (see
+        ``tribosweep._settings.Steady``).
     periodic_tol : float
         Relative repetition tolerance that declares a cycle.
     census : bool
