@@ -251,7 +251,8 @@ def sweep(
     ftle_d0 : float
         Separation of the two trajectories in units of the characteristic sizes (1e-8).
     ftle_rtol : float
-        Relative tolerance of the exponent's runs (1e-11: well below ``ftle_d0``).
+        Relative tolerance of the exponent's runs (1e-9: two runs ``ftle_d0`` apart take the
+        same steps, and their step errors cancel in the separation).
     shooting_rtol, shooting_tol : float
         Integration and Newton tolerances of the shooting stage (1e-10, 1e-8: the orbit's ``A1``
         is compared with the describing function's to a few 1e-3, and the monodromy matrix needs
