@@ -22,6 +22,19 @@ fn linspace(lo: f64, hi: f64, n: usize) -> Vec<f64> {
     (0..n).map(|k| if n > 1 { lo + (hi - lo) * k as f64 / (n - 1) as f64 } else { 0.5 * (lo + hi) }).collect()
 }
 
+/// The switch law with unilateral contact at 0.05 m/s, band 0.1 mm/s (the work-precision bench's
+/// `switch_unilateral` scene).
+fn switch_unilateral() -> Params {
+    Params {
+        contact: ContactModel::Unilateral,
+        friction_law: FrictionLaw::Switch,
+        mu_static: 0.3,
+        sliding_speed: 0.05,
+        stick_band: 1e-4,
+        ..Params::seed()
+    }
+}
+
 /// The scenes of the work-precision bench (`_workprecision.make_scenes`): sliders, start
 /// states and the simulated time.
 fn scenes(n: usize) -> Vec<(&'static str, Vec<Slider>, Vec<State>, f64)> {
@@ -38,14 +51,7 @@ fn scenes(n: usize) -> Vec<(&'static str, Vec<Slider>, Vec<State>, f64)> {
     // The switch law (Leine et al.) on the stick-slip scene with a band of 0.1 mm/s, and with
     // unilateral contact at 0.05 m/s from 40 um (the pin leaves the disk and sticks).
     let switch = Params { friction_law: FrictionLaw::Switch, stick_band: 1e-4, ..stick };
-    let switch_uni = Params {
-        contact: ContactModel::Unilateral,
-        friction_law: FrictionLaw::Switch,
-        mu_static: 0.3,
-        sliding_speed: 0.05,
-        stick_band: 1e-4,
-        ..seed
-    };
+    let switch_uni = switch_unilateral();
     let z = |z0: f64, k: usize| vec![State::new(z0, 0.0, 0.0, 0.0, 0.0, 0.0); k];
     let mk = |base: Params, name: &str, vals: Vec<f64>| -> Vec<Slider> {
         vals.into_iter()
@@ -899,14 +905,7 @@ fn separations(s: &[Slider], ys: &[State]) -> Vec<State> {
 fn two_runs_a_small_distance_apart_separate_as_at_a_far_tighter_tolerance() {
     let d0 = 1e-8;
     let t_end = 0.1;
-    let switch_uni = Params {
-        contact: ContactModel::Unilateral,
-        friction_law: FrictionLaw::Switch,
-        mu_static: 0.3,
-        sliding_speed: 0.05,
-        stick_band: 1e-4,
-        ..Params::seed()
-    };
+    let switch_uni = switch_unilateral();
     let scenes = [
         ("smooth", Params { mu: 0.215, ..Params::seed() }, [60.0, 70.0, 80.0, 90.0], 1e-6, 1e-5),
         ("switch_unilateral", switch_uni, [110.0, 116.7, 123.3, 130.0], 40e-6, 0.1),
