@@ -564,3 +564,66 @@ fn a_pin_landing_under_tension_does_not_fly_through_the_disk() {
     assert!(off(&with_phi.y) < 1e-5, "{:e}", off(&with_phi.y));
     assert!(reference.y[idx::Z].abs() < 2e-4);
 }
+
+#[test]
+fn a_run_near_a_fold_of_cycles_stops_on_the_stable_orbit_inside_the_unstable_ones_hold() {
+    // The switch-law Stribeck sweep's point at 72.2 N, 0.6 m/s (benches/bench_stribeck.py) lies
+    // near a fold of cycles: an unstable orbit (largest multiplier 1.004, real: a fold) and a
+    // stable one (0.995) of nearly one period, A1 2 % apart. Its transient, started as the sweep
+    // starts it, passes the unstable orbit first: the check of its slow approach at 0.26 s finds
+    // it and holds the repetition test off for 1,000 periods (8.3 s), while the run drifts to the
+    // stable orbit along the multiplier near 1. Checks inside the hold find the stable orbit
+    // (at 2.1 s); before they ran there, the run stopped by repetition at 8.6 s.
+    use crate::model::FrictionLaw;
+    use crate::ode::Method;
+    use crate::steady::{run_to_steady, ApproachCheck, ApproachVerdict, SteadyOptions, SteadyOutcome, Tolerances};
+    let s = Slider::new(Params {
+        contact: ContactModel::Unilateral,
+        friction_law: FrictionLaw::Switch,
+        mu_static: 0.3,
+        normal_load: 72.22222222222223,
+        omega_friction: 413.07437424999057,
+        omega_normal: 443.35803527287646,
+        omega_torsion: 724.7559943734607,
+        sliding_speed: 0.6000000000000001,
+        ..Params::seed()
+    })
+    .unwrap();
+    // The sweep's start: on the unstable linear mode of steady sliding, |z| = |z_st|.
+    let y0 = State::new(
+        1.4299754787109904e-05,
+        1.481464247812367e-06,
+        2.875127420609245e-06,
+        3.934798917067847e-05,
+        -0.0013321398612891045,
+        0.04222910888053016,
+    );
+    // The sweep's transients (`tribosweep._sweep.stages.run_steady`).
+    let opts = SteadyOptions {
+        t_max: 20.0,
+        method: Method::Dop853,
+        tol: Tolerances::new(1e-6),
+        periodic_tol: 1e-5,
+        irregular_block: 128,
+        approach_periods: 10,
+        approach_check: Some(approach_check as ApproachCheck),
+        ..SteadyOptions::default()
+    };
+    let sum = run_to_steady(&s, &y0, &opts);
+    assert_eq!((sum.outcome, sum.approach), (SteadyOutcome::Periodic, true), "{sum:?}");
+    assert!(sum.t_end < 4.0, "stopped at {} s", sum.t_end);
+    let so = ShootingOptions { rtol: 1e-9, tol: 1e-8, max_iter: 20, n_samples: 256, ..ShootingOptions::default() };
+    let stable = shoot(&s, &sum.y_end, sum.period, &so);
+    assert!(stable.status == Status::Success && stable.stable, "{stable:?}");
+    let largest = |o: &PeriodicOrbit| o.moduli[(0..6).find(|&k| k != o.trivial).unwrap()];
+    assert!((0.99..1.0).contains(&largest(&stable)), "{:?}", stable.moduli);
+    // The unstable orbit the run passed: its nearest repetition at 0.3 s, checked as the run checks.
+    let early =
+        run_to_steady(&s, &y0, &SteadyOptions { t_max: 0.3, approach_periods: 0, approach_check: None, ..opts });
+    let near = early.nearest.expect("sections by 0.3 s");
+    let (verdict, _) = approach_check(&s, &near.y, near.period, 1e-9, 1e-8);
+    let ApproachVerdict::Unstable { largest: mu, period, a1, kind } = verdict else { panic!("{verdict:?}") };
+    assert!(mu > 1.0 && mu < 1.02 && kind == 1, "{mu} {kind}");
+    assert!(rel(period, stable.period) < 1e-3, "{period} {}", stable.period);
+    assert!((0.01..0.05).contains(&rel(a1, stable.harmonics.a1)), "{a1} {}", stable.harmonics.a1);
+}
