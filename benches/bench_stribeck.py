@@ -8,6 +8,7 @@ regimes the two laws give at each point.
     python benches/bench_stribeck.py [--threads 2] [--repeat 2] [--stages]
     python benches/bench_stribeck.py --scaling [--law switch] [--threads 2] [--repeat 3]
     python benches/bench_stribeck.py --settings [--law switch] [--out bench_out]
+    python benches/bench_stribeck.py --ftle [--law switch] [--threads 2]
 
 ``--stages`` also prints, for the last run of each law, the wall time of its batched core calls by
 kind (``steady``: the transients; ``sampled``: the irregular points' measurement windows;
@@ -21,6 +22,10 @@ perfect speed-up, and the points/s a perfect one would give).
 ``--settings`` instead runs one law's sweep over the transients' ``rtol`` x ``transient_irregular_block``
 against a reference run to ``t_max`` at rtol 1e-10 (:mod:`tribosweep.bench.sweep_settings`), prints
 its table and writes ``sweep_settings.png`` into ``--out``.
+
+``--ftle`` instead measures the irregular points' Lyapunov exponents from 8 starts along each
+attractor under several settings of the exponent's runs, against a reference at ``ftle_rtol``
+1e-11 (:mod:`tribosweep.bench.ftle_settings`), and prints the table.
 """
 
 from __future__ import annotations
@@ -114,7 +119,8 @@ def main(argv=None) -> int:
     ap.add_argument("--stages", action="store_true", help="time the core calls of each law's last run by kind")
     ap.add_argument("--settings", action="store_true", help="speed against agreement over rtol x transient_irregular_block")
     ap.add_argument("--scaling", action="store_true", help="each stage on 1 thread against --threads")
-    ap.add_argument("--law", default="switch", choices=("switch", "coulomb"), help="the law of --settings and --scaling")
+    ap.add_argument("--ftle", action="store_true", help="the exponent's settings on replicates against ftle_rtol 1e-11")
+    ap.add_argument("--law", default="switch", choices=("switch", "coulomb"), help="the law of --settings, --scaling and --ftle")
     ap.add_argument("--out", default="bench_out", help="where --settings writes its chart")
     a = ap.parse_args(argv)
     print(f"{machine_line()}; threads {a.threads}")
@@ -124,6 +130,11 @@ def main(argv=None) -> int:
         res = sweep_settings(a.out, quick=a.repeat < 2, threads=a.threads, law=a.law)
         print(res["markdown"])
         print(f"chart: {res['files']['sweep_settings']}")
+        return 0
+    if a.ftle:
+        from tribosweep.bench.ftle_settings import ftle_settings
+
+        print(ftle_settings(threads=a.threads, law=a.law)["markdown"])
         return 0
     if a.scaling:
         print(scaling(a.law, a.threads, a.repeat))

@@ -364,3 +364,21 @@ def test_intermittent_motion_stops_before_t_max_with_its_unstable_cycle():
     assert abs(float(ds.irregular_intermittent_multiplier.values.ravel()[0]) - orb["moduli"][0, 0]) < 2e-3
     kind = ds.irregular_intermittent_instability
     assert int(kind.values.ravel()[0]) == 2 and kind.attrs["flag_meanings"].split()[2] == "flip"
+
+
+def test_replicate_z_is_t_distributed_without_a_difference_and_finds_a_shift():
+    # tribosweep.bench.ftle_settings judges the exponent's settings by z over replicates: with 8
+    # replicates a side and equal spreads it is Student's t with 14 degrees of freedom (median
+    # |t| = 0.692; the median of 4,000 draws has a standard error of about 0.013: 0.035 is under
+    # 3 of them, and a spread taken with ddof=0 would give 0.740), and a shift of the mean by 5
+    # combined standard errors gives a noncentral t of mean 5.29 (standard error of the mean of
+    # 4,000 draws about 0.02).
+    from tribosweep.bench.ftle_settings import replicate_z
+
+    rng = np.random.default_rng(7)
+    ref, same = rng.normal(3.0, 2.0, (8, 4000)), rng.normal(3.0, 2.0, (8, 4000))
+    z = replicate_z(ref, same)
+    assert abs(np.median(np.abs(z)) - 0.692) < 0.035
+    assert abs(z.mean()) < 0.1
+    shifted = replicate_z(ref, same + 5 * 2.0 * np.sqrt(2 / 8))
+    assert abs(shifted.mean() - 5.29) < 0.08

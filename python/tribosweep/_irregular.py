@@ -7,18 +7,20 @@ at once (every core call is one batched ``_core.ensemble`` over all points):
 
 ``irregular_z_min``, ``irregular_z_max``
     The range of ``z`` over a measurement window of ``window`` seconds (sampled every
-    ``sample_dt``) that starts where the transient ended.
+    ``sample_dt``) that starts where the transient ended, sampled on the exponent's base run
+    (at ``ftle_rtol``; a run of its own until 2026-11-29).
 ``irregular_omega``
     The dominant angular frequency of ``z`` over the window: the peak of the Hann-windowed
     spectrum, refined by a parabola through the logarithms of the peak bin and its neighbours
     (:func:`dominant_omega`).
 ``irregular_ftle``, ``irregular_ftle_se``
     The largest finite-time Lyapunov exponent [1/s] by the two-trajectory method of Benettin et
-    al. (1980) (:func:`benettin`): the end state of the window and a copy displaced by ``d0`` in
+    al. (1980) (:func:`benettin`): the transient's end state and a copy displaced by ``d0`` in
     units of the characteristic sizes are run side by side for ``warmup + segments`` segments of
     ``tau`` seconds; after each the copy is pulled back to distance ``d0`` along the separation.
     The exponent is the mean of ``ln(d_k / d0) / tau`` over the last ``segments`` segments; its
-    standard error is the segments' standard deviation over ``sqrt(segments)``.
+    standard error is the segments' standard deviation over ``sqrt(segments)``. A point runs at
+    least until its window is sampled (by default 12 segments, 0.6 s, cover the 0.5 s window).
 
 How to read the exponent. On any bounded motion that is not an equilibrium, the direction along
 the flow has exponent 0, so the largest exponent is >= 0: about 0 (within a few standard errors)
@@ -33,17 +35,30 @@ enough that a separation of ``d0 = 1e-8`` grows at most ``e^10`` (to 2e-4 of the
 size, still linear) at exponents up to 200 1/s. ``segments = 40`` (2 s) makes the standard error
 a fifth of the segment spread, where it is needed: a point whose exponent is 5 standard errors
 from 0 after ``min_segments = 10`` (0.5 s; chaotic points of the Stribeck sweep are 8-9 there)
-stops, at a third of the cost of 40 (:data:`FTLE_DECISIVE`). ``warmup = 4`` segments (0.2 s)
+stops, at a third of the cost of 40 (:data:`FTLE_DECISIVE`). ``warmup = 2`` segments (0.1 s)
 let the separation turn from its arbitrary start into the most unstable direction (the normal
 mode's transverse contraction, about 50 1/s, is gone after a segment; the torsion mode's, about
-0.3-1 1/s, is not, which is why the estimate of a periodic motion scatters about 0 by its
-standard error). Both runs are integrated at ``rtol = 1e-9``, though ``d0`` is smaller: two runs
-``d0`` apart take the same steps (the controller's step sizes are smooth in the state), so their
-step errors largely cancel in the separation. Over 0.1 s it is as accurate at 1e-9 as at 1e-11
-(a smooth scene: 6.6e-7 against 7.9e-7, relative), and where the pin leaves the disk and sticks
-the floor is the events' located times at every tolerance (2-5e-2 from 1e-6 to 1e-11); the
-separation's error then moves one 50 ms segment's rate by at most about 1 1/s, against standard
-errors of 3-15 1/s (the Rust test ``two_runs_a_small_distance_apart_separate_as_at_a_far_tighter_tolerance``).
+0.3-1 1/s, is not after 4 either, which is why the estimate of a periodic motion scatters about 0
+by its standard error). Both runs are integrated at ``rtol = 1e-7``, though ``d0`` is smaller:
+two runs ``d0`` apart take the same steps (the controller's step sizes are smooth in the state),
+so their step errors largely cancel in the separation (the Rust test
+``two_runs_a_small_distance_apart_separate_as_at_a_far_tighter_tolerance``; where the pin leaves
+the disk and sticks, the floor is the events' located times at every tolerance, 2-5e-2 of the
+separation from 1e-6 to 1e-11 over 0.1 s, at most about 1 1/s in one segment's rate).
+
+How the tolerance was chosen (2026-11-29): on replicates, not on one run's segments. The
+Stribeck sweep's 31 irregular points (``benches/bench_stribeck.py``), each measured 8 times with
+the window 0.5, 1.5, ..., 7.5 s (8 starts along its attractor), give an exponent per point as the
+replicates' mean with their standard error. Against the same at ``rtol = 1e-11``, in units of the
+combined replicate standard errors: at 1e-7 median 0.62, largest 1.76 (with ``warmup = 2``: 0.54
+and 1.43), at 1e-8 0.65 and 2.10, at 1e-9 0.78 and 4.96, at 1e-10 0.46 and 5.62, at 1e-6 0.59 and
+3.32 (its mean shift +0.45, 2.5 of its standard errors: a bias). The largest at 1e-9 and 1e-10 is
+one point near 0 (2.6 and 3.4 against -0.03 1/s, replicate standard errors 0.35-0.47), which 1e-8
+and 1e-7 get right: the exponent there is not monotonic in the tolerance, and a tighter one is
+not safer. One run's segment standard error matches the replicates' spread at the median
+point but underestimates it up to 4.6x on intermittent motion, so single runs could not tell
+these settings apart. At 1e-7 with ``warmup = 2`` the sweep takes 11.4 million right-hand sides
+against 12.8 million at 1e-9 with ``warmup = 4``.
 """
 
 from __future__ import annotations
@@ -258,25 +273,44 @@ def slider_propagator(
     rtol: float,
     threads: int | None,
     record: dict | None = None,
+    window: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> Propagator:
     """A :data:`Propagator` of the slider at the points ``values`` (rows over ``names``).
 
     ``record``, when given, accumulates ``n_rhs`` (array over the rows of ``values``) and the first
     failure of each row (``record["failure"]``: row -> status name).
+
+    ``window``, when given, is ``(t, z)``: times from the start of the first call (ascending, from
+    0) and an array ``(rows of values, t.size)`` into which the bases' ``z`` at those times is
+    written. The calls are taken as consecutive segments of one length (as :func:`benettin` makes
+    them); a call whose segment holds some of the times samples its runs there, on the
+    integrator's interpolant, which moves none of its steps.
     """
     base = {k: float(v) for k, v in base.items()}
     values = np.asarray(values, dtype=np.float64)
+    calls = [0]
 
     def propagate(states: np.ndarray, tau: float, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        rows = np.concatenate([rows, rows])
-        res = _core.ensemble(base, contact, friction_law, names, np.ascontiguousarray(values[rows]),
+        k = calls[0]
+        calls[0] += 1
+        both = np.concatenate([rows, rows])
+        kw = {}
+        if window is not None:
+            # The samples of segment k: floor(t / tau) = k (one at a segment's end is the next one's start).
+            seg = np.floor(window[0] / tau + 1e-9)
+            here = np.flatnonzero(seg == k)
+            if here.size:
+                kw = dict(t_eval=np.ascontiguousarray(np.clip(window[0][here] - k * tau, 0.0, tau)), kind="sampled")
+        res = _core.ensemble(base, contact, friction_law, names, np.ascontiguousarray(values[both]),
                              np.ascontiguousarray(states, dtype=np.float64), float(tau), integrator, float(rtol),
-                             threads=threads, kind="final")  # fmt: skip
+                             threads=threads, **{"kind": "final", **kw})  # fmt: skip
         status = np.asarray(res["status"])
         ok = status == STATUS["success"]
+        if kw:
+            window[1][np.ix_(rows, here)] = np.asarray(res["y"])[: rows.size, :, 0]
         if record is not None:
-            np.add.at(record["n_rhs"], rows, np.asarray(res["n_rhs"], dtype=np.int64))
-            for r, st in zip(rows[~ok], status[~ok]):
+            np.add.at(record["n_rhs"], both, np.asarray(res["n_rhs"], dtype=np.int64))
+            for r, st in zip(both[~ok], status[~ok]):
                 record["failure"].setdefault(int(r), STATUS_NAMES[int(st)])
         return np.asarray(res["y_end"]), ok
 
@@ -306,7 +340,8 @@ def measure(
     y_start : array, (m, 6)
         Their states where the transient ended.
     integration : Integration
-        The window's integration (the FTLE runs use the settings' own ``ftle_rtol``).
+        The runs' integrator (their tolerance is the settings' own ``ftle_rtol``: the window is
+        sampled on the exponent's runs).
     settings : Irregular
         Measurement settings.
     threads : int, optional
@@ -319,7 +354,7 @@ def measure(
         (empty or what failed) and ``n_rhs``.
     """
     s = settings
-    integrator, rtol = integration.integrator, integration.rtol
+    integrator = integration.integrator
     sel = np.asarray(sel, dtype=np.int64)
     m = sel.size
     out = {k: np.full(m, np.nan) for k in IRREGULAR_VARIABLES}
@@ -337,19 +372,28 @@ def measure(
         full[k] = np.asarray(a, dtype=np.float64)
     scale = characteristic_sizes({k: np.asarray(v)[sel] for k, v in full.items()})
 
-    # The measurement window: z sampled from the transient's end state.
+    # The exponent's runs, every point's pair in one call per segment, from the transient's end
+    # state; the bases' first segments sample z: the measurement window (one run of the base
+    # trajectory serves both; a separate window took 5 % of the Stribeck sweep's right-hand sides).
+    # A point runs until its window is sampled, whatever its exponent decided.
     n_samples = int(math.floor(s.window / s.sample_dt + 1e-9)) + 1
     t_eval = np.arange(n_samples) * s.sample_dt
-    win = _core.ensemble({k: float(v) for k, v in base.items()}, contact, friction_law, names, values,
-                         np.ascontiguousarray(y_start, dtype=np.float64), float(t_eval[-1]), integrator, float(rtol),
-                         t_eval=np.ascontiguousarray(t_eval), threads=threads, kind="sampled")  # fmt: skip
-    out["n_rhs"] += np.asarray(win["n_rhs"], dtype=np.int64)
-    w_status = np.asarray(win["status"])
-    z = np.asarray(win["y"])[:, :, 0]
-    ok = (w_status == STATUS["success"]) & np.all(np.isfinite(z), axis=1)
+    spans = int(math.floor(t_eval[-1] / s.ftle_tau + 1e-9)) + 1 - s.ftle_warmup
+    segments = max(s.ftle_segments, spans)
+    z = np.full((m, n_samples), np.nan)
+    record = {"n_rhs": np.zeros(m, dtype=np.int64), "failure": {}}
+    propagate = slider_propagator(base, contact, friction_law, names, values, integrator=integrator,
+                                  rtol=s.ftle_rtol, threads=threads, record=record, window=(t_eval, z))  # fmt: skip
+    res = benettin(propagate, np.asarray(y_start, dtype=np.float64), scale, tau=s.ftle_tau, segments=segments,
+                   warmup=s.ftle_warmup, d0=s.ftle_d0, min_segments=max(s.ftle_min_segments, spans))  # fmt: skip
+    out["n_rhs"] += record["n_rhs"]
+    win = np.all(np.isfinite(z), axis=1)
+    ok = win & res["ok"]
     for i in np.flatnonzero(~ok):
-        out["status"][i] = w_status[i] if w_status[i] != STATUS["success"] else STATUS["non_finite"]
-        out["reason"][i] = f"irregular motion: the measurement window failed ({STATUS_NAMES[out['status'][i]]})"
+        st = record["failure"].get(int(i), "non_finite")
+        out["status"][i] = STATUS[st]
+        what = "the Lyapunov-exponent runs" if win[i] else "the measurement window"
+        out["reason"][i] = f"irregular motion: {what} failed ({st})"
     if ok.any():
         out["irregular_z_min"][ok] = z[ok].min(axis=1)
         out["irregular_z_max"][ok] = z[ok].max(axis=1)
@@ -357,22 +401,7 @@ def measure(
         # n - 1 samples (by default 5000 of 5001; 5001 has the prime factor 1667, which took
         # numpy's FFT 4.1 ms for the Stribeck sweep's 31 rows against 1.4 ms).
         out["irregular_omega"][ok] = dominant_omega(z[ok][:, : n_samples - 1], s.sample_dt)
-
-    # The FTLE, from the end of the window, every point's pair in one call per segment.
-    idx = np.flatnonzero(ok)
-    if idx.size:
-        record = {"n_rhs": np.zeros(idx.size, dtype=np.int64), "failure": {}}
-        propagate = slider_propagator(base, contact, friction_law, names, values[idx], integrator=integrator,
-                                      rtol=s.ftle_rtol, threads=threads, record=record)  # fmt: skip
-        res = benettin(propagate, np.asarray(win["y_end"])[idx], scale[idx], tau=s.ftle_tau, segments=s.ftle_segments,
-                       warmup=s.ftle_warmup, d0=s.ftle_d0, min_segments=s.ftle_min_segments)  # fmt: skip
-        out["irregular_ftle"][idx] = res["ftle"]
-        out["irregular_ftle_se"][idx] = res["ftle_se"]
-        out["n_rhs"][idx] += record["n_rhs"]
-        for r in np.flatnonzero(~res["ok"]):
-            j = idx[r]
-            st = record["failure"].get(int(r), "non_finite")
-            out["status"][j] = STATUS[st]
-            out["reason"][j] = f"irregular motion: the Lyapunov-exponent runs failed ({st})"
+        out["irregular_ftle"][ok] = res["ftle"][ok]
+        out["irregular_ftle_se"][ok] = res["ftle_se"][ok]
     out["reason"] = out["reason"].astype(str)
     return out

@@ -179,14 +179,15 @@ def sweep(
         (the work-precision charts of ``tribosweep bench``); a 1,058-point seed sweep takes 18 s
         instead of 34 s.
     rtol, atol
-        Integration tolerances of what is measured (as in :func:`tribosweep.simulate`): the window
-        of irregular motion at ``rtol``, the cycles' shooting checks at ten times tighter (never
-        tighter than ``shooting_rtol``). ``atol`` applies to every run.
+        Integration tolerances of what is measured (as in :func:`tribosweep.simulate`): the
+        cycles' shooting checks at ten times tighter than ``rtol`` (never tighter than
+        ``shooting_rtol``; irregular motion is measured on the exponent's runs, at
+        ``ftle_rtol``). ``atol`` applies to every run.
     transient_rtol : float
         Relative tolerance of the transients (1e-6), which find the attractor a point reaches:
-        every number reported of it is measured afterwards at ``rtol`` (a cycle by shooting on
-        the orbit, irregular motion over its window), so this sets only where a chaotic transient
-        happens to end. On the issue-10 Stribeck sweep no regime at 1e-6 differs from transients
+        every number reported of it is measured afterwards (a cycle by shooting on the orbit at
+        ten times tighter than ``rtol``, irregular motion over its window at ``ftle_rtol``), so
+        this sets only where a chaotic transient happens to end. On the issue-10 Stribeck sweep no regime at 1e-6 differs from transients
         at 1e-10 run to ``t_max``, at 0.73x the right-hand sides of 1e-8 (see
         ``tribosweep._settings.Steady``).
     periodic_tol : float
@@ -239,7 +240,8 @@ def sweep(
         A transient that stays bounded but neither repeats nor decays (stationary, or still so at
         ``t_max``) is regime ``irregular``; from where it ended, ``z`` is sampled every ``irregular_sample_dt`` (1e-4)
         over ``irregular_window`` (0.5) for ``irregular_z_min``, ``irregular_z_max`` and
-        ``irregular_omega`` (the spectral peak).
+        ``irregular_omega`` (the spectral peak), on the base run of the exponent (which runs at
+        least that long).
     ftle_tau : float, s
         Segment length of its largest finite-time Lyapunov exponent ``irregular_ftle`` (0.05:
         about 5 torsion periods; see ``tribosweep._irregular``).
@@ -247,12 +249,13 @@ def sweep(
         Segments averaged at most (40, >= 2; the standard error ``irregular_ftle_se`` is their
         spread over the square root of their number), at least (10, >= 2: a point whose exponent
         is then 5 standard errors from 0, clearly chaotic, stops; the others run on) and run
-        first without counting (4, >= 0).
+        first without counting (2, >= 0).
     ftle_d0 : float
         Separation of the two trajectories in units of the characteristic sizes (1e-8).
     ftle_rtol : float
-        Relative tolerance of the exponent's runs (1e-9: two runs ``ftle_d0`` apart take the
-        same steps, and their step errors cancel in the separation).
+        Relative tolerance of the exponent's runs (1e-7: two runs ``ftle_d0`` apart take the
+        same steps, and their step errors cancel in the separation; chosen on replicates against
+        1e-11, ``tribosweep._irregular``).
     shooting_rtol, shooting_tol : float
         Integration and Newton tolerances of the shooting stage (1e-10, 1e-8: the orbit's ``A1``
         is compared with the describing function's to a few 1e-3, and the monodromy matrix needs

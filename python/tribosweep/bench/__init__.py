@@ -12,6 +12,7 @@ matplotlib). Modules:
                   where each integrator, the describing function and shooting fail, as maps
 ``model_cost``    cost and error of each analysis model over a sweep
 ``sweep_settings`` the Stribeck sweep's speed against its agreement, over transient rtol x transient_irregular_block
+``ftle_settings``  the Lyapunov exponent's settings, judged on replicates along each attractor
 ``cycle_check``   what a run's periodic stop is worth against the shot orbit, and what the check costs
 ``reference``     the independent scipy oracle of the model (also the tests' reference)
 ``baselines``     the numba Dormand-Prince kernel and scipy batches the benches compare with

@@ -6,7 +6,7 @@ loads 10-150 N x 10, arms 5-12.7 cm x 4, speeds 0.2-1 m/s x 5: 200 points, `cens
 the transients' tolerance `transient_rtol` and `transient_irregular_block`, the sections per block of
 the stationarity test that ends an irregular transient before `t_max` (0: it runs to `t_max`). The
 measurement tolerance `rtol` stays at its default (cycles are measured by shooting at ten times
-tighter, irregular motion over a window at `rtol`). This module runs the sweep over both and compares
+tighter, irregular motion on the exponent's runs at `ftle_rtol`). This module runs the sweep over both and compares
 every run with a reference that runs every transient to `t_max` with `rtol` and `transient_rtol` at
 1e-10:
 
