@@ -340,10 +340,8 @@ pub struct SteadyOptions {
     /// checked by shooting (the census's first stops), keep the floor of the strict tolerance:
     /// what counts as irregular motion does not move with the stops.
     pub stationary_tol: Option<f64>,
-    /// No periodic state is declared by repetition at a section crossed before this time [s]: a
-    /// run going on from near an unstable cycle repeats there at first (0: no hold). A slow
-    /// approach's stop ([`Self::approach_periods`]) is checked by shooting and may end the run
-    /// inside the hold, on a stable orbit.
+    /// No periodic state is declared at a section crossed before this time [s]: a run going on
+    /// from near an unstable cycle repeats there at first (0: no hold).
     pub hold: f64,
     /// Amplitude below which a shrinking motion counts as decayed [m of z]; every component is
     /// compared in units of its characteristic size times `decay_amplitude / |z_st|`.
@@ -386,9 +384,8 @@ pub struct SteadyOptions {
     /// is near 1 otherwise takes `ln(APPROACH_TOL / periodic_tol) / ln(1 / |mu|)` periods more
     /// (660 at the Stribeck sweep's 0.993). Shooting from there (`approach_check`) converges on
     /// the cycle: a stable orbit of the same period (to 1 %) ends the run on it, measured on the
-    /// orbit; near an unstable one the run goes on, declaring no cycle by repetition until a
-    /// deviation along its largest multiplier has grown a thousandfold (4 to 1,000 periods),
-    /// while the approach test goes on and a later check on a stable orbit ends it; where shooting
+    /// orbit; near an unstable one the run goes on, declaring no cycle until a deviation along
+    /// its largest multiplier has grown a thousandfold (4 to 1,000 periods); where shooting
     /// fails or finds another period, the run goes on with the approach test off. In the run, so
     /// that a run going on keeps its lane and its place in the call.
     pub approach_periods: usize,

@@ -541,14 +541,9 @@ impl SectionWatcher {
     /// The slow-approach test (`SteadyOptions::approach_periods`), after the repetition test found
     /// nothing at the newest crossing: where for some `p` (the smallest wins) the envelope of the
     /// residual after `p` sections has shrunk over three blocks of `approach_periods` periods
-    /// ([`Envelope`]) to at most [`APPROACH_TOL`] and the period agrees with the one before to
-    /// [`APPROACH_TOL`], sets `found` (reduced as the repetition test reduces it) and `approach`.
-    /// Also inside a hold: a hold keeps the repetition test from declaring an unstable cycle the
-    /// run is still near, but this stop is checked by shooting, which tells a stable orbit from
-    /// it. Near a fold of cycles the run drifts from the unstable orbit of the pair to the stable
-    /// one along a multiplier near 1 (1.004 and 0.995 at 72.2 N, 0.6 m/s on the Stribeck sweep, A1
-    /// 2 % apart): a hold of 1,000 periods kept that run from stopping until 8.6 s, where a
-    /// check at 2.1 s found the stable orbit.
+    /// ([`Envelope`]) to at most [`APPROACH_TOL`], outside the hold, and the period agrees with
+    /// the one before to [`APPROACH_TOL`], sets `found` (reduced as the repetition test reduces
+    /// it) and `approach`.
     fn slow_approach(&mut self) -> bool {
         let n = self.n_seen;
         let t = self.get(0).t;
@@ -564,7 +559,7 @@ impl SectionWatcher {
             } else {
                 f64::NAN
             };
-            if !self.envelope[p].add(r, self.approach_periods * p) {
+            if !self.envelope[p].add(r, self.approach_periods * p) || t < self.hold {
                 continue;
             }
             let (dt_now, dt_prev) = (t - self.get(p).t, self.get(p).t - self.get(2 * p).t);
