@@ -57,8 +57,10 @@ one point near 0 (2.6 and 3.4 against -0.03 1/s, replicate standard errors 0.35-
 and 1e-7 get right: the exponent there is not monotonic in the tolerance, and a tighter one is
 not safer. One run's segment standard error matches the replicates' spread at the median
 point but underestimates it up to 4.6x on intermittent motion, so single runs could not tell
-these settings apart. At 1e-7 with ``warmup = 2`` the sweep takes 11.4 million right-hand sides
-against 12.8 million at 1e-9 with ``warmup = 4``.
+these settings apart. At 1e-7 with ``warmup = 2`` the measurement of the sweep's 31 points
+(window and exponent) takes 1.92 million right-hand sides, against 3.39 million at 1e-9 with
+``warmup = 4`` (``python benches/bench_stribeck.py --ftle``, where the same comparison is made
+from 8 starts per point along the transients' ends: 1e-7 largest 1.79, 1e-9 3.22).
 """
 
 from __future__ import annotations

@@ -293,9 +293,11 @@ class Irregular:
     ftle_rtol : float
         Relative tolerance of the exponent's runs (1e-7; 1e-11, then 1e-9, until 2026-11-29):
         two runs ``ftle_d0`` apart take the same steps, so their step errors cancel in the
-        separation. Chosen on replicates (:mod:`tribosweep._irregular`): the Stribeck sweep's 31
-        exponents, each the mean of 8 runs along its attractor, agree with those at 1e-11 within
-        1.8 replicate standard errors at 1e-7 (with ``ftle_warmup`` 2: 1.4), against 5.0 at 1e-9.
+        separation. Chosen on replicates (:mod:`tribosweep._irregular`, ``python
+        benches/bench_stribeck.py --ftle``): the Stribeck sweep's 31 exponents, each the mean of
+        8 runs along its attractor, agree with those at 1e-11 within 1.8 combined replicate
+        standard errors at 1e-7 with ``ftle_warmup`` 2, against 3.2 at 1e-9 (the reference's
+        own two halves: 2.7).
     """
 
     block: int = 256
