@@ -50,12 +50,14 @@ def replicate_z(f_ref: np.ndarray, f: np.ndarray) -> np.ndarray:
     return (f.mean(axis=0) - f_ref.mean(axis=0)) / se
 
 
-def _irregular_points(law: str, threads: int):
-    """The sweep's call of :func:`tribosweep._irregular.measure` (its arguments)."""
+def _irregular_points(law: str, threads: int, axes: dict | None = None):
+    """The sweep's call of :func:`tribosweep._irregular.measure` (its arguments; the sweep in one
+    chunk, so that one call measures every irregular point)."""
     from .._model import SliderModel
     from .._sweep import sweep
     from .sweep_settings import AXES
 
+    axes = AXES if axes is None else axes
     got = {}
     measure = _irregular.measure
 
@@ -66,19 +68,24 @@ def _irregular_points(law: str, threads: int):
     _irregular.measure = record
     try:
         model = SliderModel(contact="unilateral", friction_law=law, mu_static=0.3)
-        sweep(model=model, census=False, t_max=20.0, threads=threads, progress=False, **AXES)
+        n = int(np.prod([np.size(v) for v in axes.values()]))
+        sweep(model=model, census=False, t_max=20.0, threads=threads, progress=False, chunk_size=n, **axes)
     finally:
         _irregular.measure = measure
     return got["args"]
 
 
-def ftle_settings(*, threads: int = 2, replicates: int = 8, law: str = "switch") -> dict:
-    """Measure every setting of :data:`SETTINGS` on ``replicates`` starts per irregular point.
+def ftle_settings(*, threads: int = 2, replicates: int = 8, law: str = "switch", axes: dict | None = None,
+                  settings: dict | None = None) -> dict:  # fmt: skip
+    """Measure every setting of ``settings`` (default :data:`SETTINGS`, which must hold
+    :data:`REFERENCE`) on ``replicates`` starts per irregular point of the sweep over ``axes``
+    (default the issue-10 Stribeck sweep's).
 
     Returns ``numbers`` (per setting: ``rhs`` per measurement of all points, ``median_z``,
     ``max_z``, ``mean_z``), ``floor`` (the reference's halves against each other) and ``markdown``.
     """
-    base, contact, friction_law, pp, sel, y0 = _irregular_points(law, threads)
+    settings = SETTINGS if settings is None else settings
+    base, contact, friction_law, pp, sel, y0 = _irregular_points(law, threads, axes)
     names = sorted(pp)
     values = np.column_stack([np.asarray(pp[k], dtype=np.float64)[sel] for k in names])
     starts = [np.asarray(y0, dtype=np.float64)]
@@ -87,7 +94,7 @@ def ftle_settings(*, threads: int = 2, replicates: int = 8, law: str = "switch")
                            np.ascontiguousarray(y0), float(k), "dop853", 1e-8, threads=threads, kind="final")  # fmt: skip
         starts.append(np.asarray(r["y_end"]))
     runs = {}
-    for name, kw in SETTINGS.items():
+    for name, kw in settings.items():
         st = dataclasses.replace(DEFAULTS.irregular, **kw)
         outs = [_irregular.measure(base, contact, friction_law, pp, sel, y, settings=st, threads=threads) for y in starts]
         runs[name] = (np.array([o["irregular_ftle"] for o in outs]), float(np.mean([o["n_rhs"].sum() for o in outs])))
@@ -102,7 +109,7 @@ def ftle_settings(*, threads: int = 2, replicates: int = 8, law: str = "switch")
     zf = replicate_z(ref[:h, ok], ref[h:, ok])
     floor = {"median_z": float(np.median(np.abs(zf))), "max_z": float(np.abs(zf).max())}
     lines = [
-        f"The {int(ok.sum())} irregular points of the issue-10 Stribeck sweep ({law} law), each measured from "
+        f"The {int(ok.sum())} irregular points of the sweep ({law} law), each measured from "
         f"{replicates} starts along its attractor; each setting's exponents against the reference's "
         f"({REFERENCE}) in units of the replicates' combined standard errors. The reference's two halves "
         f"against each other: median |z| {floor['median_z']:.2f}, largest {floor['max_z']:.2f}. A mean z off 0 by "
