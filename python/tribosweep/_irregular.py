@@ -303,19 +303,17 @@ def slider_propagator(
         k = calls[0]
         calls[0] += 1
         both = np.concatenate([rows, rows])
-        kw = {}
-        if window is not None:
-            # The samples of segment k: floor(t / tau) = k (one at a segment's end is the next one's start).
-            seg = np.floor(window[0] / tau + 1e-9)
-            here = np.flatnonzero(seg == k)
-            if here.size:
-                kw = dict(t_eval=np.ascontiguousarray(np.clip(window[0][here] - k * tau, 0.0, tau)), kind="sampled")
+        # The samples of segment k: floor(t / tau) = k (one at a segment's end is the next one's start).
+        here = np.flatnonzero(np.floor(window[0] / tau + 1e-9) == k) if window is not None else np.empty(0, int)
+        kw = {"kind": "final"}
+        if here.size:
+            kw = {"kind": "sampled", "t_eval": np.ascontiguousarray(np.clip(window[0][here] - k * tau, 0.0, tau))}
         res = _core.ensemble(base, contact, friction_law, names, np.ascontiguousarray(values[both]),
                              np.ascontiguousarray(states, dtype=np.float64), float(tau), integrator, float(rtol),
-                             threads=threads, **{"kind": "final", **kw})  # fmt: skip
+                             threads=threads, **kw)  # fmt: skip
         status = np.asarray(res["status"])
         ok = status == STATUS["success"]
-        if kw:
+        if here.size:
             window[1][np.ix_(rows, here)] = np.asarray(res["y"])[: rows.size, :, 0]
         if record is not None:
             np.add.at(record["n_rhs"], both, np.asarray(res["n_rhs"], dtype=np.int64))
