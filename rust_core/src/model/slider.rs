@@ -431,6 +431,38 @@ impl OdeSystem<6> for Slider {
         }
     }
 
+    fn event_reads(&self, i: usize) -> u64 {
+        let (z, zd, xd, phi, phid) = (1 << idx::Z, 1 << idx::ZD, 1 << idx::XD, 1 << idx::PHI, 1 << idx::PHID);
+        match i {
+            event::GAP | event::ESCAPE => z,
+            event::NORMAL => z | zd | phi,
+            event::SLIP | event::BAND_HI | event::BAND_LO => xd | phid,
+            _ => u64::MAX,
+        }
+    }
+
+    /// One of [`Self::events`]'s functions, by the same expressions (the tests compare the bits).
+    fn event(&self, t: f64, y: &State, mode: ContactMode, i: usize) -> f64 {
+        let (band, bound) = switch_live(mode);
+        let switch = self.p.friction_law == FrictionLaw::Switch;
+        match i {
+            event::GAP => self.gap(y),
+            event::NORMAL => self.p.normal_load + self.dynamic_law_force(y),
+            event::SLIP if self.p.friction_law == FrictionLaw::Constant => 1.0,
+            event::SLIP => self.slip_velocity(y),
+            event::ESCAPE => self.p.escape_limit - y[idx::Z].abs(),
+            event::BAND_HI if switch && band => self.slip_velocity(y) - self.p.stick_band,
+            event::BAND_LO if switch && band => self.slip_velocity(y) + self.p.stick_band,
+            event::STICK if switch && bound => self.stick_margin(y),
+            event::BAND_HI | event::BAND_LO | event::STICK if switch => 1.0,
+            _ => {
+                let mut g = [0.0; MAX_EVENTS];
+                self.events(t, y, mode, &mut g);
+                g[i]
+            }
+        }
+    }
+
     /// Exact rates of the event functions along the flow (`f` = the right-hand side at `y` in
     /// `mode`); a switch-law function that is the constant 1 in `mode` has rate 0.
     fn event_rates(&self, _t: f64, y: &State, f: &State, mode: ContactMode, d: &mut [f64; MAX_EVENTS]) -> bool {

@@ -294,3 +294,43 @@ fn stribeck_curve_passes_through_mu_at_operating_speed() {
     assert!(s.mu_of(0.0) > s.mu_of(0.1));
     assert!(close(s.mu_of(0.0), 0.3, 1e-14));
 }
+
+/// `event` (one function, as root finding reads it) gives `events`'s bits for every law, contact
+/// model, mode and function, at states on and off the disk, in and out of the stick band, from
+/// the components `event_reads` names alone.
+#[test]
+fn one_event_function_is_the_events_bits() {
+    use crate::ode::OdeSystem;
+    let modes =
+        [ContactMode::Contact, ContactMode::SlipBack, ContactMode::Free, ContactMode::Stick, ContactMode::Transition];
+    for law in [FrictionLaw::Constant, FrictionLaw::Coulomb, FrictionLaw::Switch] {
+        for contact in [ContactModel::Bilateral, ContactModel::Unilateral] {
+            let p = Params { contact, friction_law: law, mu_static: 0.3, stick_band: 1e-4, ..Params::seed() };
+            let s = Slider::new(p).unwrap();
+            for k in 0..40 {
+                let u = |j: u32| ((k as f64 + 1.0) * (0.37 + 0.11 * j as f64)).sin();
+                let y = State::new(
+                    30e-6 * u(0),
+                    0.02 * u(1),
+                    1e-5 * u(2),
+                    p.sliding_speed * (1.0 + u(3)),
+                    1e-4 * u(4),
+                    0.5 * u(5),
+                );
+                for mode in modes {
+                    let mut g = [f64::NAN; MAX_EVENTS];
+                    s.events(0.3, &y, mode, &mut g);
+                    for (i, gi) in g.iter().enumerate().take(s.n_events()) {
+                        let one = s.event(0.3, &y, mode, i);
+                        assert_eq!(one.to_bits(), gi.to_bits(), "{law:?} {contact:?} {mode:?} #{i}: {one} vs {gi}");
+                        // It reads only the components `event_reads` names.
+                        let reads = s.event_reads(i);
+                        let only = State::from_fn(|j, _| if reads & (1 << j) != 0 { y[j] } else { f64::NAN });
+                        let masked = s.event(0.3, &only, mode, i);
+                        assert_eq!(masked.to_bits(), gi.to_bits(), "{law:?} {contact:?} {mode:?} #{i} reads {reads:b}");
+                    }
+                }
+            }
+        }
+    }
+}

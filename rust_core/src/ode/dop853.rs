@@ -315,6 +315,27 @@ impl<const N: usize, S: OdeSystem<N>> Dense<N> for Dop853Dense<'_, N, S> {
         })
     }
 
+    fn eval_some(&self, t: f64, reads: u64) -> SVector<f64, N> {
+        let c = self.cont.get_or_init(|| self.coefficients());
+        let x = (t - self.t0) / self.h;
+        let x1 = 1.0 - x;
+        // `eval`'s operations on the components asked for (zeros elsewhere; beyond the 64 bits of
+        // `reads`, every component).
+        SVector::from_fn(|i, _| {
+            if i < 64 && reads & (1 << i) == 0 {
+                return 0.0;
+            }
+            let mut p = c[6][i] * x;
+            p = (c[5][i] + p) * x1;
+            p = (c[4][i] + p) * x;
+            p = (c[3][i] + p) * x1;
+            p = (c[2][i] + p) * x;
+            p = (c[1][i] + p) * x1;
+            p = (c[0][i] + p) * x;
+            self.y0[i] + p
+        })
+    }
+
     fn end_rates(&self) -> Option<super::EndRates<N>> {
         Some(((self.t0, self.t0 + self.h), self.ends))
     }

@@ -345,12 +345,7 @@ where
     let mut n_found = 0;
     let pend_before = *pend;
     let mut t_check = [f64::NEG_INFINITY; MAX_EVENTS];
-    let mut gbuf = [0.0; MAX_EVENTS];
-    let mut g_at = |i: usize, tt: f64| {
-        let yy = dense.eval(tt);
-        sys.events(tt, &yy, mode, &mut gbuf);
-        gbuf[i]
-    };
+    let g_at = |i: usize, tt: f64| sys.event(tt, &dense.eval_some(tt, sys.event_reads(i)), mode, i);
     // The event functions' rates at both ends (for the cubic model each crossing's search starts
     // from), computed at the first crossing that needs them.
     let mut rates: Option<Option<([f64; MAX_EVENTS], [f64; MAX_EVENTS])>> = None;

@@ -456,7 +456,7 @@ impl<const C: usize, const N: usize> LaneDense<C, N> {
     /// operation for operation (DP5's `y0 + (dy + (bspl + (r4 + r5 (1-x)) x) (1-x)) x`,
     /// DOP853's `contd8` Horner scheme).
     #[inline(always)]
-    fn at(&self, j: usize, l: usize, x: f64, x1: f64) -> f64 {
+    pub(crate) fn at(&self, j: usize, l: usize, x: f64, x1: f64) -> f64 {
         let c = &self.c;
         if self.eight {
             let mut p = c[6][j][l] * x;

@@ -95,6 +95,21 @@ pub trait OdeSystem<const N: usize> {
     /// (in either direction) within a step.
     fn events(&self, _t: f64, _y: &SVector<f64, N>, _mode: Self::Mode, _g: &mut [f64; MAX_EVENTS]) {}
 
+    /// The state components event function `i` reads (bit `j`: component `j`; all by default):
+    /// root finding interpolates only those ([`Dense::eval_some`]).
+    fn event_reads(&self, _i: usize) -> u64 {
+        u64::MAX
+    }
+
+    /// Event function `i` alone: `events(t, y, mode)[i]`, the same bits (a system may compute it
+    /// without the others: root finding reads one function at a time). Only the components of
+    /// [`Self::event_reads`] may be read.
+    fn event(&self, t: f64, y: &SVector<f64, N>, mode: Self::Mode, i: usize) -> f64 {
+        let mut g = [0.0; MAX_EVENTS];
+        self.events(t, y, mode, &mut g);
+        g[i]
+    }
+
     /// Time derivatives `d[i]` of the event functions at `(t, y)`, where `f` is the right-hand side
     /// there in `mode`; `false` where the system does not provide them (then the hidden-crossing
     /// check uses its interior points only). An entry may be NaN: no rate for that function.
@@ -301,6 +316,12 @@ pub type EndRates<const N: usize> = ((f64, f64), (SVector<f64, N>, SVector<f64, 
 pub trait Dense<const N: usize> {
     /// Interpolated state at `t` in `[t0, t1]`.
     fn eval(&self, t: f64) -> SVector<f64, N>;
+
+    /// The components of [`Self::eval`] whose bit is set in `reads` (bit `i`: component `i`), the
+    /// same bits; the others are unspecified (root finding reads one function of a few components).
+    fn eval_some(&self, t: f64, _reads: u64) -> SVector<f64, N> {
+        self.eval(t)
+    }
 
     /// The step `(t0, t1)` this interpolant spans and the right-hand side at both of its ends,
     /// where the method keeps them (the explicit methods' first and last stages): root finders

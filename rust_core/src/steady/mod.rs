@@ -113,10 +113,12 @@ impl Default for Extremes {
 impl Extremes {
     #[inline]
     pub(crate) fn update(&mut self, s: &Slider, y: &State, mode: ContactMode) {
-        let f = s.forces(y, mode);
-        self.min_normal_force = self.min_normal_force.min(f.normal);
+        // `Slider::forces`'s normal force and sliding velocity (the same expressions), without
+        // its friction law (an exponential under Stribeck's).
+        let normal = if mode.in_contact() { s.p.normal_load + s.dynamic_law_force(y) } else { 0.0 };
+        self.min_normal_force = self.min_normal_force.min(normal);
         self.max_gap = self.max_gap.max(s.gap(y));
-        self.min_slip_velocity = self.min_slip_velocity.min(f.slip_velocity);
+        self.min_slip_velocity = self.min_slip_velocity.min(s.slip_velocity(y));
         self.max_abs_z = self.max_abs_z.max(y[idx::Z].abs());
     }
 }

@@ -143,7 +143,7 @@ impl Observer<6, ContactMode> for SteadyObserver {
         if zd0 > 0.0 && zd1 <= 0.0 {
             // Section: zd = 0 falling. Located on the dense output, which is accurate to the
             // integration tolerance; that sets the section's.
-            let (t, y) = locate(st, |y| y[idx::ZD], |f| f[idx::ZD], 1e-14 * st.t1.abs().max(1.0));
+            let (t, y) = locate(st, idx::ZD, 1e-14 * st.t1.abs().max(1.0));
             let peaks = self.w.peaks_since.sup(&y.abs());
             self.w.peak_since = st.y1[idx::Z].abs();
             self.w.peaks_since = st.y1.abs();
@@ -166,24 +166,20 @@ impl Observer<6, ContactMode> for SteadyObserver {
     }
 }
 
-/// Locate a zero of `g` (falling from > 0 to <= 0) inside a step on the dense output (the events'
-/// root finder, [`crate::ode::events::locate`]): the time on the far side of the zero, and the state there.
+/// Locate a zero of component `k` of the state (falling from > 0 to <= 0) inside a step on the
+/// dense output (the events' root finder, [`crate::ode::events::locate`]), interpolating that
+/// component alone: the time on the far side of the zero, and the state there.
 ///
 /// Where the interpolant keeps the right-hand side at the ends of its step and the step was not
-/// cut short by an event, the search starts at the root of `g`'s cubic model (`rate`: `dg/dt`
+/// cut short by an event, the search starts at the root of the component's cubic model (its rate
 /// from the state's derivative).
-fn locate(
-    st: &StepView<'_, 6, ContactMode>,
-    g: impl Fn(&State) -> f64,
-    rate: impl Fn(&State) -> f64,
-    tol: f64,
-) -> (f64, State) {
+fn locate(st: &StepView<'_, 6, ContactMode>, k: usize, tol: f64) -> (f64, State) {
     use crate::ode::events::{hermite_root, locate_from};
-    let (g0, g1) = (g(st.y0), g(st.y1));
+    let (g0, g1) = (st.y0[k], st.y1[k]);
     let guess = st.dense.end_rates().and_then(|((t0, t1), (f0, f1))| {
-        (t0 == st.t0 && t1 == st.t1).then(|| hermite_root(t0, t1 - t0, g0, g1, rate(&f0), rate(&f1))).flatten()
+        (t0 == st.t0 && t1 == st.t1).then(|| hermite_root(t0, t1 - t0, g0, g1, f0[k], f1[k])).flatten()
     });
-    let t = locate_from(|t| g(&st.dense.eval(t)), st.t0, g0, st.t1, g1, tol, guess);
+    let t = locate_from(|t| st.dense.eval_some(t, 1 << k)[k], st.t0, g0, st.t1, g1, tol, guess);
     let y = if t == st.t1 { *st.y1 } else { st.dense.eval(t) };
     (t, y)
 }

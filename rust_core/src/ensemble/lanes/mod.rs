@@ -56,6 +56,7 @@
 // Index loops over lanes and components are the point here: they are what LLVM vectorises.
 #![allow(clippy::needless_range_loop)]
 
+mod quick;
 mod run;
 mod slider;
 mod state;

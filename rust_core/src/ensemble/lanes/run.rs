@@ -2,6 +2,7 @@
 //! the controller, the common accepted step on the lanes, and the cold path for lanes that need
 //! their scalar side (the scalar driver's event code, observers, the end of a run).
 
+use super::quick::{go_on, quick_event, restart, Quick};
 use super::slider::{
     event_rates_lanes, events_at, events_lanes, hidden_crossings, n_events, Coef, Modes, SliderRhs, EV_COMPS,
     EV_COMPS_CONST, NE, SWITCH, TANH,
@@ -20,7 +21,7 @@ use crate::ode::lanes::{
 };
 use crate::ode::lanes::{Al, LaneDense};
 use crate::ode::stepper::StepDense;
-use crate::ode::{Control, Observer, OdeSystem, Options, Outcome, SampleStore, StepView, MAX_EVENTS};
+use crate::ode::{Control, Observer, Options, Outcome, SampleStore, StepView, MAX_EVENTS};
 use std::sync::atomic::Ordering::Relaxed;
 
 /// The portable path (the tests check that the SIMD copies agree bitwise).
@@ -448,7 +449,11 @@ pub(super) fn run_impl<'a, const UNI: bool, const LAW: u8, const M8: bool, const
         // ---- the cold path: events, observers, the end of a run ----
         if attn.iter().any(|&a| a) {
             // A lane whose extra stages the hidden-crossing check built (and counted) takes its
-            // coefficients from `full`, the same numbers the scalar `Dop853Dense` would compute.
+            // coefficients from `full`, the others from their stages (`Dop853Dense::from_stages`).
+            // Under constant friction the two give the same numbers; under the Stribeck laws the
+            // lanes' exponential differs from libm's in the last bits, and so do the extra stages:
+            // which interpolant a lane's events are located on then depends on whether the check
+            // ran for it, on its own values only (not on the batch).
             if M8 && checks && !full_built && (0..N).any(|l| attn[l] && need[l]) {
                 dop853_poly_into(&mut full, &ALL_COMPS, &ln.y, &yn, &ln.f, &hh, &kk, &extra);
                 full_built = true;
@@ -456,6 +461,19 @@ pub(super) fn run_impl<'a, const UNI: bool, const LAW: u8, const M8: bool, const
             for l in 0..N {
                 if !attn[l] {
                     continue;
+                }
+                // The common event, on the lane's own values (the cold path's bits).
+                if M8 && full_built && need[l] && busy[l] {
+                    let span = (t_start[l], t_new[l], hh[l]);
+                    match quick_event::<LAW, N>(&mut ln, l, &full, (&yn, fnew, &g1), span, last[l]) {
+                        Quick::Cold => {}
+                        Quick::Done => continue,
+                        Quick::End(t, y, outcome) => {
+                            finish(&mut ln, l, t, y, hh[l], outcome, &mut out);
+                            refill(&mut ln, l, inp, &mut out);
+                            continue;
+                        }
+                    }
                 }
                 let y0 = lane_state(&ln.y, l);
                 let y1 = lane_state(&yn, l);
@@ -510,55 +528,13 @@ pub(super) fn run_impl<'a, const UNI: bool, const LAW: u8, const M8: bool, const
                 }
                 if let Some(sw) = ev.switched {
                     // Restart at the event in the new mode: fresh derivative, fresh event values.
-                    let sd = ln.side[l].as_mut().expect("live");
                     let (t, y1, mode) = (ev.t1, ev.y1, ev.new_mode);
-                    ln.h[l] = sd.steps.switch(sd.mode, mode, ln.h[l]);
-                    ln.rejected[l] = true;
-                    sd.mode = mode;
-                    let f = sd.s.rhs(&y1, mode);
-                    sd.stats.n_rhs += 1;
-                    if !f.iter().all(|v| v.is_finite()) {
+                    if !restart(&mut ln, l, t, &y1, mode, sw.index, &sw.pend_before, &sw.t_check) {
                         finish(&mut ln, l, t, y1, hh[l], Outcome::NonFinite, &mut out);
                         refill(&mut ln, l, inp, &mut out);
-                        continue;
                     }
-                    let mut g = [0.0; MAX_EVENTS];
-                    sd.s.events(t, &y1, mode, &mut g);
-                    for e in 0..ne {
-                        sd.pend[e] = match sw.pend_before[e] {
-                            Some(ts) if t <= sw.t_check[e] => Some(ts),
-                            _ if e == sw.index || g[e] == 0.0 => Some(t),
-                            _ => None,
-                        };
-                    }
-                    let pend = sd.pend;
-                    for i in 0..6 {
-                        ln.y[i][l] = y1[i];
-                        ln.f[i][l] = f[i];
-                    }
-                    for e in 0..ne {
-                        ln.g0[e][l] = g[e];
-                        ln.pend[e][l] = pend[e].is_some();
-                        ln.pend_t[e][l] = pend[e].unwrap_or(f64::NAN);
-                    }
-                    ln.t[l] = t;
-                    ln.modes.set(l, mode);
-                    ln.ln_err_old[l] = LN_ERR_FLOOR;
                 } else {
-                    for i in 0..6 {
-                        ln.y[i][l] = y1[i];
-                        ln.f[i][l] = fnew[i][l];
-                    }
-                    ln.t[l] = t_new[l];
-                    let sd = ln.side[l].as_mut().expect("live");
-                    for e in 0..ne {
-                        ln.g0[e][l] = g1[e][l];
-                        if sd.pend[e].is_none() && g1[e][l] == 0.0 {
-                            sd.pend[e] = Some(t_new[l]);
-                        }
-                        ln.pend[e][l] = sd.pend[e].is_some();
-                        ln.pend_t[e][l] = sd.pend[e].unwrap_or(f64::NAN);
-                    }
+                    go_on(&mut ln, l, &y1, fnew, &g1, t_new[l]);
                     if last[l] {
                         finish(&mut ln, l, t_new[l], y1, hh[l], Outcome::Finished, &mut out);
                         refill(&mut ln, l, inp, &mut out);

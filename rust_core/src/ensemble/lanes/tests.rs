@@ -932,3 +932,53 @@ fn two_runs_a_small_distance_apart_separate_as_at_a_far_tighter_tolerance() {
         }
     }
 }
+
+/// The common event handled on the lane (`quick::quick_event`) gives the bits of the cold path
+/// (the scalar driver's `step_events` behind the lane's observers), on every scene with events,
+/// for the event log, a run to a steady state (sections, peaks, extremes) and the end state; and
+/// where the steps are checked for hidden crossings (whose interpolant it needs) it handles a good
+/// part of the events (a quarter at least: those with a pending function, more than one crossing
+/// or a section in their step go to the cold path).
+#[test]
+fn the_quick_event_path_gives_the_cold_paths_bits() {
+    use super::quick::{HANDLED, QUICK};
+    let opts = SteadyOptions { t_max: 0.3, tol: tol(1e-7), ..SteadyOptions::default() };
+    let tasks = [Task::Events, Task::Steady { opts: &opts, decay: None, known: None, restart: None }, Task::Final];
+    let t = tol(1e-7);
+    for (name, s, y0, t_end) in scenes(8) {
+        let (mut handled, mut events) = (0, 0);
+        for task in tasks {
+            // On this thread (`run_portable`), where the switch and the count live.
+            let go = |quick: bool| {
+                QUICK.with(|q| q.set(quick));
+                let feed = Feed::new(None);
+                let inp = Input::new(&s, &y0, t_end, &t, task, &feed);
+                let r = match (s[0].p.contact == ContactModel::Unilateral, s[0].p.friction_law) {
+                    (false, FrictionLaw::Constant) => run_portable::<false, 0, true, W>(&inp, Vec::new(), false),
+                    (false, FrictionLaw::Coulomb) => run_portable::<false, 1, true, W>(&inp, Vec::new(), false),
+                    (false, FrictionLaw::Switch) => run_portable::<false, 2, true, W>(&inp, Vec::new(), false),
+                    (true, FrictionLaw::Constant) => run_portable::<true, 0, true, W>(&inp, Vec::new(), false),
+                    (true, FrictionLaw::Coulomb) => run_portable::<true, 1, true, W>(&inp, Vec::new(), false),
+                    (true, FrictionLaw::Switch) => run_portable::<true, 2, true, W>(&inp, Vec::new(), false),
+                };
+                sorted(r.0)
+            };
+            let before = HANDLED.with(|h| h.get());
+            let quick = go(true);
+            handled += HANDLED.with(|h| h.get()) - before;
+            let cold = go(false);
+            QUICK.with(|q| q.set(true));
+            for i in 0..s.len() {
+                assert_eq!(bits(&quick[i]), bits(&cold[i]), "{name} {i}");
+            }
+            events += quick.iter().map(|r| r.run.stats.n_events).sum::<u64>();
+        }
+        println!("{name}: {handled} of {events} events handled on the lanes");
+        // Where the steps are checked for hidden crossings (unilateral contact, the switch law):
+        // the quick path needs the check's interpolant.
+        let checked = s[0].p.contact == ContactModel::Unilateral || s[0].p.friction_law == FrictionLaw::Switch;
+        if checked && events > 0 {
+            assert!(4 * handled > events, "{name}: {handled} of {events}");
+        }
+    }
+}
