@@ -296,33 +296,17 @@ fn poly<const N: usize>(
     [dy, f1, f2, f3, f4, f5, f6]
 }
 
-impl<const N: usize, S: OdeSystem<N>> Dense<N> for Dop853Dense<'_, N, S> {
-    fn eval(&self, t: f64) -> SVector<f64, N> {
+impl<const N: usize, S: OdeSystem<N>> Dop853Dense<'_, N, S> {
+    /// The components `i` with `keep(i)` at `t` (zeros elsewhere):
+    /// y0 + x (F0 + (1-x) (F1 + x (F2 + (1-x) (F3 + x (F4 + (1-x) (F5 + x F6)))))), component
+    /// by component (the lanes' `LaneDense` evaluates the same operations).
+    #[inline(always)]
+    fn eval_where(&self, t: f64, keep: impl Fn(usize) -> bool) -> SVector<f64, N> {
         let c = self.cont.get_or_init(|| self.coefficients());
         let x = (t - self.t0) / self.h;
         let x1 = 1.0 - x;
-        // y0 + x (F0 + (1-x) (F1 + x (F2 + (1-x) (F3 + x (F4 + (1-x) (F5 + x F6)))))), component
-        // by component (the lanes' `LaneDense` evaluates the same operations).
         SVector::from_fn(|i, _| {
-            let mut p = c[6][i] * x;
-            p = (c[5][i] + p) * x1;
-            p = (c[4][i] + p) * x;
-            p = (c[3][i] + p) * x1;
-            p = (c[2][i] + p) * x;
-            p = (c[1][i] + p) * x1;
-            p = (c[0][i] + p) * x;
-            self.y0[i] + p
-        })
-    }
-
-    fn eval_some(&self, t: f64, reads: u64) -> SVector<f64, N> {
-        let c = self.cont.get_or_init(|| self.coefficients());
-        let x = (t - self.t0) / self.h;
-        let x1 = 1.0 - x;
-        // `eval`'s operations on the components asked for (zeros elsewhere; beyond the 64 bits of
-        // `reads`, every component).
-        SVector::from_fn(|i, _| {
-            if i < 64 && reads & (1 << i) == 0 {
+            if !keep(i) {
                 return 0.0;
             }
             let mut p = c[6][i] * x;
@@ -334,6 +318,17 @@ impl<const N: usize, S: OdeSystem<N>> Dense<N> for Dop853Dense<'_, N, S> {
             p = (c[0][i] + p) * x;
             self.y0[i] + p
         })
+    }
+}
+
+impl<const N: usize, S: OdeSystem<N>> Dense<N> for Dop853Dense<'_, N, S> {
+    fn eval(&self, t: f64) -> SVector<f64, N> {
+        self.eval_where(t, |_| true)
+    }
+
+    fn eval_some(&self, t: f64, reads: u64) -> SVector<f64, N> {
+        // Beyond the 64 bits of `reads`, every component.
+        self.eval_where(t, |i| i >= 64 || reads & (1 << i) != 0)
     }
 
     fn end_rates(&self) -> Option<super::EndRates<N>> {
