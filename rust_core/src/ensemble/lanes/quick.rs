@@ -72,16 +72,17 @@ pub(super) fn quick_event<const LAW: u8, const N: usize>(
         return Quick::Cold;
     }
     let (s, mode) = (sd.s, sd.mode);
-    let (ta, ga) = (t0, ln.g0[e][l]);
+    let ga = ln.g0[e][l];
     if !s.crossing_counts(mode, e, ga < 0.0) {
         return Quick::Cold;
     }
     let eval = |t: f64| State::from(dense.eval_lane(l, (t - t0) / h));
-    // Function `i` alone, on the components it reads (as `step_events`'s `Dense::eval_some`).
-    let g_at = |i: usize, t: f64| {
-        let (reads, x) = (s.event_reads(i), (t - t0) / h);
+    // The function alone, on the components it reads (as `step_events`'s `Dense::eval_some`).
+    let reads = s.event_reads(e);
+    let g_at = |t: f64| {
+        let x = (t - t0) / h;
         let y = State::from_fn(|j, _| if reads & (1 << j) != 0 { dense.at(j, l, x, 1.0 - x) } else { 0.0 });
-        s.event(t, &y, mode, i)
+        s.event(t, &y, mode, e)
     };
     let gb = g1[e][l];
     let (y0, y1) = (lane_state(&ln.y, l), lane_state(yn, l));
@@ -91,7 +92,7 @@ pub(super) fn quick_event<const LAW: u8, const N: usize>(
         && s.event_rates(t_new, &y1, &lane_state(fnew, l), mode, &mut d1))
     .then(|| hermite_root(t0, t_new - t0, ga, gb, d0[e], d1[e]))
     .flatten();
-    let te = locate_from(|t| g_at(e, t), ta, ga, t_new, gb, sd.opts.event_tol, guess);
+    let te = locate_from(g_at, t0, ga, t_new, gb, sd.opts.event_tol, guess);
     let mut g = [0.0; MAX_EVENTS];
     let ye = if te < t_new { eval(te) } else { y1 };
     let (t1, y_end, after) = match s.on_event(te, &ye, mode, e) {
