@@ -1,18 +1,22 @@
 //! Ctrl-C during a long computation.
 //!
-//! [`detach`] runs the numerics on a worker thread under a fresh stop request
+//! [`detach`] runs the numerics on a worker thread (a persistent one, [`workers`]) under a fresh stop request
 //! (`tribosweep_core::cancel::Token`) while the calling thread, with the GIL released, waits for the
 //! result and every [`POLL`] attaches to run Python's signal handlers (`check_signals`). When a
 //! handler raises (SIGINT's default raises `KeyboardInterrupt`), the token is cancelled, the core's
 //! loops see it within `cancel::CHECK_EVERY` steps (about a millisecond of work on the slider),
 //! the worker's partial results are dropped, and the exception propagates to Python. Reaction
-//! time: the poll interval plus the core's check interval plus the thread's exit, well under a
+//! time: the poll interval plus the core's check interval plus the worker's return, well under a
 //! second. Python runs signal handlers on its main thread only; called from another thread,
 //! `check_signals` does nothing and the call simply waits for its result.
 
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
-use std::sync::mpsc::{sync_channel, RecvTimeoutError};
+use std::panic::{catch_unwind, resume_unwind, AssertUnwindSafe};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::mpsc::{sync_channel, Receiver, RecvTimeoutError};
+use std::sync::OnceLock;
+use std::thread::Result as Caught;
 use std::time::Duration;
 use tribosweep_core::cancel::Token;
 
@@ -23,53 +27,86 @@ pub(crate) const POLL: Duration = Duration::from_millis(50);
 /// before they moved to a worker.
 const STACK: usize = 8 << 20;
 
+/// The persistent workers that run the calls ([`detach`]), one per logical core: as many calls
+/// as cores can run at once (from as many Python threads, e.g. dask's threaded scheduler) without
+/// starting a thread. A thread started and joined per call cost 75-100 us on a 2-core Zen 3 (the
+/// kernel's `clone`, the stack's mapping and page faults, the exit): about half of a call that
+/// integrates ten trajectories for 50 ms of simulated time, as each Lyapunov segment of a sweep
+/// does. Further calls at once start a thread of their own, as every call did before.
+fn workers() -> &'static (rayon::ThreadPool, usize) {
+    static WORKERS: OnceLock<(rayon::ThreadPool, usize)> = OnceLock::new();
+    WORKERS.get_or_init(|| {
+        let n = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .stack_size(STACK)
+            .thread_name(|i| format!("tribosweep-call-{i}"))
+            .build()
+            .expect("building the call workers");
+        (pool, n)
+    })
+}
+
+/// Calls running on [`workers`] now.
+static BUSY: AtomicUsize = AtomicUsize::new(0);
+
 /// `f` on a worker thread with the GIL released, cancelled when a Python signal handler raises
 /// (the error is returned; `f`'s result is dropped). A panic in `f` propagates as before (pyo3
 /// makes it a `PanicException`).
 pub(crate) fn detach<R: Send>(py: Python<'_>, f: impl FnOnce() -> R + Send) -> PyResult<R> {
     let token = Token::new();
-    std::thread::scope(|scope| {
-        let (tx, mut rx) = sync_channel::<R>(1);
-        let tok = &token;
-        let work = move || {
-            let r = tok.scope(f);
-            // The receiver is gone only if the caller stopped waiting: nothing to deliver to.
-            let _ = tx.send(r);
-        };
-        let worker = std::thread::Builder::new()
-            .name("tribosweep-call".into())
-            .stack_size(STACK)
-            .spawn_scoped(scope, work)
-            .map_err(|e| PyRuntimeError::new_err(format!("cannot start a worker thread: {e}")))?;
-        loop {
-            // The receiver is not Sync: it moves into the detached closure and back.
-            let (back, got) = py.detach(move || {
-                let got = rx.recv_timeout(POLL);
-                (rx, got)
-            });
-            rx = back;
-            match got {
-                Ok(r) => {
-                    // Sent as the worker's last act: the join is immediate.
-                    let _ = py.detach(move || worker.join());
-                    return Ok(r);
-                }
-                Err(RecvTimeoutError::Timeout) => {
-                    if let Err(e) = py.check_signals() {
-                        token.cancel();
-                        // A panic while stopping is of no interest now: the signal's error wins.
-                        let _ = py.detach(move || worker.join());
-                        return Err(e);
-                    }
-                }
-                Err(RecvTimeoutError::Disconnected) => {
-                    // The worker ended without a result: it panicked. Re-raise the panic here.
-                    match py.detach(move || worker.join()) {
-                        Err(payload) => std::panic::resume_unwind(payload),
-                        Ok(()) => return Err(PyRuntimeError::new_err("the worker thread ended without a result")),
-                    }
+    let tok = &token;
+    let (tx, rx) = sync_channel::<Caught<R>>(1);
+    // The result, or the panic's payload, is sent as the worker's last act.
+    let work = move || {
+        let _ = tx.send(catch_unwind(AssertUnwindSafe(|| tok.scope(f))));
+    };
+    let (pool, n) = workers();
+    let got = if BUSY.fetch_add(1, Ordering::AcqRel) < *n {
+        // The scope ends when `work` has: on a signal, once the cancelled core has stopped.
+        let got = py.detach(|| {
+            pool.in_place_scope(|s| {
+                s.spawn(move |_| work());
+                wait(rx, tok)
+            })
+        });
+        BUSY.fetch_sub(1, Ordering::AcqRel);
+        got
+    } else {
+        BUSY.fetch_sub(1, Ordering::AcqRel);
+        py.detach(|| {
+            std::thread::scope(|scope| {
+                std::thread::Builder::new()
+                    .name("tribosweep-call".into())
+                    .stack_size(STACK)
+                    .spawn_scoped(scope, work)
+                    .map_err(|e| PyRuntimeError::new_err(format!("cannot start a worker thread: {e}")))?;
+                wait(rx, tok)
+            })
+        })
+    };
+    match got? {
+        Ok(r) => Ok(r),
+        // Re-raised on the calling thread, as a panic of the call itself.
+        Err(payload) => resume_unwind(payload),
+    }
+}
+
+/// The worker's result, waited for without the GIL; every [`POLL`] Python's signal handlers run
+/// (with the GIL), and when one raises, the token is cancelled and its error returned.
+fn wait<R>(rx: Receiver<Caught<R>>, token: &Token) -> PyResult<Caught<R>> {
+    loop {
+        match rx.recv_timeout(POLL) {
+            Ok(r) => return Ok(r),
+            Err(RecvTimeoutError::Timeout) => {
+                if let Err(e) = Python::attach(|py| py.check_signals()) {
+                    token.cancel();
+                    return Err(e);
                 }
             }
+            Err(RecvTimeoutError::Disconnected) => {
+                return Err(PyRuntimeError::new_err("the worker thread ended without a result"))
+            }
         }
-    })
+    }
 }
