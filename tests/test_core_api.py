@@ -6,12 +6,15 @@
 - Optional parameters are keyword-only in every function (required ones stay positional), so an
   argument can never land in the wrong slot when a parameter is added.
 - The ensemble's path (lane-batched or scalar) and grouping are the core's choice: the results do
-  not depend on the thread count, bit for bit.
+  not depend on the thread count, bit for bit, nor on how many calls run at once.
 """
 
 from __future__ import annotations
 
+import concurrent.futures
 import inspect
+import os
+import threading
 
 import numpy as np
 import pytest
@@ -138,6 +141,34 @@ def test_ensemble_results_do_not_depend_on_the_thread_count():
         for key, value in runs[0].items():
             if isinstance(value, np.ndarray):
                 assert np.array_equal(value, runs[1][key], equal_nan=True), (case, key)
+
+
+def test_calls_from_more_python_threads_than_cores_give_the_serial_results():
+    # Calls run on persistent workers, one per core; a call made while every worker is busy starts
+    # a thread of its own. Four calls per core at once (each of 2 threads inside): every result is
+    # the same call's made alone, bit for bit, on either kind of worker.
+    n = 4 * (os.cpu_count() or 1)
+    mus = np.linspace(0.18, 0.26, 12)[:, None]
+    y0 = np.array([[1e-6, 0, 0, 0, 0, 0]])
+
+    def call(k: int) -> dict:
+        return _core.ensemble({}, "unilateral", "constant", ["mu"], mus + 1e-3 * k, y0, 0.02 + 1e-3 * k, "dop853",
+                              1e-7, threads=2)  # fmt: skip
+
+    alone = [call(k) for k in range(n)]
+    start = threading.Barrier(n)
+
+    def at_once(k: int) -> dict:
+        start.wait()
+        return call(k)
+
+    with concurrent.futures.ThreadPoolExecutor(n) as ex:
+        together = list(ex.map(at_once, range(n)))
+    for a, b in zip(alone, together):
+        for key, value in a.items():
+            if isinstance(value, np.ndarray):
+                assert np.array_equal(value, b[key], equal_nan=True), key
+    assert all(int(np.sum(a["n_rhs"])) > 0 for a in alone)
 
 
 def test_steady_runs_return_cells_only_where_a_run_left_any():
