@@ -13,7 +13,9 @@ from __future__ import annotations
 
 import concurrent.futures
 import inspect
+import multiprocessing
 import os
+import sys
 import threading
 
 import numpy as np
@@ -169,6 +171,25 @@ def test_calls_from_more_python_threads_than_cores_give_the_serial_results():
             if isinstance(value, np.ndarray):
                 assert np.array_equal(value, b[key], equal_nan=True), key
     assert all(int(np.sum(a["n_rhs"])) > 0 for a in alone)
+
+
+def _fork_call(threads: int) -> tuple[int, bytes]:
+    mus = np.linspace(0.18, 0.26, 12)[:, None]
+    r = _core.ensemble({}, "unilateral", "constant", ["mu"], mus, np.array([[1e-6, 0, 0, 0, 0, 0]]), 0.02, "dop853",
+                       1e-7, threads=threads)  # fmt: skip
+    return int(np.sum(r["n_rhs"])), np.asarray(r["y_end"]).tobytes()
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="fork is multiprocessing's default start method on Linux")
+@pytest.mark.parametrize("threads", [1, 2])
+def test_a_forked_child_computes_as_its_parent(threads):
+    # A child made by fork inherits the parent's thread pools without their threads: its first call
+    # waited forever (on 2 threads; on 1 too, once calls ran on persistent workers). Each process
+    # now makes its own pools.
+    expect = _fork_call(threads)  # the parent's pools exist before the fork
+    with multiprocessing.get_context("fork").Pool(1) as pool:
+        got = pool.apply_async(_fork_call, (threads,)).get(timeout=120)
+    assert got == expect
 
 
 def test_steady_runs_return_cells_only_where_a_run_left_any():

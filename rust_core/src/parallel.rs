@@ -3,13 +3,14 @@
 //! Every point is computed by the same pure function of its own inputs, so the results do not
 //! depend on the thread count or on how rayon splits the work: bit-identical for 1 and N threads
 //! (tested). A panic inside one point is caught and becomes that point's `Status::Panic`, so one
-//! bad point cannot take a sweep down. Thread pools are cached per thread count.
+//! bad point cannot take a sweep down. Thread pools are cached per thread count (and per process:
+//! a forked child makes its own, [`PerProcess`]).
 
 use crate::cancel;
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::panic::{catch_unwind, AssertUnwindSafe};
-use std::sync::{Arc, Mutex, OnceLock};
+use std::sync::{Arc, Mutex};
 
 /// Environment variable that sets the default thread count (else: all logical cores).
 pub const THREADS_ENV: &str = "TRIBOSWEEP_THREADS";
@@ -23,9 +24,48 @@ pub fn default_threads() -> usize {
         .unwrap_or_else(|| std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1))
 }
 
+/// A value made once per process: in a child made by `fork` (Python's `multiprocessing` on Linux
+/// by default), made again. A child inherits its parent's thread pools without their threads:
+/// work handed to one of them waited forever (a forked child's first parallel call hung). The
+/// parent's value is leaked in the child, not dropped (dropping a pool signals threads that do
+/// not exist there).
+pub struct PerProcess<T> {
+    slot: Mutex<Option<(u32, T)>>,
+}
+
+impl<T: Clone> PerProcess<T> {
+    /// Empty; the first [`PerProcess::get`] makes the value.
+    pub const fn new() -> Self {
+        PerProcess { slot: Mutex::new(None) }
+    }
+
+    /// This process's value, made by `make` if there is none yet (or only the parent's).
+    pub fn get(&self, make: impl FnOnce() -> T) -> T {
+        let pid = std::process::id();
+        let mut guard = self.slot.lock().unwrap_or_else(|e| e.into_inner());
+        match guard.as_ref() {
+            Some((owner, v)) if *owner == pid => v.clone(),
+            _ => {
+                let v = make();
+                if let Some(parents) = guard.replace((pid, v.clone())) {
+                    std::mem::forget(parents);
+                }
+                v
+            }
+        }
+    }
+}
+
+impl<T: Clone> Default for PerProcess<T> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 fn pool(threads: usize) -> Arc<rayon::ThreadPool> {
-    static POOLS: OnceLock<Mutex<HashMap<usize, Arc<rayon::ThreadPool>>>> = OnceLock::new();
-    let pools = POOLS.get_or_init(|| Mutex::new(HashMap::new()));
+    type Pools = Arc<Mutex<HashMap<usize, Arc<rayon::ThreadPool>>>>;
+    static POOLS: PerProcess<Pools> = PerProcess::new();
+    let pools = POOLS.get(Pools::default);
     let mut guard = pools.lock().unwrap_or_else(|e| e.into_inner());
     guard
         .entry(threads)
@@ -153,6 +193,26 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_per_process_value_is_made_once_in_a_process() {
+        let made = std::sync::atomic::AtomicUsize::new(0);
+        let cell: PerProcess<Arc<u32>> = PerProcess::new();
+        let make = || {
+            made.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            Arc::new(7)
+        };
+        let a = cell.get(make);
+        let b = cell.get(make);
+        assert!(Arc::ptr_eq(&a, &b) && *a == 7);
+        assert_eq!(made.load(std::sync::atomic::Ordering::Relaxed), 1);
+        // As in a forked child: the value is another process's, so it is made again.
+        cell.slot.lock().unwrap().as_mut().unwrap().0 ^= 1;
+        let c = cell.get(make);
+        assert!(!Arc::ptr_eq(&a, &c));
+        assert_eq!(made.load(std::sync::atomic::Ordering::Relaxed), 2);
+        assert!(Arc::ptr_eq(&c, &cell.get(make)));
+    }
 
     #[test]
     fn panics_become_data_and_order_is_kept() {

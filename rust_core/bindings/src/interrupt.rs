@@ -15,10 +15,11 @@ use pyo3::prelude::*;
 use std::panic::{catch_unwind, resume_unwind, AssertUnwindSafe};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::mpsc::{sync_channel, Receiver, RecvTimeoutError};
-use std::sync::OnceLock;
+use std::sync::Arc;
 use std::thread::Result as Caught;
 use std::time::Duration;
 use tribosweep_core::cancel::Token;
+use tribosweep_core::parallel::PerProcess;
 
 /// How often the waiting thread looks at Python's signals.
 pub(crate) const POLL: Duration = Duration::from_millis(50);
@@ -32,10 +33,11 @@ const STACK: usize = 8 << 20;
 /// starting a thread. A thread started and joined per call cost 75-100 us on a 2-core Zen 3 (the
 /// kernel's `clone`, the stack's mapping and page faults, the exit): about half of a call that
 /// integrates ten trajectories for 50 ms of simulated time, as each Lyapunov segment of a sweep
-/// does. Further calls at once start a thread of their own, as every call did before.
-fn workers() -> &'static (rayon::ThreadPool, usize) {
-    static WORKERS: OnceLock<(rayon::ThreadPool, usize)> = OnceLock::new();
-    WORKERS.get_or_init(|| {
+/// does. Further calls at once start a thread of their own, as every call did before. Per process:
+/// a child made by `fork` makes its own ([`PerProcess`]).
+fn workers() -> Workers {
+    static WORKERS: PerProcess<Workers> = PerProcess::new();
+    WORKERS.get(|| {
         let n = std::thread::available_parallelism().map_or(1, |n| n.get());
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(n)
@@ -43,12 +45,17 @@ fn workers() -> &'static (rayon::ThreadPool, usize) {
             .thread_name(|i| format!("tribosweep-call-{i}"))
             .build()
             .expect("building the call workers");
-        (pool, n)
+        Workers { pool: Arc::new(pool), n, busy: Arc::new(AtomicUsize::new(0)) }
     })
 }
 
-/// Calls running on [`workers`] now.
-static BUSY: AtomicUsize = AtomicUsize::new(0);
+/// The call workers of this process: the pool, its size and how many calls run on it now.
+#[derive(Clone)]
+struct Workers {
+    pool: Arc<rayon::ThreadPool>,
+    n: usize,
+    busy: Arc<AtomicUsize>,
+}
 
 /// `f` on a worker thread with the GIL released, cancelled when a Python signal handler raises
 /// (the error is returned; `f`'s result is dropped). A panic in `f` propagates as before (pyo3
@@ -61,8 +68,8 @@ pub(crate) fn detach<R: Send>(py: Python<'_>, f: impl FnOnce() -> R + Send) -> P
     let work = move || {
         let _ = tx.send(catch_unwind(AssertUnwindSafe(|| tok.scope(f))));
     };
-    let (pool, n) = workers();
-    let got = if BUSY.fetch_add(1, Ordering::AcqRel) < *n {
+    let Workers { pool, n, busy } = workers();
+    let got = if busy.fetch_add(1, Ordering::AcqRel) < n {
         // The scope ends when `work` has: on a signal, once the cancelled core has stopped.
         let got = py.detach(|| {
             pool.in_place_scope(|s| {
@@ -70,10 +77,10 @@ pub(crate) fn detach<R: Send>(py: Python<'_>, f: impl FnOnce() -> R + Send) -> P
                 wait(rx, tok)
             })
         });
-        BUSY.fetch_sub(1, Ordering::AcqRel);
+        busy.fetch_sub(1, Ordering::AcqRel);
         got
     } else {
-        BUSY.fetch_sub(1, Ordering::AcqRel);
+        busy.fetch_sub(1, Ordering::AcqRel);
         py.detach(|| {
             std::thread::scope(|scope| {
                 std::thread::Builder::new()
