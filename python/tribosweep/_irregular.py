@@ -3,7 +3,8 @@
 A transient that stays bounded but has neither repeated (to ``periodic_tol``) nor decayed by
 ``t_max`` is an answer, not a failure: the slider moves irregularly, quasi-periodically or
 chaotically. :func:`measure` characterises such motion from the run's end state, for many points
-at once (every core call is one batched ``_core.ensemble`` over all points):
+at once (each core call is one batched ``_core.ensemble`` over a group of points; the groups, one
+per thread, run at once):
 
 ``irregular_z_min``, ``irregular_z_max``
     The range of ``z`` over a measurement window of ``window`` seconds (sampled every
