@@ -7,7 +7,6 @@ errors from 0, a frequency within a stated fraction of a bin), never one chaotic
 from __future__ import annotations
 
 import re
-import time
 
 import numpy as np
 import pytest
@@ -163,21 +162,7 @@ def test_ftle_of_the_seed_bouncing_cycle_is_zero_within_its_standard_error():
     assert out["irregular_z_min"][0] == pytest.approx(float(orb.z_min), rel=2e-3)
 
 
-@pytest.fixture(scope="module")
-def chaotic_ends():
-    """87.8 N, 7.57 cm, 0.2 m/s on the Stribeck sweep: three ends of 20-30 s transients."""
-    m = STRIBECK_MODEL
-    pp, names, vals = _point(m, 87.77777777777777, 0.07566666666666667, 0.2)
-    ends = []
-    for z0, t_end in ((1e-6, 20.0), (2e-6, 25.0), (-3e-6, 30.0)):
-        r = _core.ensemble(m.values(), m.contact, m.friction_law, names, vals, np.array([[z0, 0, 0, 0, 0, 0]]),
-                           t_end, "dop853", 1e-8, kind="final")  # fmt: skip
-        assert r["status"][0] == ts.STATUS["success"]
-        ends.append(r["y_end"][0])
-    return {k: np.repeat(v, 3) for k, v in pp.items()}, np.array(ends)
-
-
-def test_a_stribeck_point_is_chaotic(chaotic_ends):
+def test_a_stribeck_point_is_chaotic():
     # 87.8 N, 7.57 cm, 0.2 m/s on the Stribeck sweep: sliding unstable, the transient neither repeats
     # nor decays. How we know the motion is chaotic (measured when this test was written): the
     # exponent is 90-113 1/s (+- 4-9) whatever the separation (d0 1e-7, 1e-8, 1e-9), the tolerance
@@ -189,8 +174,15 @@ def test_a_stribeck_point_is_chaotic(chaotic_ends):
     # 139, 97, 107 +- 16, 11, 13 1/s, against 123, 103, 102 +- 7, 6, 6 over all 40 segments, at a
     # third of the right-hand sides); asserted: decided chaotic, > 5 standard errors.
     m = STRIBECK_MODEL
-    pp3, ends = chaotic_ends
-    out = _irregular.measure(m.values(), m.contact, m.friction_law, pp3, np.arange(3), ends, threads=1)
+    pp, names, vals = _point(m, 87.77777777777777, 0.07566666666666667, 0.2)
+    ends = []
+    for z0, t_end in ((1e-6, 20.0), (2e-6, 25.0), (-3e-6, 30.0)):
+        r = _core.ensemble(m.values(), m.contact, m.friction_law, names, vals, np.array([[z0, 0, 0, 0, 0, 0]]),
+                           t_end, "dop853", 1e-8, kind="final")  # fmt: skip
+        assert r["status"][0] == ts.STATUS["success"]
+        ends.append(r["y_end"][0])
+    pp3 = {k: np.repeat(v, 3) for k, v in pp.items()}
+    out = _irregular.measure(m.values(), m.contact, m.friction_law, pp3, np.arange(3), np.array(ends))
     f, se = out["irregular_ftle"], out["irregular_ftle_se"]
     assert (out["status"] == ts.STATUS["success"]).all()
     assert np.all(f > _irregular.FTLE_DECISIVE * se), (f, se)
@@ -200,43 +192,6 @@ def test_a_stribeck_point_is_chaotic(chaotic_ends):
     # torsion mode (600-650 rad/s at this arm length).
     assert np.all(out["irregular_z_max"] > 0) and np.all(out["irregular_z_min"] < 0)
     assert np.all(np.abs(out["irregular_omega"] - 620) < 40), out["irregular_omega"]
-
-
-def test_measuring_in_groups_gives_the_one_group_result_bit_for_bit(chaotic_ends):
-    # On more than one thread the points are measured in groups at once (each group its own calls,
-    # renormalisations and decisions): a point's runs do not depend on the others', so every
-    # output is the one-group output, bit for bit.
-    m = STRIBECK_MODEL
-    pp3, ends = chaotic_ends
-    one = _irregular.measure(m.values(), m.contact, m.friction_law, pp3, np.arange(3), ends, threads=1)
-    for threads in (2, 3):
-        got = _irregular.measure(m.values(), m.contact, m.friction_law, pp3, np.arange(3), ends, threads=threads)
-        for key, value in one.items():
-            assert np.array_equal(np.asarray(value), np.asarray(got[key])), (threads, key)
-    assert int(one["n_rhs"].sum()) > 0
-
-
-def test_a_group_that_fails_stops_the_others_and_raises(chaotic_ends, monkeypatch):
-    # An error in one group's core call (here a simulated one, in the group of the second point)
-    # reaches the caller; the other groups stop at their next segment instead of running on.
-    m = STRIBECK_MODEL
-    pp3, ends = chaotic_ends
-    calls = []
-    real = _core.ensemble
-
-    def flaky(base, contact, law, names, values, states, *args, **kwargs):
-        calls.append(len(states))
-        if np.all(states == ends[1], axis=1).any():  # the second point's group, at its first segment
-            raise RuntimeError("simulated core failure")
-        time.sleep(0.02)  # the others are slow: unstopped, their 13 calls each would take 0.26 s
-        return real(base, contact, law, names, values, states, *args, **kwargs)
-
-    monkeypatch.setattr(_irregular._core, "ensemble", flaky)
-    with pytest.raises(RuntimeError, match="simulated core failure"):
-        _irregular.measure(m.values(), m.contact, m.friction_law, pp3, np.arange(3), ends, threads=3)
-    # Three groups of one point: the failing one stopped at its first call, the others at their next
-    # segment (unstopped, each would make at least 13 calls: 2 warm-up segments and the window's 11).
-    assert len(calls) <= 7, calls
 
 
 # --- the sweep ---------------------------------------------------------------------------------

@@ -3,8 +3,7 @@
 A transient that stays bounded but has neither repeated (to ``periodic_tol``) nor decayed by
 ``t_max`` is an answer, not a failure: the slider moves irregularly, quasi-periodically or
 chaotically. :func:`measure` characterises such motion from the run's end state, for many points
-at once (each core call is one batched ``_core.ensemble`` over a group of points; the groups, one
-per thread, run at once):
+at once (every core call is one batched ``_core.ensemble`` over all points):
 
 ``irregular_z_min``, ``irregular_z_max``
     The range of ``z`` over a measurement window of ``window`` seconds (sampled every
@@ -73,10 +72,7 @@ exponents of 50-130 1/s at the chaotic points).
 
 from __future__ import annotations
 
-import concurrent.futures
 import math
-import os
-import threading
 from collections.abc import Callable, Mapping
 
 import numpy as np
@@ -182,21 +178,6 @@ FTLE_DECISIVE = 5.0
 #: ``propagate(states (2 m, d), tau, rows (m,)) -> (states (2 m, d), ok (2 m,) bool)``: one batched run of
 #: length ``tau`` of the bases and copies of the points ``rows`` (indices into the start states).
 Propagator = Callable[[np.ndarray, float, np.ndarray], tuple[np.ndarray, np.ndarray]]
-
-
-class _Stopped(Exception):
-    """Raised in a group of :func:`measure` when another group has failed or been interrupted."""
-
-
-def _thread_budget(threads: int | None) -> int:
-    """The core's thread count for ``threads``: itself, else ``TRIBOSWEEP_THREADS``, else the cores
-    this process may use."""
-    if threads:
-        return int(threads)
-    env = os.environ.get("TRIBOSWEEP_THREADS", "").strip()
-    if env.isdigit() and int(env) > 0:
-        return int(env)
-    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
 
 
 def benettin(
@@ -406,53 +387,12 @@ def measure(
     t_eval = np.arange(n_samples) * s.sample_dt
     spans = int(math.floor(t_eval[-1] / s.ftle_tau + 1e-9)) + 1 - s.ftle_warmup
     segments = max(s.ftle_segments, spans)
-    y_start = np.asarray(y_start, dtype=np.float64)
     z = np.full((m, n_samples), np.nan)
     record = {"n_rhs": np.zeros(m, dtype=np.int64), "failure": {}}
-    res = {"ftle": np.full(m, np.nan), "ftle_se": np.full(m, np.nan), "ok": np.zeros(m, dtype=bool)}
-    stop = threading.Event()
-
-    def group(rows: np.ndarray, threads_g: int | None) -> None:
-        # One group of points, on its own: its own calls, renormalisations and decisions.
-        z_g = np.full((rows.size, n_samples), np.nan)
-        rec = {"n_rhs": np.zeros(rows.size, dtype=np.int64), "failure": {}}
-        inner = slider_propagator(base, contact, friction_law, names, values[rows], integrator=integrator,
-                                  rtol=s.ftle_rtol, threads=threads_g, record=rec, window=(t_eval, z_g))  # fmt: skip
-
-        def propagate(states: np.ndarray, tau: float, idx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-            if stop.is_set():
-                raise _Stopped
-            return inner(states, tau, idx)
-
-        r = benettin(propagate, y_start[rows], scale[rows], tau=s.ftle_tau, segments=segments,
-                     warmup=s.ftle_warmup, d0=s.ftle_d0, min_segments=max(s.ftle_min_segments, spans))  # fmt: skip
-        z[rows], record["n_rhs"][rows] = z_g, rec["n_rhs"]
-        record["failure"].update({int(rows[i]): st for i, st in rec["failure"].items()})
-        for key in res:
-            res[key][rows] = r[key]
-
-    # The points in groups run at once, each on its share of the threads: a point's runs, and so
-    # its results, do not depend on the others (a run's bits do not depend on its batch), so this
-    # is the one-group result, bit for bit. Without it every segment was one call for all points,
-    # and each call waited for its slowest thread: the last segments, of the few points still
-    # undecided, used two threads 1.28x as well as one.
-    n_groups = min(m, _thread_budget(threads))
-    groups = [np.arange(g, m, n_groups) for g in range(n_groups)]
-    if n_groups == 1:
-        group(groups[0], threads)
-    else:
-        per = max(1, _thread_budget(threads) // n_groups)
-        with concurrent.futures.ThreadPoolExecutor(n_groups, thread_name_prefix="tribosweep-ftle") as ex:
-            futures = [ex.submit(group, rows, per) for rows in groups]
-            try:
-                concurrent.futures.wait(futures, return_when=concurrent.futures.FIRST_EXCEPTION)
-            finally:
-                # A group's error, or Ctrl-C while waiting: the other groups stop at their next segment.
-                if not all(f.done() and f.exception() is None for f in futures):
-                    stop.set()
-        errors = [e for e in (f.exception() for f in futures) if e is not None and not isinstance(e, _Stopped)]
-        if errors:
-            raise errors[0]
+    propagate = slider_propagator(base, contact, friction_law, names, values, integrator=integrator,
+                                  rtol=s.ftle_rtol, threads=threads, record=record, window=(t_eval, z))  # fmt: skip
+    res = benettin(propagate, np.asarray(y_start, dtype=np.float64), scale, tau=s.ftle_tau, segments=segments,
+                   warmup=s.ftle_warmup, d0=s.ftle_d0, min_segments=max(s.ftle_min_segments, spans))  # fmt: skip
     out["n_rhs"] += record["n_rhs"]
     win = np.all(np.isfinite(z), axis=1)
     ok = win & res["ok"]
