@@ -28,17 +28,17 @@ pub(crate) const POLL: Duration = Duration::from_millis(50);
 /// before they moved to a worker.
 const STACK: usize = 8 << 20;
 
-/// The persistent workers that run the calls ([`detach`]), one per logical core: as many calls
-/// as cores can run at once (from as many Python threads, e.g. dask's threaded scheduler) without
-/// starting a thread. A thread started and joined per call cost 75-100 us on a 2-core Zen 3 (the
-/// kernel's `clone`, the stack's mapping and page faults, the exit): about half of a call that
-/// integrates ten trajectories for 50 ms of simulated time, as each Lyapunov segment of a sweep
-/// does. Further calls at once start a thread of their own, as every call did before. Per process:
-/// a child made by `fork` makes its own ([`PerProcess`]).
+/// The persistent workers that run the calls ([`detach`]): one per logical core, at most
+/// [`MAX_WORKERS`], so that as many calls can run at once (from as many Python threads, e.g. dask's
+/// threaded scheduler) without starting a thread. A thread started and joined per call cost
+/// 75-100 us on a 2-core Zen 3 (the kernel's `clone`, the stack's mapping and page faults, the
+/// exit): about half of a call that integrates ten trajectories for 50 ms of simulated time, as
+/// each Lyapunov segment of a sweep does. Further calls at once start a thread of their own, as
+/// every call did before. Per process: a child made by `fork` makes its own ([`PerProcess`]).
 fn workers() -> Workers {
     static WORKERS: PerProcess<Workers> = PerProcess::new();
     WORKERS.get(|| {
-        let n = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let n = std::thread::available_parallelism().map_or(1, |n| n.get()).min(MAX_WORKERS);
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(n)
             .stack_size(STACK)
@@ -48,6 +48,12 @@ fn workers() -> Workers {
         Workers { pool: Arc::new(pool), n, busy: Arc::new(AtomicUsize::new(0)) }
     })
 }
+
+/// The most persistent call workers of a process. A process seldom runs more calls at once than
+/// this, and each worker is a thread for the process's lifetime: one per core on a 64-core node
+/// would leave 64 idle threads in each of, say, 64 dask worker processes (4,096 threads, against
+/// containers' process limits of a few thousand).
+const MAX_WORKERS: usize = 4;
 
 /// The call workers of this process: the pool, its size and how many calls run on it now.
 #[derive(Clone)]
