@@ -33,52 +33,48 @@ pub struct PerProcess<T> {
     slot: Mutex<Option<(u32, T)>>,
 }
 
-impl<T: Clone> PerProcess<T> {
-    /// Empty; the first [`PerProcess::get`] makes the value.
+impl<T> PerProcess<T> {
+    /// Empty; the first [`PerProcess::with`] makes the value.
     pub const fn new() -> Self {
         PerProcess { slot: Mutex::new(None) }
     }
 
-    /// This process's value, made by `make` if there is none yet (or only the parent's).
-    pub fn get(&self, make: impl FnOnce() -> T) -> T {
+    /// `f` of this process's value (under its lock), made by `make` if there is none yet (or only
+    /// the parent's).
+    pub fn with<R>(&self, make: impl FnOnce() -> T, f: impl FnOnce(&mut T) -> R) -> R {
         let pid = std::process::id();
         let mut guard = self.slot.lock().unwrap_or_else(|e| e.into_inner());
-        match guard.as_ref() {
-            Some((owner, v)) if *owner == pid => v.clone(),
-            _ => {
-                let v = make();
-                if let Some(parents) = guard.replace((pid, v.clone())) {
-                    std::mem::forget(parents);
-                }
-                v
+        if guard.as_ref().is_none_or(|(owner, _)| *owner != pid) {
+            if let Some(parents) = guard.replace((pid, make())) {
+                std::mem::forget(parents);
             }
         }
+        f(&mut guard.as_mut().expect("made above").1)
     }
 }
 
-impl<T: Clone> Default for PerProcess<T> {
+impl<T> Default for PerProcess<T> {
     fn default() -> Self {
         Self::new()
     }
 }
 
 fn pool(threads: usize) -> Arc<rayon::ThreadPool> {
-    type Pools = Arc<Mutex<HashMap<usize, Arc<rayon::ThreadPool>>>>;
-    static POOLS: PerProcess<Pools> = PerProcess::new();
-    let pools = POOLS.get(Pools::default);
-    let mut guard = pools.lock().unwrap_or_else(|e| e.into_inner());
-    guard
-        .entry(threads)
-        .or_insert_with(|| {
-            Arc::new(
-                rayon::ThreadPoolBuilder::new()
-                    .num_threads(threads)
-                    .thread_name(|i| format!("tribosweep-{i}"))
-                    .build()
-                    .expect("building a rayon thread pool"),
-            )
-        })
-        .clone()
+    static POOLS: PerProcess<HashMap<usize, Arc<rayon::ThreadPool>>> = PerProcess::new();
+    POOLS.with(HashMap::new, |pools| {
+        pools
+            .entry(threads)
+            .or_insert_with(|| {
+                Arc::new(
+                    rayon::ThreadPoolBuilder::new()
+                        .num_threads(threads)
+                        .thread_name(|i| format!("tribosweep-{i}"))
+                        .build()
+                        .expect("building a rayon thread pool"),
+                )
+            })
+            .clone()
+    })
 }
 
 /// `f(i)` for every `i` in `0..n`, in blocks of `block` indices on `threads` threads (`None`:
@@ -202,16 +198,17 @@ mod tests {
             made.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
             Arc::new(7)
         };
-        let a = cell.get(make);
-        let b = cell.get(make);
+        let get = |make: &dyn Fn() -> Arc<u32>| cell.with(make, |v| v.clone());
+        let a = get(&make);
+        let b = get(&make);
         assert!(Arc::ptr_eq(&a, &b) && *a == 7);
         assert_eq!(made.load(std::sync::atomic::Ordering::Relaxed), 1);
         // As in a forked child: the value is another process's, so it is made again.
         cell.slot.lock().unwrap().as_mut().unwrap().0 ^= 1;
-        let c = cell.get(make);
+        let c = get(&make);
         assert!(!Arc::ptr_eq(&a, &c));
         assert_eq!(made.load(std::sync::atomic::Ordering::Relaxed), 2);
-        assert!(Arc::ptr_eq(&c, &cell.get(make)));
+        assert!(Arc::ptr_eq(&c, &get(&make)));
     }
 
     #[test]

@@ -37,7 +37,7 @@ const STACK: usize = 8 << 20;
 /// every call did before. Per process: a child made by `fork` makes its own ([`PerProcess`]).
 fn workers() -> Workers {
     static WORKERS: PerProcess<Workers> = PerProcess::new();
-    WORKERS.get(|| {
+    let make = || {
         let n = std::thread::available_parallelism().map_or(1, |n| n.get()).min(MAX_WORKERS);
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(n)
@@ -45,8 +45,9 @@ fn workers() -> Workers {
             .thread_name(|i| format!("tribosweep-call-{i}"))
             .build()
             .expect("building the call workers");
-        Workers { pool: Arc::new(pool), n, busy: Arc::new(AtomicUsize::new(0)) }
-    })
+        Workers { pool: Arc::new(pool), busy: Arc::new(AtomicUsize::new(0)) }
+    };
+    WORKERS.with(make, |w| w.clone())
 }
 
 /// The most persistent call workers of a process. A process seldom runs more calls at once than
@@ -55,11 +56,10 @@ fn workers() -> Workers {
 /// containers' process limits of a few thousand).
 const MAX_WORKERS: usize = 4;
 
-/// The call workers of this process: the pool, its size and how many calls run on it now.
+/// The call workers of this process: the pool and how many calls run on it now.
 #[derive(Clone)]
 struct Workers {
     pool: Arc<rayon::ThreadPool>,
-    n: usize,
     busy: Arc<AtomicUsize>,
 }
 
@@ -74,8 +74,8 @@ pub(crate) fn detach<R: Send>(py: Python<'_>, f: impl FnOnce() -> R + Send) -> P
     let work = move || {
         let _ = tx.send(catch_unwind(AssertUnwindSafe(|| tok.scope(f))));
     };
-    let Workers { pool, n, busy } = workers();
-    let got = if busy.fetch_add(1, Ordering::AcqRel) < n {
+    let Workers { pool, busy } = workers();
+    let got = if busy.fetch_add(1, Ordering::AcqRel) < pool.current_num_threads() {
         // The scope ends when `work` has: on a signal, once the cancelled core has stopped.
         let got = py.detach(|| {
             pool.in_place_scope(|s| {
