@@ -76,9 +76,8 @@ def build_old(rev: str, cache: Path) -> Path:
 
 def child(law: str, repeat: int, threads: int, path: Path | None) -> dict:
     env = dict(os.environ)
-    env.pop("PYTHONPATH", None)
-    if path is not None:
-        env["PYTHONPATH"] = str(path)
+    if path is not None:  # the old package first; a PYTHONPATH already set (run.sh of device_carry.sh) after it
+        env["PYTHONPATH"] = os.pathsep.join([str(path)] + [p for p in [env.get("PYTHONPATH")] if p])
     axes = json.dumps({k: [float(x) for x in v] for k, v in AXES.items()})
     out = subprocess.run([sys.executable, "-c", CHILD, law, str(repeat), str(threads), axes], env=env, check=True,
                          capture_output=True, text=True, cwd=path or ROOT / "benches")  # fmt: skip
