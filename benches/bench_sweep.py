@@ -4,7 +4,10 @@ Issue 4's benchmark. The grid spans normal load 10-150 N x arm length 5-12.7 cm 
 0.2-1.0 m/s around the seed configuration (unilateral contact, constant friction). Each run is a
 separate process so that its peak RSS (ru_maxrss) is its own.
 
-    python benches/bench_sweep.py --points 100000 --threads 2 [--memory-points 1000000]
+    python benches/bench_sweep.py --points 100000 --threads 2 [--memory-points 1000000] [--serial-chunks]
+
+From 8 threads on a sweep computes several chunks at once (``tribosweep._sweep.runner.overlap``);
+``--serial-chunks`` computes them one at a time, as below 8 threads, for a comparison.
 """
 
 from __future__ import annotations
@@ -26,10 +29,15 @@ def grid_for(points: int) -> tuple[int, int, int]:
     return max(2, round(4 * k)), max(2, round(2 * k)), max(1, round(k))
 
 
-def child(points: int, method: str, threads: int, output: str | None, bistability: bool, samples: int) -> dict:
+def child(points: int, method: str, threads: int, output: str | None, bistability: bool, samples: int,
+          serial: bool = False) -> dict:  # fmt: skip
     import numpy as np
 
     import tribosweep as ts
+    from tribosweep._sweep import runner
+
+    if serial:
+        runner.overlap = lambda threads: 1
 
     nl, na, nv = grid_for(points)
     t0 = time.perf_counter()
@@ -44,6 +52,7 @@ def child(points: int, method: str, threads: int, output: str | None, bistabilit
     n = regime.size
     out = {
         "points": int(n), "method": method, "threads": threads, "bistability": bistability, "samples": samples,
+        "chunks_at_once": runner.overlap(threads),
         "censused": int((ds.census_samples.values > 0).sum()), "wall_s": wall,
         "points_per_s": n / wall, "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
         "regimes": {name: int((regime == i).sum()) for i, name in enumerate(ts.REGIME_NAMES)},
@@ -66,24 +75,27 @@ def main(argv=None) -> int:
     ap.add_argument("--no-bistability", action="store_true")
     ap.add_argument("--samples", type=int, default=16,
                     help="census disturbances per point K (the issue's 10^5-point goal: 16)")  # fmt: skip
-    ap.add_argument("--child", nargs=6, metavar=("POINTS", "METHOD", "THREADS", "OUTPUT", "BISTABILITY", "K"),
+    ap.add_argument("--serial-chunks", action="store_true", help="one chunk at a time on any thread count")
+    ap.add_argument("--child", nargs=7, metavar=("POINTS", "METHOD", "THREADS", "OUTPUT", "BISTABILITY", "K", "SERIAL"),
                     help=argparse.SUPPRESS)  # fmt: skip
     ap.add_argument("--json", type=pathlib.Path)
     a = ap.parse_args(argv)
     if a.child:
-        p, m, t, o, b, k = a.child
-        print(json.dumps(child(int(p), m, int(t), None if o == "-" else o, b == "1", int(k))))
+        p, m, t, o, b, k, ser = a.child
+        print(json.dumps(child(int(p), m, int(t), None if o == "-" else o, b == "1", int(k), ser == "1")))
         return 0
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for bist in ([False] if a.no_bistability else [False, True]):
             out = os.path.join(tmp, f"auto{int(bist)}.nc")
-            rows.append(run_child([str(a.points), "auto", str(a.threads), out, str(int(bist)), str(a.samples)]))
+            rows.append(run_child([str(a.points), "auto", str(a.threads), out, str(int(bist)), str(a.samples),
+                                   str(int(a.serial_chunks))]))  # fmt: skip
         if a.memory_points:
-            rows.append(run_child([str(a.memory_points), "linear", str(a.threads), os.path.join(tmp, "big.nc"), "0", "1"]))
+            rows.append(run_child([str(a.memory_points), "linear", str(a.threads), os.path.join(tmp, "big.nc"), "0", "1",
+                                   str(int(a.serial_chunks))]))  # fmt: skip
     for r in rows:
         census = f"census K = {r['samples']} at {r['censused']} points" if r["bistability"] else "no census"
-        print(f"{r['method']:6} points {r['points']:>8} threads {r['threads']} {census}: "
+        print(f"{r['method']:6} points {r['points']:>8} threads {r['threads']} ({r['chunks_at_once']} chunks at once) {census}: "
               f"wall {r['wall_s']:8.1f} s  {r['points_per_s']:9.0f} points/s  peak RSS {r['peak_rss_mb']:7.0f} MB")
         print(f"       regimes {r['regimes']}\n       decided by {r['decided_by']}")
     if a.json:

@@ -169,6 +169,37 @@ def test_after_an_interrupted_call_the_next_one_is_unchanged():
     assert np.array_equal(before, small(1))
 
 
+def test_a_signal_stops_chunks_computing_on_the_sweeps_own_threads():
+    # On 8 threads a sweep computes 2 chunks at once on threads of its own process
+    # (runner.overlap), where Python delivers no signal. Each chunk here is one point on the
+    # bouncing cycle, which never repeats to 1e-15, so its transient would run to t_max = 10^4 s.
+    # The signal stops the main thread's wait; the main thread then stops the chunks' core calls:
+    # the sweep ends within REACTION, no chunk thread computes on, and later calls are unaffected.
+    def sweep():
+        ts.sweep(BOUNCING, extra_axes={"mu": [0.28, 0.29, 0.3]}, strategy="transient", census=False, t_max=1e4,
+                 periodic_tol=1e-15, chunk_size=1, threads=8, progress=False, boundaries=False)  # fmt: skip
+
+    before = ts.ensemble(BOUNCING, 0.05, {"mu": [0.25, 0.3]}, threads=2)
+    reaction = stops_promptly(sweep)
+    assert reaction < REACTION, f"{reaction:.2f} s from the signal to the exception"
+    assert not [t.name for t in threading.enumerate() if t.name.startswith("tribosweep-chunk")]
+    after = ts.ensemble(BOUNCING, 0.05, {"mu": [0.25, 0.3]}, threads=2)
+    for name in ("z_end", "x_end", "phi_dot_end"):
+        np.testing.assert_array_equal(before[name].values, after[name].values)
+
+
+def test_stopped_calls_refuse_to_start_until_released():
+    from tribosweep import _core
+
+    _core.stop_calls(True)
+    try:
+        with pytest.raises(KeyboardInterrupt, match="stop_calls"):
+            ts.ensemble(SEED, 0.01, {"mu": [0.2]}, threads=1)
+    finally:
+        _core.stop_calls(False)
+    assert np.isfinite(ts.ensemble(SEED, 0.01, {"mu": [0.2]}, threads=1).z_end.values).all()
+
+
 def _run_until(script: str, ready, args=(), timeout: float = 120.0):
     """Start ``script`` in a fresh interpreter; once ``ready()`` is true (polled), send SIGINT and
     return (seconds from the signal to the exit, return code, stderr)."""
@@ -206,6 +237,28 @@ def test_ctrl_c_interrupts_the_describing_function_with_keyboard_interrupt():
     elapsed, code, err = _run_until(script, _printed_started)
     assert elapsed < REACTION, f"{elapsed:.2f} s from SIGINT to exit"
     assert code != 0 and "KeyboardInterrupt" in err, err
+
+
+def test_ctrl_c_stops_overlapped_chunks_and_leaves_no_suspects(tmp_path: Path):
+    # The chunks of an 8-thread sweep compute two at a time on threads of the process; one of
+    # mu = 0.1 (quick) and three on the never-repeating cycle. Ctrl-C once the quick one is saved:
+    # the process exits within REACTION, and the interrupted chunks leave no "running" markers,
+    # which would make a resume run them alone in fresh processes as crash suspects.
+    out = tmp_path / "sweep.nc"
+    script = """
+        import sys
+        import tribosweep as ts
+        ts.sweep(ts.SliderModel(contact="unilateral"), extra_axes={"mu": [0.1, 0.28, 0.29, 0.3]},
+                 strategy="transient", census=False, t_max=1e4, periodic_tol=1e-15, chunk_size=1, threads=8,
+                 output=sys.argv[1], progress=False, boundaries=False)
+    """
+    parts = Path(f"{out}.parts")
+    elapsed, code, err = _run_until(script, lambda proc: (parts / "chunk_000000.npz").exists(), args=(str(out),))
+    assert elapsed < REACTION, f"{elapsed:.2f} s from SIGINT to exit"
+    assert code != 0 and "KeyboardInterrupt" in err, err
+    assert "interrupted: 1 of 4 chunks are saved" in err, err
+    running = parts / "running"
+    assert not running.exists() or not list(running.iterdir()), list(running.iterdir())
 
 
 def test_ctrl_c_inside_a_slow_chunk_keeps_the_finished_chunks(tmp_path: Path):

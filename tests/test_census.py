@@ -10,6 +10,7 @@ import pytest
 import tribosweep as ts
 from tribosweep import _census
 from tribosweep._irregular import characteristic_sizes
+from tribosweep._sweep import runner as _runner
 
 SEED_U = ts.SliderModel(contact="unilateral")
 
@@ -466,6 +467,20 @@ def test_census_output_is_independent_of_threads_chunks_and_executor():
     _same(ref, ts.sweep(threads=1, chunk_size=3, **SWEEP))
     with concurrent.futures.ProcessPoolExecutor(2) as pool:
         _same(ref, ts.sweep(threads=1, chunk_size=5, executor=pool, **SWEEP))
+
+
+def test_chunks_overlapped_on_many_threads_give_the_serial_census(monkeypatch):
+    # From 8 threads on, a sweep without an executor computes several chunks at once on threads of
+    # its own process (runner.overlap: 2 at 8 threads), their core calls sharing one thread pool;
+    # each point's census is still its own.
+    ref = ts.sweep(threads=1, chunk_size=64, **SWEEP)
+    pools = []
+    run_pool = _runner._run_pool
+    monkeypatch.setattr(_runner, "_run_pool", lambda *a: pools.append(a[3]._max_workers) or run_pool(*a))
+    _same(ref, ts.sweep(threads=8, chunk_size=3, **SWEEP))
+    assert pools == [2]
+    _same(ref, ts.sweep(threads=2, chunk_size=3, **SWEEP))  # one chunk at a time below 8 threads
+    assert pools == [2]
 
 
 def test_a_census_with_first_stops_is_independent_of_threads_and_chunks():

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Sequence
 
 import numpy as np
@@ -83,6 +84,15 @@ def times(name: str, value, t_end: float) -> np.ndarray | None:
 #: Most worker threads accepted: far above any machine's cores, far below what would exhaust
 #: memory on thread stacks (a huge value used to panic in the bindings or hang).
 MAX_THREADS: int = 1024
+
+
+def default_threads() -> int:
+    """The threads a core call takes when given None: ``TRIBOSWEEP_THREADS``, else the cores this
+    process may use (as the core's own default)."""
+    env = os.environ.get("TRIBOSWEEP_THREADS", "")
+    if env.isdigit() and int(env) > 0:
+        return int(env)
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
 
 
 def threads(value) -> int | None:

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import concurrent.futures
 import contextlib
-import os
 import threading
 from collections.abc import Mapping
 
@@ -155,10 +154,8 @@ class SharedBranches:
 
 
 def _workers(threads: int | None) -> int:
-    """Threads for independent continuations: ``threads``, or one per core the process may use."""
-    if threads is not None:
-        return threads
-    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    """Threads for independent continuations: ``threads``, or the core's default."""
+    return _checks.default_threads() if threads is None else threads
 
 
 def _curve(kind: str, model, x, y, n, orbit, from_hopf, start, direction, options, threads=None,

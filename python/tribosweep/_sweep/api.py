@@ -143,7 +143,10 @@ def sweep(
         Runs the chunks: a ``concurrent.futures`` executor or a dask ``Client`` (chunks are
         submitted and saved as they finish; a worker process that dies costs only its chunk, and a
         point that keeps killing its process is quarantined as ``crashed``: see
-        ``tribosweep._sweep.runner``), or any object with ``map``. Default: an in-process loop.
+        ``tribosweep._sweep.runner``), or any object with ``map``. Default: in this process, one
+        chunk at a time below 8 threads, else one chunk per 4 threads (at most 4) at once on
+        threads of this process, so that one chunk's tail overlaps another's work (the same bits;
+        ``tribosweep._sweep.runner.overlap``).
     scheduler : str, optional
         Run the chunks on a dask cluster: a scheduler's address (``"tcp://host:8786"``), or
         ``"local:N"`` to start ``N`` worker processes on this machine for the sweep. Needs

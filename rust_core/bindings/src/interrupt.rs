@@ -8,12 +8,14 @@
 //! the worker's partial results are dropped, and the exception propagates to Python. Reaction
 //! time: the poll interval plus the core's check interval plus the worker's return, well under a
 //! second. Python runs signal handlers on its main thread only; called from another thread,
-//! `check_signals` does nothing and the call simply waits for its result.
+//! `check_signals` does nothing and the call simply waits for its result. Such calls are stopped by
+//! [`stop_calls`]: a sweep whose chunks run on threads of its own process calls it when Ctrl-C
+//! reaches its main thread, so that no chunk computes on after the sweep has stopped.
 
-use pyo3::exceptions::PyRuntimeError;
+use pyo3::exceptions::{PyKeyboardInterrupt, PyRuntimeError};
 use pyo3::prelude::*;
 use std::panic::{catch_unwind, resume_unwind, AssertUnwindSafe};
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::mpsc::{sync_channel, Receiver, RecvTimeoutError};
 use std::sync::Arc;
 use std::thread::Result as Caught;
@@ -63,10 +65,35 @@ struct Workers {
     busy: Arc<AtomicUsize>,
 }
 
-/// `f` on a worker thread with the GIL released, cancelled when a Python signal handler raises
-/// (the error is returned; `f`'s result is dropped). A panic in `f` propagates as before (pyo3
-/// makes it a `PanicException`).
+/// Whether [`stop_calls`] has stopped this process's calls.
+static STOPPED: AtomicBool = AtomicBool::new(false);
+
+/// The error of a call stopped by [`stop_calls`].
+fn stopped() -> PyErr {
+    PyKeyboardInterrupt::new_err("stopped by tribosweep._core.stop_calls (the sweep was interrupted)")
+}
+
+/// `stop_calls(True)`: stop every call of this process that is computing, from whichever thread
+/// it was made, within [`POLL`] plus the core's check interval, and refuse new ones (each raises
+/// `KeyboardInterrupt`), until `stop_calls(False)`. Python delivers Ctrl-C to its main thread
+/// only, so a sweep that runs chunks on other threads of its process calls this when its main
+/// thread is interrupted, waits for those threads, and then lifts it.
+#[pyfunction]
+fn stop_calls(stop: bool) {
+    STOPPED.store(stop, Ordering::SeqCst);
+}
+
+pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(stop_calls, m)?)
+}
+
+/// `f` on a worker thread with the GIL released, cancelled when a Python signal handler raises or
+/// [`stop_calls`] stops the process's calls (the error is returned; `f`'s result is dropped). A
+/// panic in `f` propagates as before (pyo3 makes it a `PanicException`).
 pub(crate) fn detach<R: Send>(py: Python<'_>, f: impl FnOnce() -> R + Send) -> PyResult<R> {
+    if STOPPED.load(Ordering::SeqCst) {
+        return Err(stopped());
+    }
     let token = Token::new();
     let tok = &token;
     let (tx, rx) = sync_channel::<Caught<R>>(1);
@@ -106,13 +133,21 @@ pub(crate) fn detach<R: Send>(py: Python<'_>, f: impl FnOnce() -> R + Send) -> P
 }
 
 /// The worker's result, waited for without the GIL; every [`POLL`] Python's signal handlers run
-/// (with the GIL), and when one raises, the token is cancelled and its error returned.
+/// (with the GIL), and when one raises, or [`stop_calls`] has stopped the calls, the token is
+/// cancelled and the error returned.
 fn wait<R>(rx: Receiver<Caught<R>>, token: &Token) -> PyResult<Caught<R>> {
     loop {
         match rx.recv_timeout(POLL) {
             Ok(r) => return Ok(r),
             Err(RecvTimeoutError::Timeout) => {
-                if let Err(e) = Python::attach(|py| py.check_signals()) {
+                let stop = Python::attach(|py| py.check_signals()).and_then(|()| {
+                    if STOPPED.load(Ordering::SeqCst) {
+                        Err(stopped())
+                    } else {
+                        Ok(())
+                    }
+                });
+                if let Err(e) = stop {
                     token.cancel();
                     return Err(e);
                 }

@@ -29,6 +29,7 @@ use pyo3::prelude::*;
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     errors::register(m)?;
+    interrupt::register(m)?;
     names::register(m)?;
     simulate::register(m)?;
     linear::register(m)?;
