@@ -303,20 +303,30 @@ def cluster(omega, mult, amps, size, tol: float) -> tuple[np.ndarray, list[int]]
     three: two period-2 cycles at 52.9 N, 5.8 cm share A1 (1.41e-5 m) and their frequency to 0.2 %,
     and differ in A2 (4.1e-6 against 1.5e-5 m); by A1 alone they were one.
     """
-    amps = np.asarray(amps, dtype=np.float64).reshape(np.size(omega), 3)
-    size = np.asarray(size, dtype=np.float64).reshape(np.size(omega))
-    size = np.where(np.isfinite(size), size, np.max(amps, axis=1, initial=0.0))
-    label = np.full(omega.size, -1)
+    n = np.size(omega)
+    amps = np.asarray(amps, dtype=np.float64).reshape(n, 3)
+    size = np.asarray(size, dtype=np.float64).reshape(n)
+    if not np.isfinite(size).all():
+        size = np.where(np.isfinite(size), size, np.max(amps, axis=1, initial=0.0))
+    # :func:`same_cycle`'s test on Python floats (the same float64 arithmetic and comparisons, so
+    # the same labels): a census sweep clusters thousands of points of a few samples each, where
+    # numpy's cost per call on 3-element arrays was most of the time (the 2,000-point census
+    # grid's 3,168 clusterings: 241-279 ms -> 82-95 ms).
+    om, am, sz = np.asarray(omega, dtype=np.float64).tolist(), amps.tolist(), size.tolist()
+    mu = np.asarray(mult).tolist()
+    label: list[int] = []
     heads: list[int] = []
-    for s in range(omega.size):
+    for s in range(n):
         for c, h in enumerate(heads):
-            if mult[s] == mult[h] and same_cycle(omega[s], amps[s], omega[h], amps[h], size[h], tol):
-                label[s] = c
+            lim = tol * max(sz[h], 1e-12)
+            if (mu[s] == mu[h] and abs(om[s] - om[h]) <= tol * om[h]
+                    and all(abs(x - y) <= lim for x, y in zip(am[s], am[h]))):  # fmt: skip
+                label.append(c)
                 break
         else:
-            label[s] = len(heads)
+            label.append(len(heads))
             heads.append(s)
-    return label, heads
+    return np.array(label, dtype=np.int64), heads
 
 
 def same_cycle(omega, amps, ref_omega: float, ref_amps, size: float, tol: float):
