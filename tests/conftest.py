@@ -6,11 +6,19 @@ slow approach to a stable cycle, for the sweep's transients too."""
 from __future__ import annotations
 
 import json
+import os
 import pathlib
 import struct
 
 import numpy as np
 import pytest
+
+# The default thread count (threads=None) is pinned for the whole suite, before the core reads it:
+# from 8 threads on, a sweep computes several chunks at once (tribosweep._sweep.runner.overlap),
+# and tests that stop a sweep after its n-th chunk, or crash it inside one, count chunks finished
+# in order. Their verdicts must not depend on the cores of the machine they run on. Tests of the
+# overlap itself ask for 8 threads explicitly.
+os.environ["TRIBOSWEEP_THREADS"] = "2"
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 _CANDIDATES = [ROOT / "tests" / "data" / "seed_values.json", ROOT.parent / "shared" / "reference" / "seed_values.json"]

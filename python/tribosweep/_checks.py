@@ -89,7 +89,7 @@ MAX_THREADS: int = 1024
 def default_threads() -> int:
     """The threads a core call takes when given None: ``TRIBOSWEEP_THREADS``, else the cores this
     process may use (as the core's own default)."""
-    env = os.environ.get("TRIBOSWEEP_THREADS", "")
+    env = os.environ.get("TRIBOSWEEP_THREADS", "").strip()
     if env.isdigit() and int(env) > 0:
         return int(env)
     return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
