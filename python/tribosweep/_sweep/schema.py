@@ -311,7 +311,9 @@ def point_specs(dims: tuple[str, ...], *, wear_rate: bool = False) -> list[VarSp
             "(the motion of the transient from the unstable mode); measured on the orbit shooting converged where "
             "largest_cycle_verified is verified"
         )
-    by_name["wall_time"].attrs["comment"] = "a measurement: differs between runs"
+    by_name["wall_time"].attrs["comment"] = (
+        "a measurement: differs between runs; from 8 threads on, chunks computed at once share the cores, "
+        "so the points' times add up to more than the sweep's")  # fmt: skip
     by_name["wear_rate_relative"].attrs["comment"] = (
         "the rate while the contact slides steadily (NaN where steady sliding is not what a small disturbance "
         "reaches); where steady sliding coexists with vibration (wear_applicability mild_wear_in_part) it holds only "
