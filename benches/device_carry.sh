@@ -10,7 +10,7 @@
 #
 # run.sh installs only the carried wheels whose distribution that Python lacks (its own numpy,
 # scipy and numba stay: the benches' baselines run on them), into /tmp/tribosweep-site, puts the
-# package on PYTHONPATH and runs the rest of its arguments. About 25 MB; the tool carries 64 MiB
+# package on PYTHONPATH and runs the rest of its arguments. About 55 MB; the tool carries 64 MiB
 # with the working tree. Needs `make install-test` first (it builds the extension into .venv).
 set -euo pipefail
 cd "$(dirname "$0")/.."

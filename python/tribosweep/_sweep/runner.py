@@ -50,7 +50,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import _checks
+from .. import _checks, _core
 from .._codes import DECIDED_BY, REGIME, STATUS_CRASHED
 from . import chunk as _chunk
 from . import schema
@@ -97,8 +97,6 @@ def stop_running(futures) -> None:
     """Ctrl-C (or an error) reached the main thread while chunks compute on other threads of this
     process, where Python delivers no signal: stop their core calls (each raises
     ``KeyboardInterrupt`` there, and new ones are refused) and wait for those threads to end."""
-    from .. import _core
-
     _core.stop_calls(True)
     try:
         concurrent.futures.wait(futures, timeout=STOP_WAIT)
@@ -309,7 +307,7 @@ def run(plan: Plan, chunks: Iterable[int], threads, executor, sink, bar, *, mark
     rest = [k for k in chunks if k not in set(suspects)]
     if executor is None:
         _run_isolated(plan, isolated, threads, asm)
-        inflight = overlap(threads) if len(rest) > 1 else 1
+        inflight = min(overlap(threads), len(rest))
         if inflight > 1:
             with concurrent.futures.ThreadPoolExecutor(inflight, thread_name_prefix="tribosweep-chunk") as pool:
                 _run_pool(plan, rest, threads, pool, asm, markers, [])
