@@ -486,6 +486,62 @@ def test_cycles_are_told_apart_by_three_harmonics_in_units_of_the_motion():
     assert list(_cycles.cluster(omega * [1, 1.02], [4, 4], amps, np.full(2, 9.91e-6), tol)[0]) == [0, 1]
 
 
+def test_cluster_labels_are_those_of_same_cycle():
+    # cluster tests pairs on Python floats for speed; same_cycle is the rule on arrays (the
+    # transients' cycles are matched with it). Both must give the same labels, also at the
+    # tolerance's edges: samples whose frequency and harmonics differ from the first sample's by
+    # exactly its bounds (to the last bit), by half or 1.5 of them, with mixed multiplicities and
+    # NaN sizes.
+    tol = _census.CYCLE_TOL
+
+    def reference(omega, mult, amps, size):
+        size = np.where(np.isfinite(size), size, np.max(amps, axis=1, initial=0.0))
+        label, heads = [], []
+        for s in range(omega.size):
+            for c, h in enumerate(heads):
+                if mult[s] == mult[h] and _cycles.same_cycle(omega[s], amps[s], omega[h], amps[h], size[h], tol):
+                    label.append(c)
+                    break
+            else:
+                label.append(len(heads))
+                heads.append(s)
+        return label, heads
+
+    def round_bound(x, bound, refs):
+        """``x`` moved by a few ulps until ``bound(x)`` is so round (trailing zero bits) that each of
+        ``refs(x)`` plus 0.5, 1 or 1.5 of it is exact: differences then sit on the bound to the bit."""
+        for _ in range(100_000):
+            b = bound(x)
+            if all((r + f * b) - r == f * b for r in refs(x) for f in (0.5, 1.0, 1.5, -0.5, -1.0, -1.5)):
+                return x
+            x = np.nextafter(x, np.inf)
+        raise AssertionError("no round bound found")
+
+    rng = np.random.default_rng(7)
+    splits = exact = 0
+    for _ in range(200):
+        n = int(rng.integers(2, 17))
+        # Inside one binary exponent's range with their bounds (560-1000 rad/s, 1.1-1.4e-5 m), so
+        # that the differences can be exact at all.
+        om0 = round_bound(560.0 + 440.0 * rng.random(), lambda w: tol * w, lambda w: [w])
+        a0 = 1.1e-5 + 0.3e-5 * rng.random(3)
+        size0 = round_bound(1e-5 * (1 + 0.1 * rng.random()), lambda z: tol * max(z, 1e-12), lambda z, a=a0: a)
+        omega, amps = np.full(n, om0), np.tile(a0, (n, 1))
+        size = np.where(rng.random(n) < 0.3, np.nan, 1e-5 * (1 + 0.1 * rng.random(n)))
+        size[0] = size0
+        mult = rng.choice([1, 1, 1, 2], n)
+        for s in range(1, n):  # the first sample's bounds, exactly at, inside or outside them
+            omega[s] = om0 + rng.choice([-1.0, 1.0]) * rng.choice([0.0, 0.5, 1.0, 1.0, 1.5]) * (tol * om0)
+            amps[s] = a0 + rng.choice([-1.0, 1.0], 3) * rng.choice([0.0, 0.5, 1.0, 1.0, 1.5], 3) * (tol * size0)
+            exact += abs(omega[s] - om0) == tol * om0
+        label, heads = _cycles.cluster(omega, mult, amps, size, tol)
+        want = reference(omega, mult, amps, size)
+        assert (label.tolist(), heads) == want, (omega, mult, amps, size)
+        splits += len(heads) > 1
+    # The draws split into several cycles, and many differences sit exactly on a bound.
+    assert splits > 50 and exact > 300, (splits, exact)
+
+
 def test_census_rows_of_arrays_without_columns():
     # Without stationarity blocks (irregular_block=0) the census's cell arrays have no columns; a
     # sample going on from an unstable cycle reads every per-sample array as one row per sample
