@@ -322,6 +322,15 @@ def test_classification_of_transient_summaries(summary, stable, regime, decided_
         assert summary["reason"][0] in reason[0]
 
 
+def test_a_decay_where_sliding_is_linearly_unstable_is_a_failed_detection_not_sliding():
+    # Small motion grows there, so no run comes to rest: the run's decay test was deceived.
+    r, status, reason, decided = _stages.classify(_summary("decayed"), np.array([False]), 7.0)
+    assert _codes.REGIME_NAMES[r[0]] == "unstable_undetermined"
+    assert ts.STATUS_NAMES[status[0]] == "not_converged"
+    assert _codes.DECIDED_BY_NAMES[decided[0]] == "transient"
+    assert "t = 5.25 s" in reason[0] and "linearly unstable" in reason[0], reason[0]
+
+
 def test_a_diverged_run_says_where_and_when_it_left_the_models_validity():
     # The steady-state core gives no reason for an escape; the sweep writes one from the run's summary.
     fly = _summary("diverged") | {"max_abs_z": [1e-3], "max_gap": [0.994e-3]}

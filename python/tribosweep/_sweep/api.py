@@ -229,7 +229,9 @@ def sweep(
         none under constant friction; at ``periodic_tol`` or below: no first stops.
     unstable_disturbance : float
         ``auto``: transients of linearly unstable points start on the unstable mode with
-        ``|z| = unstable_disturbance |z_st|``.
+        ``|z| = unstable_disturbance |z_st|``, or less where that would put another component beyond
+        10 times as many of its characteristic sizes (a frictional mode with little ``z``:
+        ``tribosweep._sweep.stages.MODE_START_CAP``).
     decay_amplitude : float, m, optional
         Amplitude below which a motion counts as decayed (default ``1e-3 |z_st|``).
     irregular_block : int
