@@ -157,8 +157,9 @@ impl Observer<6, ContactMode> for SteadyObserver {
             if self.w.found.is_some() || self.w.decayed || self.w.irregular {
                 return Control::Stop;
             }
-        } else if st.y1.norm() == 0.0 || self.w.peak_since < self.decay_floor {
-            // Exactly at rest (or below any meaningful size): nothing will ever cross the section.
+        } else if st.y1.norm() == 0.0 || (self.w.peak_since < self.decay_floor && self.w.quiet_beside_z(st.y1)) {
+            // Exactly at rest, or z below any meaningful size and the other compared components
+            // below the decay threshold: nothing will ever cross the section.
             self.w.decayed = true;
             return Control::Stop;
         }

@@ -379,6 +379,21 @@ impl SectionWatcher {
         (self.n_seen - 1 - back) % RING
     }
 
+    /// Whether every compared component of `y` other than `z` is below the decay test's threshold
+    /// (each in its decay scale, as [`Self::push`] measures a crossing; a displacement and its rate
+    /// both, so an oscillation passing through zero does not pass): with `z` at rest no section is
+    /// crossed and the decay test never runs, so the rest shortcut on `z`
+    /// ([`super::observer::SteadyObserver`]'s `decay_floor`) asks this of the others. On `z` alone
+    /// it called a motion of the frictional mode decayed at once where that mode carries almost no
+    /// `z`. (A millionth of the threshold, as on `z`, is out of reach: below the integration's
+    /// absolute tolerance a component no longer decays reliably.)
+    pub(super) fn quiet_beside_z(&self, y: &State) -> bool {
+        self.comps
+            .iter()
+            .filter(|&&k| k != idx::Z)
+            .all(|&k| y[k].abs() / self.decay_scale[k] * self.decay_unit < self.decay_amp)
+    }
+
     pub(super) fn get(&self, back: usize) -> &Crossing {
         &self.ring[self.slot(back)]
     }

@@ -462,3 +462,35 @@ fn a_run_is_intermittent_once_it_came_back_to_one_unstable_cycle_three_times_aft
     let im = Saddle::visit(&mut sd, period, a1, 1.05, 2, 6).expect("third visit");
     assert_eq!(im, Intermittent { period, largest: mu, visits: INTERMITTENT_VISITS, kind: 2 });
 }
+
+#[test]
+fn a_motion_of_the_frictional_mode_alone_is_not_taken_for_rest() {
+    // Under speed-dependent friction x is compared. Without a moment arm friction puts no torque on
+    // phi, so a disturbance of x' alone leaves z at exactly 0 (no section is ever crossed), and the
+    // rest shortcut on z alone (|z| below a millionth of the decay amplitude) called the motion
+    // decayed at the first step, with x' at a tenth of its size. It rings down at the friction
+    // mode's own rate until every compared component is below the decay amplitude (1e-3 of its
+    // size): from 0.1, ln(100) / rate.
+    let p = Params { friction_law: FrictionLaw::Switch, mu_static: 0.3, moment_arm: 0.0, ..Params::seed() };
+    let s = Slider::new(p).unwrap();
+    let sizes = characteristic_sizes(&s);
+    let y0 = State::new(0.0, 0.0, 0.0, 0.1 * sizes[idx::XD], 0.0, 0.0);
+    let r = run_to_steady(&s, &y0, &SteadyOptions { t_max: 60.0, ..SteadyOptions::default() });
+    let rate = -crate::linear::linear_stability(&s).mode(crate::linear::ModeKind::Friction).growth_rate;
+    let expected = 100f64.ln() / rate;
+    let largest = (0..6).map(|k| r.y_end[k].abs() / sizes[k]).fold(0.0, f64::max);
+    println!(
+        "{:?} at {:.3} s ({expected:.3} s at {rate:.3} 1/s); largest component {largest:.2e} of its size: {:?}",
+        r.outcome,
+        r.t_end,
+        (0..6).map(|k| r.y_end[k] / sizes[k]).collect::<Vec<_>>()
+    );
+    assert_eq!(r.outcome, SteadyOutcome::Decayed);
+    assert_eq!(r.y_end[idx::Z], 0.0);
+    assert!(
+        rate > 0.0 && (r.t_end / expected - 1.0).abs() < 0.2,
+        "decayed at {} s, the mode needs {expected} s",
+        r.t_end
+    );
+    assert!(largest < 1e-3, "at the stop a component is still {largest:e} of its size");
+}
